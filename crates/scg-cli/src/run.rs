@@ -1,0 +1,185 @@
+//! `scg run`.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use scg_core::step::StepSet;
+use scg_scene::Scene;
+
+use crate::EXIT_BAD_INPUT;
+
+/// Arguments of `scg run`.
+#[derive(Args, Debug, Default)]
+pub struct RunArgs {
+    /// Scene file; the embedded vortex case when omitted.
+    pub case: Option<PathBuf>,
+    /// Output folder for recordings.
+    #[arg(long, default_value = "recordings")]
+    pub out: PathBuf,
+    /// Override a scene key, e.g. `--set dt=1e-5` or `--set groups.0.alpha=2` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Print the schedule the scene produces and exit without running.
+    #[arg(long)]
+    pub plan: bool,
+    /// Do not write recordings.
+    #[arg(long)]
+    pub no_record: bool,
+}
+
+fn load(args: &RunArgs) -> Result<Scene, i32> {
+    let r = match &args.case {
+        Some(p) => scg_scene::load(p, &args.set),
+        None => Scene::embedded(&args.set),
+    };
+    r.map_err(|e| {
+        eprintln!("error: {e}");
+        EXIT_BAD_INPUT
+    })
+}
+
+/// Fail early when `dir` cannot take files.
+pub fn ensure_writable(dir: &Path) -> Result<(), String> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| format!("cannot create output folder {}: {e}", dir.display()))?;
+    let probe = dir.join(format!(".scg-write-test-{}", std::process::id()));
+    std::fs::write(&probe, b"")
+        .map_err(|e| format!("output folder {} is not writable: {e}", dir.display()))?;
+    let _ = std::fs::remove_file(probe);
+    Ok(())
+}
+
+/// Run `scg run`; returns the exit status.
+pub fn run(args: RunArgs) -> i32 {
+    let scene = match load(&args) {
+        Ok(s) => s,
+        Err(code) => return code,
+    };
+    let report = scg_scene::check::check(&scene);
+    for f in &report.findings {
+        eprintln!(
+            "{}: {}",
+            if f.level == scg_scene::check::Level::Error {
+                "error"
+            } else {
+                "warning"
+            },
+            f.message
+        );
+    }
+    if report.has_errors() {
+        return EXIT_BAD_INPUT;
+    }
+    let record = !args.no_record;
+    if args.plan {
+        let sim = scene.build(record);
+        println!(
+            "schedule of scene `{}` ({} systems):",
+            scene.name,
+            sim.plan().systems.len()
+        );
+        print!("{}", sim.plan().render());
+        return 0;
+    }
+    if record && let Err(e) = ensure_writable(&args.out) {
+        eprintln!("error: {e}");
+        return EXIT_BAD_INPUT;
+    }
+    let mut sim = scene.build(record);
+    let mut paths = Vec::new();
+    if record {
+        let meta = scene.run_meta(report.messages());
+        let rrd = args.out.join(format!("{}.rrd", scene.name));
+        let mcap = args.out.join(format!("{}.mcap", scene.name));
+        match scg_record::RrdSink::create(&rrd, &meta) {
+            Ok(s) => sim.add_recorder(Box::new(s)),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return 1;
+            }
+        }
+        match scg_record::McapSink::create(&mcap, &meta) {
+            Ok(s) => sim.add_recorder(Box::new(s)),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return 1;
+            }
+        }
+        paths.push(rrd);
+        paths.push(mcap);
+    }
+
+    let stop = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let _ = signal_hook::flag::register(sig, Arc::clone(&stop));
+    }
+    let steps = scene.steps();
+    let n0 = scene.groups.iter().map(|g| g.count()).sum::<usize>();
+    eprintln!(
+        "running `{}`: {} particles, {} steps of {:.3e} s",
+        scene.name, n0, steps, scene.dt
+    );
+    let bar = ProgressBar::new(steps);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} steps  {elapsed_precise} eta {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let t0 = Instant::now();
+    let mut result = sim.record_now().map(|_| 0);
+    if result.is_ok() {
+        result = sim.run(steps, |i| {
+            if i % 256 == 0 {
+                bar.set_position(i);
+            }
+            !stop.load(Ordering::Relaxed)
+        });
+    }
+    bar.finish_and_clear();
+    let wall = t0.elapsed().as_secs_f64();
+    let done = sim.step_count();
+    let particle_steps = sim.particle_steps();
+    let fin = sim.finish_recorders();
+    let interrupted = stop.load(Ordering::Relaxed);
+    match &result {
+        Ok(_) => eprintln!(
+            "{} {done} steps (t = {:.6} s) in {wall:.3} s: {:.3e} particle-steps/s",
+            if interrupted {
+                "interrupted after"
+            } else {
+                "done:"
+            },
+            sim.time(),
+            particle_steps as f64 / wall.max(1e-12)
+        ),
+        Err(e) => eprintln!("error: run stopped at step {done}: {e}"),
+    }
+    let timers = sim.timers();
+    let total = timers.sum().as_secs_f64().max(1e-12);
+    eprintln!("time per stage:");
+    for (set, d) in timers.by_set() {
+        if sim.plan().in_set(set).next().is_some() || set == StepSet::Scaling {
+            eprintln!(
+                "  {:<18} {:>10.3} s  {:>5.1} %",
+                set.name(),
+                d.as_secs_f64(),
+                100.0 * d.as_secs_f64() / total
+            );
+        }
+    }
+    for p in &paths {
+        eprintln!("wrote {}", p.display());
+    }
+    if let Err(e) = fin {
+        eprintln!("error: {e}");
+        return 1;
+    }
+    if result.is_err() {
+        return 1;
+    }
+    if interrupted { 130 } else { 0 }
+}

@@ -1,0 +1,98 @@
+//! Per-particle components. SI units throughout; each doc says the unit.
+
+use bevy_ecs::prelude::Component;
+use glam::DVec3;
+
+use crate::scaling::CoarseGrainLaw;
+
+/// Centre position, m.
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+pub struct Position(pub DVec3);
+
+/// Translational velocity, m/s.
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+pub struct Velocity(pub DVec3);
+
+/// Angular velocity, rad/s.
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+pub struct AngularVelocity(pub DVec3);
+
+/// Diameter as simulated (after coarse graining), m.
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct Diameter(pub f64);
+
+/// Density as simulated (after coarse graining), kg/m³.
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct Density(pub f64);
+
+/// Mass, kg (= ρ·π·d³/6, kept so the hot loops need not recompute it).
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct Mass(pub f64);
+
+/// Non-drag force accumulated during the force stage (contacts, walls), N.
+/// Cleared at the start of every step.
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+pub struct Force(pub DVec3);
+
+/// Torque accumulated during the force stage, N·m. Cleared every step.
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+pub struct Torque(pub DVec3);
+
+/// Stable particle id, unique over a run and never reused.
+#[derive(Component, Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct ParticleId(pub u32);
+
+/// Index of the scene group (size class) the particle belongs to.
+#[derive(Component, Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct GroupId(pub u32);
+
+/// How the particle was coarse grained (written by the scaling stage).
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct CoarseGrain {
+    /// Coarse-graining ratio α = d_CG / d_original (1 = original particle).
+    pub alpha: f64,
+    /// The scaling law applied.
+    pub law: CoarseGrainLaw,
+    /// Original diameter, m.
+    pub original_diameter: f64,
+    /// Original density, kg/m³.
+    pub original_density: f64,
+}
+
+/// How the fluid sees the particle (written by the scaling stage).
+///
+/// The fluid force is computed for a sphere of diameter `drag_diameter` and multiplied by
+/// `force_scale`: (d, 1) for every law but `parcel`, (d/α, α³) for `parcel`.
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct FluidCoupling {
+    /// Diameter the drag law is evaluated for, m.
+    pub drag_diameter: f64,
+    /// Factor applied to the fluid force, dimensionless.
+    pub force_scale: f64,
+}
+
+/// Stokes-drag factors precomputed once per particle for a fixed dt (exponential scheme).
+///
+/// `tau` is the Stokes response time, s; `decay` = e^(−dt/τ); `relax` = τ·(1 − e^(−dt/τ)), s;
+/// `half_relax` = τ·(1 − e^(−dt/(2τ))), s (the mid-step predictor's).
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct StokesFactors {
+    /// Momentum response time τ = m / (3π·μ·d_drag·force_scale), s.
+    pub tau: f64,
+    /// e^(−dt/τ), dimensionless.
+    pub decay: f64,
+    /// τ·(1 − e^(−dt/τ)), s.
+    pub relax: f64,
+    /// τ·(1 − e^(−dt/(2τ))), s.
+    pub half_relax: f64,
+}
+
+/// Marker: the particle left the domain (drained through an outlet or lost); it is
+/// despawned at the end of the step by the outlet stage.
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct Removed;
+
+/// Tangential history of a particle's wall contacts: (wall index, history displacement, m).
+/// Present with walls; empty while the particle touches no wall.
+#[derive(Component, Clone, Debug, Default, PartialEq)]
+pub struct WallHistory(pub Vec<(u32, DVec3)>);

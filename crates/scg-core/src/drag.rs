@@ -1,0 +1,136 @@
+//! Fluid drag laws (pure functions).
+//!
+//! The drag force on a sphere of diameter d with slip u_r = u − v is (paper eq. 4)
+//! F_D = C_d·A·ρ_f·|u_r|·u_r/2 with A = π·d²/4. Writing C_d = (24/Re)·f(Re) gives
+//! F_D = 3π·μ·d·f(Re)·u_r, so a particle relaxes to the fluid velocity with the response
+//! time τ = m / (3π·μ·d·f(Re)).
+
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// A drag law.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum DragLaw {
+    /// Stokes: C_d = 24/Re (paper eq. 5), valid for Re < 0.1. Linear in the slip.
+    #[default]
+    Stokes,
+    /// Schiller & Naumann (1933): C_d = 24/Re·(1 + 0.15·Re^0.687), for Re < 1000.
+    SchillerNaumann,
+}
+
+impl DragLaw {
+    /// Scene-file name.
+    pub fn name(self) -> &'static str {
+        match self {
+            DragLaw::Stokes => "stokes",
+            DragLaw::SchillerNaumann => "schiller_naumann",
+        }
+    }
+
+    /// The correction f(Re) = C_d·Re/24 of this law.
+    #[inline]
+    pub fn correction(self, re: f64) -> f64 {
+        match self {
+            DragLaw::Stokes => 1.0,
+            DragLaw::SchillerNaumann => schiller_naumann_correction(re),
+        }
+    }
+
+    /// Drag coefficient C_d at particle Reynolds number `re` (> 0).
+    pub fn coefficient(self, re: f64) -> f64 {
+        match self {
+            DragLaw::Stokes => stokes_cd(re),
+            DragLaw::SchillerNaumann => schiller_naumann_cd(re),
+        }
+    }
+}
+
+/// Stokes drag coefficient C_d = 24/Re (paper eq. 5).
+pub fn stokes_cd(re: f64) -> f64 {
+    24.0 / re
+}
+
+/// Schiller–Naumann drag coefficient C_d = 24/Re·(1 + 0.15·Re^0.687).
+pub fn schiller_naumann_cd(re: f64) -> f64 {
+    24.0 / re * schiller_naumann_correction(re)
+}
+
+/// Schiller–Naumann correction to Stokes drag, f = 1 + 0.15·Re^0.687.
+#[inline]
+pub fn schiller_naumann_correction(re: f64) -> f64 {
+    1.0 + 0.15 * re.powf(0.687)
+}
+
+/// Particle Reynolds number Re = ρ_f·d·|u_r|/μ (paper eq. 5).
+#[inline]
+pub fn particle_reynolds(
+    diameter: f64,
+    slip_speed: f64,
+    fluid_density: f64,
+    viscosity: f64,
+) -> f64 {
+    fluid_density * diameter * slip_speed / viscosity
+}
+
+/// Drag force, N, from paper eq. 4: F = C_d·A·ρ_f·|u_r|·u_r/2, for a slip vector `slip` (m/s).
+pub fn drag_force(
+    law: DragLaw,
+    diameter: f64,
+    slip: glam::DVec3,
+    fluid_density: f64,
+    viscosity: f64,
+) -> glam::DVec3 {
+    let s = slip.length();
+    if s == 0.0 {
+        return glam::DVec3::ZERO;
+    }
+    let re = particle_reynolds(diameter, s, fluid_density, viscosity);
+    let area = PI * diameter * diameter / 4.0;
+    law.coefficient(re) * area * fluid_density * s / 2.0 * slip
+}
+
+/// Stokes response time τ = m / (3π·μ·d_drag·scale), s, of a particle of mass `mass` (kg)
+/// whose fluid force is evaluated for diameter `drag_diameter` (m) and multiplied by
+/// `force_scale`. For an unscaled sphere this is τ = ρ·d²/(18·μ).
+#[inline]
+pub fn stokes_response_time(
+    mass: f64,
+    viscosity: f64,
+    drag_diameter: f64,
+    force_scale: f64,
+) -> f64 {
+    mass / (3.0 * PI * viscosity * drag_diameter * force_scale)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+
+    #[test]
+    fn eq4_with_stokes_is_3_pi_mu_d_u() {
+        let (d, mu, rho_f) = (1e-5, 1.8e-5, 1.2);
+        let slip = DVec3::new(0.3, -0.1, 0.05);
+        let f = drag_force(DragLaw::Stokes, d, slip, rho_f, mu);
+        let expect = 3.0 * PI * mu * d * slip;
+        assert!((f - expect).length() / expect.length() < 1e-14);
+    }
+
+    #[test]
+    fn response_time_matches_rho_d2_over_18_mu() {
+        let (d, rho, mu) = (1e-5, 1000.0, 1.8e-5);
+        let m = crate::scaling::sphere_mass(d, rho);
+        let tau = stokes_response_time(m, mu, d, 1.0);
+        let expect = rho * d * d / (18.0 * mu);
+        assert!(((tau - expect) / expect).abs() < 1e-14);
+    }
+
+    #[test]
+    fn schiller_naumann_limits() {
+        // f → 1 at small Re; C_d(Re = 1) = 24·1.15.
+        assert!((schiller_naumann_correction(1e-12) - 1.0).abs() < 1e-8);
+        assert!((schiller_naumann_cd(1.0) - 24.0 * 1.15).abs() < 1e-12);
+        assert_eq!(DragLaw::Stokes.correction(50.0), 1.0);
+    }
+}

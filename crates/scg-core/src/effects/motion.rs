@@ -1,0 +1,292 @@
+//! Drag and motion: the integration stage.
+//!
+//! Which system moves the particles depends on the scene: the exponential scheme with
+//! precomputed Stokes factors (the fast path), the exponential scheme with a
+//! Reynolds-dependent drag law, the explicit scheme, or plain ballistic motion when the
+//! scene has no fluid. Contact forces (when a scene has contacts or walls) enter as a kick
+//! before the drift; gravity and buoyancy as a constant acceleration inside it.
+
+use bevy_ecs::prelude::*;
+use glam::DVec3;
+
+use crate::components::*;
+use crate::drag::{DragLaw, particle_reynolds};
+use crate::effects::guard::Health;
+use crate::flow::{FlowField, Fluid};
+use crate::integrate::{
+    Integrator, explicit_euler, explicit_substeps, exponential_drift, exponential_factors,
+};
+use crate::step::{StepBuilder, StepSet};
+
+/// Simulation clock (resource): t = step·dt, never the wall clock.
+#[derive(Resource, Clone, Copy, Debug, PartialEq)]
+pub struct SimClock {
+    /// Steps completed.
+    pub step: u64,
+    /// Time step, s.
+    pub dt: f64,
+    /// Particle-steps done so far (Σ over steps of the particles moved).
+    pub particle_steps: u64,
+}
+
+impl SimClock {
+    /// Simulation time, s.
+    pub fn time(&self) -> f64 {
+        self.step as f64 * self.dt
+    }
+}
+
+/// How particles move (resource); see [`crate::sim::SimConfig`] for the meaning.
+#[derive(Resource, Clone, Copy, Debug, PartialEq)]
+pub struct Motion {
+    /// Time step, s.
+    pub dt: f64,
+    /// Integrator.
+    pub integrator: Integrator,
+    /// Drag law, `None` without fluid drag.
+    pub drag: Option<DragLaw>,
+    /// Gravity, m/s² (zero without the gravity effect).
+    pub gravity: DVec3,
+    /// Reduce gravity by buoyancy: a = g·(1 − ρ_f/ρ_p).
+    pub buoyancy: bool,
+}
+
+/// Constant body acceleration of a particle (gravity, reduced by buoyancy), m/s².
+/// Present only when the scene declares gravity.
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct BodyAcceleration(pub DVec3);
+
+/// Add the motion systems the scene needs (with `rotation`, the angular velocity is
+/// integrated from the contact torques), and the clock.
+pub fn plugin(b: &mut StepBuilder, motion: &Motion, rotation: bool) {
+    match (motion.drag, motion.integrator) {
+        (None, _) => b.add(
+            StepSet::Integration,
+            "motion",
+            "integrate_ballistic",
+            integrate_ballistic,
+        ),
+        (Some(DragLaw::Stokes), Integrator::Exponential) => b.add(
+            StepSet::Integration,
+            "drag:stokes",
+            "integrate_stokes_exponential",
+            integrate_stokes_exponential,
+        ),
+        (Some(law), Integrator::Exponential) => b.add(
+            StepSet::Integration,
+            drag_effect_name(law),
+            "integrate_drag_exponential",
+            integrate_drag_exponential,
+        ),
+        (Some(law), Integrator::Explicit) => b.add(
+            StepSet::Integration,
+            drag_effect_name(law),
+            "integrate_drag_explicit",
+            integrate_drag_explicit,
+        ),
+    }
+    if rotation {
+        b.add(
+            StepSet::Integration,
+            "contacts",
+            "integrate_rotation",
+            integrate_rotation,
+        );
+    }
+    b.add(
+        StepSet::Integration,
+        "clock",
+        "advance_clock",
+        advance_clock,
+    );
+}
+
+/// Angular velocity from the contact torque (paper eq. 3): ω += T·dt/I with the solid
+/// sphere's I = m·d²/10.
+pub fn integrate_rotation(
+    motion: Res<Motion>,
+    mut q: Query<(&mut AngularVelocity, &Torque, &Mass, &Diameter)>,
+) {
+    let dt = motion.dt;
+    q.par_iter_mut().for_each(|(mut w, t, m, d)| {
+        let inertia = 0.1 * m.0 * d.0 * d.0;
+        w.0 += t.0 * (dt / inertia);
+    });
+}
+
+fn drag_effect_name(law: DragLaw) -> &'static str {
+    match law {
+        DragLaw::Stokes => "drag:stokes",
+        DragLaw::SchillerNaumann => "drag:schiller_naumann",
+    }
+}
+
+/// Advance the step counter (the last system of the integration stage).
+pub fn advance_clock(mut clock: ResMut<SimClock>, q: Query<(), With<ParticleId>>) {
+    clock.step += 1;
+    clock.particle_steps += q.iter().len() as u64;
+}
+
+/// Velocity after the contact kick: v + F/m·dt (unchanged without contact forces).
+#[inline]
+fn kick(v: DVec3, f: Option<&Force>, m: f64, dt: f64) -> DVec3 {
+    match f {
+        Some(f) => v + f.0 * (dt / m),
+        None => v,
+    }
+}
+
+/// One exponential-midpoint step for response time `tau` with factors for dt and dt/2.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn exponential_midpoint(
+    flow: &FlowField,
+    x: DVec3,
+    v: DVec3,
+    a: DVec3,
+    tau: f64,
+    decay: f64,
+    relax: f64,
+    half_relax: f64,
+    dt: f64,
+) -> (DVec3, DVec3) {
+    let u0 = flow.velocity(x);
+    let w0 = u0 + a * tau;
+    let xh = x + w0 * (0.5 * dt) + (v - w0) * half_relax;
+    let u = flow.velocity(xh);
+    exponential_drift(x, v, u, a, tau, decay, relax, dt)
+}
+
+type MoveQuery<'w, 's, T> = Query<
+    'w,
+    's,
+    (
+        &'static mut Position,
+        &'static mut Velocity,
+        T,
+        &'static Mass,
+        Option<&'static Force>,
+        Option<&'static BodyAcceleration>,
+    ),
+>;
+
+/// Stokes drag, exponential scheme, precomputed factors: the fast path.
+pub fn integrate_stokes_exponential(
+    motion: Res<Motion>,
+    flow: Res<FlowField>,
+    health: Res<Health>,
+    mut q: MoveQuery<&'static StokesFactors>,
+) {
+    let dt = motion.dt;
+    let flow = *flow;
+    let health = &*health;
+    q.par_iter_mut().for_each(|(mut x, mut v, sf, m, f, g)| {
+        let a = g.map_or(DVec3::ZERO, |g| g.0);
+        let vk = kick(v.0, f, m.0, dt);
+        let (x1, v1) = exponential_midpoint(
+            &flow,
+            x.0,
+            vk,
+            a,
+            sf.tau,
+            sf.decay,
+            sf.relax,
+            sf.half_relax,
+            dt,
+        );
+        if !(x1.is_finite() && v1.is_finite()) {
+            health.raise();
+        }
+        x.0 = x1;
+        v.0 = v1;
+    });
+}
+
+/// Response time under `law` for the current slip, s.
+#[inline]
+fn effective_tau(law: DragLaw, tau: f64, fc: &FluidCoupling, fluid: &Fluid, slip: f64) -> f64 {
+    let re = particle_reynolds(fc.drag_diameter, slip, fluid.density, fluid.viscosity);
+    tau / law.correction(re)
+}
+
+/// Reynolds-dependent drag (e.g. Schiller–Naumann), exponential scheme: τ is evaluated
+/// from the slip at the start of the step and held over it.
+pub fn integrate_drag_exponential(
+    motion: Res<Motion>,
+    flow: Res<FlowField>,
+    fluid: Res<Fluid>,
+    health: Res<Health>,
+    mut q: MoveQuery<(&'static StokesFactors, &'static FluidCoupling)>,
+) {
+    let (dt, law) = (motion.dt, motion.drag.unwrap_or_default());
+    let (flow, fluid) = (*flow, *fluid);
+    let health = &*health;
+    q.par_iter_mut()
+        .for_each(|(mut x, mut v, (sf, fc), m, f, g)| {
+            let a = g.map_or(DVec3::ZERO, |g| g.0);
+            let vk = kick(v.0, f, m.0, dt);
+            let slip = (flow.velocity(x.0) - vk).length();
+            let tau = effective_tau(law, sf.tau, fc, &fluid, slip);
+            let (decay, relax) = exponential_factors(tau, dt);
+            let (_, half_relax) = exponential_factors(tau, 0.5 * dt);
+            let (x1, v1) =
+                exponential_midpoint(&flow, x.0, vk, a, tau, decay, relax, half_relax, dt);
+            if !(x1.is_finite() && v1.is_finite()) {
+                health.raise();
+            }
+            x.0 = x1;
+            v.0 = v1;
+        });
+}
+
+/// Any drag law, semi-implicit Euler; sub-stepped so that every sub-step has dt ≤ τ/2.
+pub fn integrate_drag_explicit(
+    motion: Res<Motion>,
+    flow: Res<FlowField>,
+    fluid: Res<Fluid>,
+    health: Res<Health>,
+    mut q: MoveQuery<(&'static StokesFactors, &'static FluidCoupling)>,
+) {
+    let (dt, law) = (motion.dt, motion.drag.unwrap_or_default());
+    let (flow, fluid) = (*flow, *fluid);
+    let health = &*health;
+    q.par_iter_mut()
+        .for_each(|(mut x, mut v, (sf, fc), m, f, g)| {
+            let mut a = g.map_or(DVec3::ZERO, |g| g.0);
+            if let Some(f) = f {
+                a += f.0 / m.0;
+            }
+            let (mut xi, mut vi) = (x.0, v.0);
+            let slip0 = (flow.velocity(xi) - vi).length();
+            let n = explicit_substeps(effective_tau(law, sf.tau, fc, &fluid, slip0), dt);
+            let h = dt / n as f64;
+            for _ in 0..n {
+                let u = flow.velocity(xi);
+                let tau = effective_tau(law, sf.tau, fc, &fluid, (u - vi).length());
+                (xi, vi) = explicit_euler(xi, vi, u, a, tau, h);
+            }
+            if !(xi.is_finite() && vi.is_finite()) {
+                health.raise();
+            }
+            x.0 = xi;
+            v.0 = vi;
+        });
+}
+
+/// No fluid: contact kick, then the exact drift under gravity (free fall is exact;
+/// with contacts alone this is symplectic Euler).
+pub fn integrate_ballistic(motion: Res<Motion>, health: Res<Health>, mut q: MoveQuery<()>) {
+    let dt = motion.dt;
+    let health = &*health;
+    q.par_iter_mut().for_each(|(mut x, mut v, (), m, f, g)| {
+        let a = g.map_or(DVec3::ZERO, |g| g.0);
+        let vk = kick(v.0, f, m.0, dt);
+        let x1 = x.0 + vk * dt + 0.5 * a * dt * dt;
+        let v1 = vk + a * dt;
+        if !(x1.is_finite() && v1.is_finite()) {
+            health.raise();
+        }
+        x.0 = x1;
+        v.0 = v1;
+    });
+}

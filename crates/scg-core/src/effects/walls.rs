@@ -1,0 +1,161 @@
+//! Walls: normal contact forces between particles and rigid walls.
+//!
+//! A wall is treated as a body of the same material with infinite radius and mass, so a
+//! contact has R* = d/2, m* = m and E* from the material. When the material has friction
+//! (or the contacts effect sets rolling friction) [`wall_contact_forces`] replaces
+//! [`wall_normal_forces`]: the same normal force plus the tangential Mindlin spring with
+//! per-particle history ([`WallHistory`]), the Coulomb limit, and the torque −r·n × F_t.
+
+use bevy_ecs::prelude::*;
+
+use crate::components::*;
+use crate::contact::tangential::{rolling_torque, tangential_force};
+use crate::contact::{Material, NormalLaw, TangentialLaw};
+use crate::step::{StepBuilder, StepSet};
+use crate::walls::WallShape;
+
+/// A named wall.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Wall {
+    /// Name (for recordings and messages).
+    pub name: String,
+    /// Geometry.
+    pub shape: WallShape,
+}
+
+/// The scene's walls and their contact law (resource).
+#[derive(Resource, Clone, Debug, PartialEq)]
+pub struct WallSet {
+    /// The walls.
+    pub walls: Vec<Wall>,
+    /// Normal contact law.
+    pub law: NormalLaw,
+    /// Wall material (also the particles' when the scene has no particle contacts).
+    pub material: Material,
+}
+
+/// Tangential law of wall contacts (resource; present only when it is active).
+#[derive(Resource, Clone, Copy, Debug, PartialEq)]
+pub struct WallTangential {
+    /// The law.
+    pub law: TangentialLaw,
+    /// Effective shear modulus G* (particle against wall), Pa.
+    pub g_eff: f64,
+}
+
+/// Add the wall systems: normal forces only, or with the tangential law when given.
+pub fn plugin(world: &mut World, b: &mut StepBuilder, tangential: Option<WallTangential>) {
+    match tangential {
+        Some(t) if t.law.active() => {
+            world.insert_resource(t);
+            b.add(
+                StepSet::Forces,
+                "walls",
+                "wall_contact_forces",
+                wall_contact_forces,
+            );
+        }
+        _ => b.add(
+            StepSet::Forces,
+            "walls",
+            "wall_normal_forces",
+            wall_normal_forces,
+        ),
+    }
+}
+
+/// Clear the force and torque accumulators (first system of the force stage).
+pub fn clear_forces(mut q: Query<(&mut Force, Option<&mut Torque>)>) {
+    q.par_iter_mut().for_each(|(mut f, t)| {
+        f.0 = glam::DVec3::ZERO;
+        if let Some(mut t) = t {
+            t.0 = glam::DVec3::ZERO;
+        }
+    });
+}
+
+/// Normal force of every wall on every particle touching it.
+pub fn wall_normal_forces(
+    walls: Res<WallSet>,
+    mut q: Query<(&Position, &Velocity, &Diameter, &Mass, &mut Force)>,
+) {
+    let walls = &*walls;
+    let e_eff = walls.material.effective_modulus();
+    q.par_iter_mut().for_each(|(x, v, d, m, mut f)| {
+        let r = 0.5 * d.0;
+        for w in &walls.walls {
+            if let Some(t) = w.shape.touch(x.0, r) {
+                let vn = v.0.dot(t.normal);
+                let (fn_, _) = walls.law.force(t.overlap, vn, e_eff, r, m.0);
+                f.0 += fn_ * t.normal;
+            }
+        }
+    });
+}
+
+type WallQuery<'w, 's> = Query<
+    'w,
+    's,
+    (
+        &'static Position,
+        &'static Velocity,
+        &'static AngularVelocity,
+        &'static Diameter,
+        &'static Mass,
+        &'static mut Force,
+        &'static mut Torque,
+        &'static mut WallHistory,
+    ),
+>;
+
+/// Normal and tangential force, and torque, of every wall on every particle touching it.
+pub fn wall_contact_forces(
+    walls: Res<WallSet>,
+    tangential: Res<WallTangential>,
+    motion: Res<crate::effects::motion::Motion>,
+    mut q: WallQuery,
+) {
+    let walls = &*walls;
+    let tl = tangential.law;
+    let g_eff = tangential.g_eff;
+    let dt = motion.dt;
+    let e_eff = walls.material.effective_modulus();
+    q.par_iter_mut()
+        .for_each(|(x, v, w, d, m, mut f, mut torque, mut hist)| {
+            let r = 0.5 * d.0;
+            let hist = &mut hist.0;
+            let old_len = hist.len();
+            for (wi, wall) in walls.walls.iter().enumerate() {
+                let wi = wi as u32;
+                let Some(t) = wall.shape.touch(x.0, r) else {
+                    continue;
+                };
+                let n = t.normal; // from the wall toward the centre
+                // Velocity of the contact point (at −r·n from the centre); the wall is at rest.
+                let vc = v.0 + w.0.cross(-r * n);
+                let vn = vc.dot(n);
+                let (fn_, kn) = walls.law.force(t.overlap, vn, e_eff, r, m.0);
+                f.0 += fn_ * n;
+                let prev = hist[..old_len]
+                    .iter()
+                    .find(|h| h.0 == wi)
+                    .map_or(glam::DVec3::ZERO, |h| h.1);
+                let mut xi = glam::DVec3::ZERO;
+                if tl.friction > 0.0 {
+                    let vt = vc - vn * n;
+                    let kt = tl.stiffness(g_eff, r, t.overlap, kn);
+                    let eta = tl.damping * (m.0 * kt).sqrt();
+                    let u = tangential_force(prev, n, vt, kt, eta, tl.friction * fn_.abs(), dt);
+                    xi = u.history;
+                    f.0 += u.force;
+                    torque.0 += (-r * n).cross(u.force);
+                }
+                if tl.rolling > 0.0 {
+                    torque.0 += rolling_torque(tl.rolling, fn_.abs(), r, w.0);
+                }
+                hist.push((wi, xi));
+            }
+            // Keep only the contacts of this step (appended after the old entries).
+            hist.drain(..old_len);
+        });
+}

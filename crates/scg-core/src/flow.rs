@@ -1,0 +1,143 @@
+//! Prescribed fluid: its properties and its velocity field (one-way coupling).
+
+use bevy_ecs::prelude::Resource;
+use glam::DVec3;
+
+/// Fluid properties (resource).
+#[derive(Resource, Clone, Copy, Debug, PartialEq)]
+pub struct Fluid {
+    /// Density ρ_f, kg/m³.
+    pub density: f64,
+    /// Dynamic viscosity μ, Pa·s.
+    pub viscosity: f64,
+}
+
+/// A rotating flow about an axis: a forced vortex u_θ = ω·r plus a flow toward the axis
+/// u_r = −k·ω·r (paper Section 4; k is `inflow_ratio`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Vortex {
+    /// A point on the axis, m.
+    pub center: DVec3,
+    /// Unit vector along the axis; the rotation is right-handed about it.
+    pub axis: DVec3,
+    /// Angular speed ω, rad/s.
+    pub omega: f64,
+    /// Inflow speed toward the axis as a fraction of the local tangential speed, dimensionless.
+    pub inflow_ratio: f64,
+}
+
+impl Vortex {
+    /// Component of `x − center` perpendicular to the axis (the radial vector), m.
+    #[inline]
+    pub fn radial(&self, x: DVec3) -> DVec3 {
+        let rel = x - self.center;
+        rel - rel.dot(self.axis) * self.axis
+    }
+
+    /// Fluid velocity at `x`, m/s. Linear in the radial vector, so r = 0 gives exactly zero.
+    #[inline]
+    pub fn velocity(&self, x: DVec3) -> DVec3 {
+        let r = self.radial(x);
+        self.omega * (self.axis.cross(r) - self.inflow_ratio * r)
+    }
+}
+
+/// The flow field (resource).
+#[derive(Resource, Clone, Copy, Debug, PartialEq)]
+pub enum FlowField {
+    /// Fluid at rest.
+    Still,
+    /// The same velocity everywhere, m/s.
+    Uniform(DVec3),
+    /// Forced vortex with inflow toward the axis.
+    Vortex(Vortex),
+    /// The classifier of the paper's Section 5: a vortex, plus a constant axial velocity
+    /// wherever the distance from the axis is below the outlet nozzle radius.
+    Classifier {
+        /// The rotating part.
+        vortex: Vortex,
+        /// Radius of the outlet nozzle, m.
+        nozzle_radius: f64,
+        /// Axial velocity inside the nozzle radius, m/s, signed along `vortex.axis`.
+        axial_speed: f64,
+    },
+}
+
+impl FlowField {
+    /// Fluid velocity at `x`, m/s. Finite for every finite `x`, including on an axis.
+    #[inline]
+    pub fn velocity(&self, x: DVec3) -> DVec3 {
+        match self {
+            FlowField::Still => DVec3::ZERO,
+            FlowField::Uniform(u) => *u,
+            FlowField::Vortex(v) => v.velocity(x),
+            FlowField::Classifier {
+                vortex,
+                nozzle_radius,
+                axial_speed,
+            } => {
+                let r = vortex.radial(x);
+                let u = vortex.omega * (vortex.axis.cross(r) - vortex.inflow_ratio * r);
+                if r.length_squared() < nozzle_radius * nozzle_radius {
+                    u + *axial_speed * vortex.axis
+                } else {
+                    u
+                }
+            }
+        }
+    }
+
+    /// Characteristic rate of change of the flow along a path, 1/s (ω for rotating flows,
+    /// 0 for uniform ones). Used by the `auto` time step.
+    pub fn rate(&self) -> f64 {
+        match self {
+            FlowField::Still | FlowField::Uniform(_) => 0.0,
+            FlowField::Vortex(v) | FlowField::Classifier { vortex: v, .. } => {
+                v.omega.abs() * (1.0 + v.inflow_ratio.abs())
+            }
+        }
+    }
+}
+
+/// Convert revolutions per minute to rad/s.
+pub fn rpm_to_rad_per_s(rpm: f64) -> f64 {
+    rpm * 2.0 * std::f64::consts::PI / 60.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn vortex() -> Vortex {
+        Vortex {
+            center: DVec3::ZERO,
+            axis: DVec3::Z,
+            omega: rpm_to_rad_per_s(300.0),
+            inflow_ratio: 0.1,
+        }
+    }
+
+    #[test]
+    fn vortex_speeds() {
+        let v = vortex();
+        let x = DVec3::new(2e-4, 0.0, 7.0);
+        let u = v.velocity(x);
+        // tangential +y at ω·r, radial −x at 0.1·ω·r, no axial part.
+        assert!((u.y - v.omega * 2e-4).abs() < 1e-18);
+        assert!((u.x + 0.1 * v.omega * 2e-4).abs() < 1e-18);
+        assert_eq!(u.z, 0.0);
+    }
+
+    #[test]
+    fn axis_is_finite_and_still() {
+        let v = vortex();
+        assert_eq!(v.velocity(DVec3::new(0.0, 0.0, 3.0)), DVec3::ZERO);
+        let c = FlowField::Classifier {
+            vortex: v,
+            nozzle_radius: 1e-3,
+            axial_speed: 1.0,
+        };
+        assert_eq!(c.velocity(DVec3::new(0.0, 0.0, -1.0)), DVec3::Z);
+        assert_eq!(c.velocity(DVec3::new(2e-3, 0.0, 0.0)).z, 0.0);
+    }
+}

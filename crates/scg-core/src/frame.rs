@@ -1,0 +1,126 @@
+//! What a run hands to its recorders: snapshots of the particle state ([`Frame`]) and a
+//! description of the run ([`RunMeta`]). The core does no I/O; a recorder (see the
+//! `scg-record` crate) implements [`FrameSink`] and is inserted as a [`Recorders`] resource.
+
+use bevy_ecs::prelude::Resource;
+
+/// One recorded snapshot of every live particle, sorted by particle id.
+///
+/// All vectors have the same length (one entry per particle).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Frame {
+    /// Step counter at which the frame was taken (t = step·dt).
+    pub step: u64,
+    /// Simulation time, s (= step·dt).
+    pub time: f64,
+    /// Stable particle id (unique over the run, never reused).
+    pub id: Vec<u32>,
+    /// Index of the particle's group in [`RunMeta::groups`].
+    pub group: Vec<u32>,
+    /// Centre position, m.
+    pub position: Vec<[f64; 3]>,
+    /// Translational velocity, m/s.
+    pub velocity: Vec<[f64; 3]>,
+    /// Diameter as simulated (after coarse graining), m.
+    pub diameter: Vec<f64>,
+    /// Density as simulated (after coarse graining), kg/m³.
+    pub density: Vec<f64>,
+    /// Scalars measured at this frame, e.g. `("count/small", 12.0)`; see [`crate::stats`].
+    pub stats: Vec<(String, f64)>,
+}
+
+impl Frame {
+    /// Number of particles in the frame.
+    pub fn len(&self) -> usize {
+        self.id.len()
+    }
+    /// True when the frame holds no particle.
+    pub fn is_empty(&self) -> bool {
+        self.id.is_empty()
+    }
+}
+
+/// Description of one particle group, as recorded.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GroupMeta {
+    /// Group name from the scene (used in entity paths and topics).
+    pub name: String,
+    /// Coarse-graining law name: `scg`, `none`, `mass` or `parcel`.
+    pub law: String,
+    /// Coarse-graining ratio α (1 = original particles).
+    pub alpha: f64,
+    /// Original (un-coarse-grained) diameter, m; for a size distribution, its mean.
+    pub original_diameter: f64,
+    /// Display colour, sRGB.
+    pub color: [u8; 3],
+}
+
+/// A static line strip that draws part of the scene's geometry (m).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Outline {
+    /// Name of the geometry item (e.g. `vessel`, `nozzle`, `floor`).
+    pub name: String,
+    /// Line strips, each a list of points, m.
+    pub strips: Vec<Vec<[f64; 3]>>,
+}
+
+/// Description of a run, written once at the start of each recording.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct RunMeta {
+    /// Case name (the scene file's stem), used for file names.
+    pub case: String,
+    /// scg version that made the recording.
+    pub scg_version: String,
+    /// Random seed of the scene.
+    pub seed: u64,
+    /// Time step, s.
+    pub dt: f64,
+    /// Steps between recorded frames.
+    pub record_every: u64,
+    /// Particle groups, indexed by [`Frame::group`].
+    pub groups: Vec<GroupMeta>,
+    /// The scene file's text, stored so a recording can be re-run.
+    pub scene_toml: String,
+    /// Geometry to draw once, as static line strips.
+    pub outlines: Vec<Outline>,
+    /// Warnings from the scene check (`scg check`), logged as text.
+    pub warnings: Vec<String>,
+}
+
+/// Something that stores frames: a file writer, an in-memory buffer in tests…
+pub trait FrameSink: Send + Sync {
+    /// Store one frame. An error stops the run.
+    fn write_frame(&mut self, frame: &Frame) -> Result<(), String>;
+    /// Flush and close; called exactly once at the end of a run (also after an interrupt).
+    fn finish(&mut self) -> Result<(), String>;
+}
+
+/// The recorders of a run (resource). The recording system builds a [`Frame`] every
+/// `record_every` steps and hands it to each sink in order.
+#[derive(Resource, Default)]
+pub struct Recorders {
+    /// The sinks, written in order.
+    pub sinks: Vec<Box<dyn FrameSink>>,
+    /// The first error a sink returned, if any (the run loop stops on it).
+    pub error: Option<String>,
+}
+
+/// A sink that keeps every frame in memory (tests, analysis of a live run).
+#[derive(Clone, Debug, Default)]
+pub struct MemorySink {
+    /// Frames received so far.
+    pub frames: std::sync::Arc<std::sync::Mutex<Vec<Frame>>>,
+}
+
+impl FrameSink for MemorySink {
+    fn write_frame(&mut self, frame: &Frame) -> Result<(), String> {
+        self.frames
+            .lock()
+            .map_err(|e| e.to_string())?
+            .push(frame.clone());
+        Ok(())
+    }
+    fn finish(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+}

@@ -1,0 +1,322 @@
+//! Verlet neighbour list built by sorted-cell binning (pure).
+//!
+//! Two particles i, j are neighbours when their centre distance (minimum image in a
+//! periodic box) is below r_i + r_j + skin. Particles are binned in cubic cells of edge
+//! ≥ d_max + skin (d_max the largest diameter), so every neighbour of a particle lies in its
+//! own cell or one of the 26 around it, whatever the size ratio. The particles are sorted by
+//! cell once per build and a hash map gives each occupied cell's range, so memory and work
+//! stay linear in N however far apart the particles are (no dense grid, no all-pairs
+//! fallback). The pair list is canonical: (i, j) with i < j, sorted.
+//!
+//! The list is rebuilt only when some particle moved more than half the skin since the
+//! last build (then no pair can have come into contact unseen).
+
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+use glam::DVec3;
+
+/// An orthogonal periodic box [0, L) in each direction (positions may lie anywhere;
+/// they are wrapped for binning and distances use the minimum image).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PeriodicBox {
+    /// Box lengths, m.
+    pub lengths: DVec3,
+}
+
+impl PeriodicBox {
+    /// The minimum-image form of the separation `d`.
+    #[inline]
+    pub fn min_image(&self, d: DVec3) -> DVec3 {
+        d - self.lengths * (d / self.lengths).round()
+    }
+
+    /// `x` wrapped into [0, L).
+    #[inline]
+    pub fn wrap(&self, x: DVec3) -> DVec3 {
+        let w = x - self.lengths * (x / self.lengths).floor();
+        // Rounding can give exactly L; fold it back to 0.
+        DVec3::select(w.cmpge(self.lengths), DVec3::ZERO, w)
+    }
+}
+
+/// Separation x_j − x_i, minimum image when `periodic`.
+#[inline]
+pub fn separation(xi: DVec3, xj: DVec3, periodic: Option<&PeriodicBox>) -> DVec3 {
+    let d = xj - xi;
+    match periodic {
+        Some(b) => b.min_image(d),
+        None => d,
+    }
+}
+
+/// A tiny deterministic hasher for integer cell keys (FxHash style).
+#[derive(Default)]
+struct CellHasher(u64);
+
+impl Hasher for CellHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for b in bytes {
+            self.write_u64(*b as u64);
+        }
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    fn write_i64(&mut self, x: i64) {
+        self.write_u64(x as u64);
+    }
+}
+
+type CellMap = HashMap<[i64; 3], (u32, u32), BuildHasherDefault<CellHasher>>;
+
+/// The Verlet neighbour list.
+#[derive(Clone, Debug, Default)]
+pub struct NeighbourList {
+    /// Skin distance, m.
+    pub skin: f64,
+    /// Periodic box, if any.
+    pub periodic: Option<PeriodicBox>,
+    /// Candidate pairs (i, j), i < j, sorted.
+    pub pairs: Vec<[u32; 2]>,
+    /// Positions at the last build.
+    reference: Vec<DVec3>,
+    /// Builds so far.
+    pub builds: u64,
+    // Scratch buffers kept between builds.
+    order: Vec<([i64; 3], u32)>,
+    cells: CellMap,
+}
+
+impl NeighbourList {
+    /// An empty list with skin `skin` (m) and an optional periodic box.
+    pub fn new(skin: f64, periodic: Option<PeriodicBox>) -> Self {
+        NeighbourList {
+            skin,
+            periodic,
+            ..Default::default()
+        }
+    }
+
+    /// True when the particle count changed or some particle moved more than skin/2
+    /// since the last build.
+    pub fn needs_rebuild(&self, pos: &[DVec3]) -> bool {
+        if pos.len() != self.reference.len() || self.builds == 0 {
+            return true;
+        }
+        let lim = 0.25 * self.skin * self.skin;
+        pos.iter()
+            .zip(&self.reference)
+            .any(|(x, r)| (*x - *r).length_squared() > lim)
+    }
+
+    /// Rebuild if needed; returns true when it rebuilt.
+    pub fn update(&mut self, pos: &[DVec3], radius: &[f64]) -> bool {
+        if self.needs_rebuild(pos) {
+            self.build(pos, radius);
+            true
+        } else {
+            false
+        }
+    }
+
+    /// Rebuild the list now from positions and radii (m).
+    pub fn build(&mut self, pos: &[DVec3], radius: &[f64]) {
+        assert_eq!(pos.len(), radius.len());
+        self.builds += 1;
+        self.reference.clear();
+        self.reference.extend_from_slice(pos);
+        self.pairs.clear();
+        let n = pos.len();
+        if n < 2 {
+            return;
+        }
+        let rmax = radius.iter().copied().fold(0.0_f64, f64::max);
+        let min_cell = (2.0 * rmax + self.skin).max(f64::MIN_POSITIVE);
+        // Cells: edge per axis, count per axis (periodic only).
+        let (edge, dims) = match self.periodic {
+            Some(b) => {
+                let dims = (b.lengths / min_cell).floor().max(DVec3::ONE);
+                (
+                    b.lengths / dims,
+                    Some([dims.x as i64, dims.y as i64, dims.z as i64]),
+                )
+            }
+            None => (DVec3::splat(min_cell), None),
+        };
+        let cell_of = |x: DVec3| -> [i64; 3] {
+            let x = match self.periodic {
+                Some(b) => b.wrap(x),
+                None => x,
+            };
+            let c = (x / edge).floor();
+            let mut k = [c.x as i64, c.y as i64, c.z as i64];
+            if let Some(d) = dims {
+                for a in 0..3 {
+                    k[a] = k[a].clamp(0, d[a] - 1);
+                }
+            }
+            k
+        };
+        self.order.clear();
+        self.order
+            .extend(pos.iter().enumerate().map(|(i, x)| (cell_of(*x), i as u32)));
+        self.order.sort_unstable();
+        self.cells.clear();
+        let mut start = 0;
+        for k in 1..=n {
+            if k == n || self.order[k].0 != self.order[start].0 {
+                self.cells
+                    .insert(self.order[start].0, (start as u32, k as u32));
+                start = k;
+            }
+        }
+        let periodic = self.periodic;
+        let mut neighbour_cells: Vec<[i64; 3]> = Vec::with_capacity(27);
+        let mut cand: Vec<u32> = Vec::new();
+        for i in 0..n {
+            let c = cell_of(pos[i]);
+            neighbour_cells.clear();
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        let mut k = [c[0] + dx, c[1] + dy, c[2] + dz];
+                        if let Some(d) = dims {
+                            for a in 0..3 {
+                                k[a] = k[a].rem_euclid(d[a]);
+                            }
+                        }
+                        neighbour_cells.push(k);
+                    }
+                }
+            }
+            if dims.is_some() {
+                // Few cells per axis: the same cell may appear more than once.
+                neighbour_cells.sort_unstable();
+                neighbour_cells.dedup();
+            }
+            cand.clear();
+            for k in &neighbour_cells {
+                if let Some(&(a, b)) = self.cells.get(k) {
+                    for &(_, j) in &self.order[a as usize..b as usize] {
+                        if (j as usize) <= i {
+                            continue;
+                        }
+                        let d = separation(pos[i], pos[j as usize], periodic.as_ref());
+                        let cut = radius[i] + radius[j as usize] + self.skin;
+                        if d.length_squared() < cut * cut {
+                            cand.push(j);
+                        }
+                    }
+                }
+            }
+            cand.sort_unstable();
+            self.pairs.extend(cand.iter().map(|&j| [i as u32, j]));
+        }
+    }
+}
+
+/// All pairs (i < j, sorted) with centre distance below r_i + r_j + skin, by the O(N²)
+/// search (reference for tests).
+pub fn brute_force_pairs(
+    pos: &[DVec3],
+    radius: &[f64],
+    skin: f64,
+    periodic: Option<&PeriodicBox>,
+) -> Vec<[u32; 2]> {
+    let mut out = Vec::new();
+    for i in 0..pos.len() {
+        for j in i + 1..pos.len() {
+            let d = separation(pos[i], pos[j], periodic);
+            let cut = radius[i] + radius[j] + skin;
+            if d.length_squared() < cut * cut {
+                out.push([i as u32, j as u32]);
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn cloud() -> impl Strategy<Value = (Vec<(f64, f64, f64, f64)>, f64, bool)> {
+        (
+            prop::collection::vec((0.0..1.0f64, 0.0..1.0f64, 0.0..1.0f64, 0.0..1.0f64), 0..250),
+            0.0..0.05f64,
+            any::<bool>(),
+        )
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+        #[test]
+        fn matches_brute_force((pts, skin, periodic) in cloud()) {
+            // Box 1 × 0.8 × 1.3, diameters 0.01..0.08 (1:8), positions partly outside the
+            // box to exercise wrapping.
+            let l = DVec3::new(1.0, 0.8, 1.3);
+            let pos: Vec<DVec3> = pts
+                .iter()
+                .map(|p| DVec3::new(p.0 * 1.5 - 0.25, p.1 * 0.8, p.2 * 2.0 - 0.5))
+                .collect();
+            let radius: Vec<f64> = pts.iter().map(|p| 0.5 * (0.01 + 0.07 * p.3)).collect();
+            let pb = periodic.then_some(PeriodicBox { lengths: l });
+            let mut list = NeighbourList::new(skin, pb);
+            list.build(&pos, &radius);
+            let expect = brute_force_pairs(&pos, &radius, skin, pb.as_ref());
+            prop_assert_eq!(&list.pairs, &expect);
+        }
+
+        #[test]
+        fn dense_polydisperse_matches_brute_force(pts in prop::collection::vec((0.0..1.0f64, 0.0..1.0f64, 0.0..1.0f64, 0.0..1.0f64), 2..400), periodic in any::<bool>()) {
+            // A small box packed with particles (many neighbours per particle, few cells
+            // per axis in the periodic case).
+            let l = DVec3::new(0.3, 0.25, 0.2);
+            let pos: Vec<DVec3> = pts.iter().map(|p| DVec3::new(p.0, p.1, p.2) * l).collect();
+            let radius: Vec<f64> = pts.iter().map(|p| 0.5 * (0.005 + 0.035 * p.3)).collect();
+            let pb = periodic.then_some(PeriodicBox { lengths: l });
+            let mut list = NeighbourList::new(0.004, pb);
+            list.build(&pos, &radius);
+            prop_assert_eq!(&list.pairs, &brute_force_pairs(&pos, &radius, 0.004, pb.as_ref()));
+        }
+    }
+
+    #[test]
+    fn rebuild_only_after_half_skin() {
+        let mut pos = vec![DVec3::ZERO, DVec3::new(0.1, 0.0, 0.0)];
+        let r = vec![0.05, 0.05];
+        let mut l = NeighbourList::new(0.02, None);
+        assert!(l.update(&pos, &r));
+        pos[0].x += 0.009;
+        assert!(!l.update(&pos, &r));
+        pos[0].x += 0.002;
+        assert!(l.update(&pos, &r));
+        assert_eq!(l.builds, 2);
+    }
+
+    #[test]
+    fn far_apart_particles_stay_cheap() {
+        // Two clusters 1e6 cell edges apart: hashing keeps memory per occupied cell.
+        let pos = vec![DVec3::ZERO, DVec3::new(0.001, 0.0, 0.0), DVec3::splat(1e4)];
+        let r = vec![0.001, 0.001, 0.001];
+        let mut l = NeighbourList::new(0.0001, None);
+        l.build(&pos, &r);
+        assert_eq!(l.pairs, vec![[0, 1]]);
+    }
+
+    #[test]
+    fn minimum_image() {
+        let b = PeriodicBox {
+            lengths: DVec3::splat(1.0),
+        };
+        let d = b.min_image(DVec3::new(0.9, -0.6, 0.2));
+        assert!((d - DVec3::new(-0.1, 0.4, 0.2)).length() < 1e-15);
+        let w = b.wrap(DVec3::new(-0.25, 1.5, 0.0));
+        assert!((w - DVec3::new(0.75, 0.5, 0.0)).length() < 1e-15);
+    }
+}

@@ -1,0 +1,208 @@
+//! Wall geometry (pure): where a sphere touches a wall, and how to draw the wall.
+
+use glam::DVec3;
+use std::f64::consts::TAU;
+
+/// A rigid wall.
+#[derive(Clone, Debug, PartialEq)]
+pub enum WallShape {
+    /// An infinite plane; particles live on the side `normal` points to.
+    Plane {
+        /// A point on the plane, m.
+        point: DVec3,
+        /// Unit normal pointing into the domain.
+        normal: DVec3,
+    },
+    /// The inside of a cylinder (a vessel); particles live inside it.
+    CylinderInside {
+        /// A point on the axis, m.
+        center: DVec3,
+        /// Unit axis vector.
+        axis: DVec3,
+        /// Radius, m.
+        radius: f64,
+        /// Axial extent (from, to) relative to `center` along `axis`, m; `None` = infinite.
+        extent: Option<(f64, f64)>,
+    },
+    /// The outside of a cylinder (e.g. an outlet nozzle pipe); particles live outside it.
+    CylinderOutside {
+        /// A point on the axis, m.
+        center: DVec3,
+        /// Unit axis vector.
+        axis: DVec3,
+        /// Radius, m.
+        radius: f64,
+        /// Axial extent (from, to) relative to `center` along `axis`, m; `None` = infinite.
+        extent: Option<(f64, f64)>,
+    },
+}
+
+/// Where a sphere touches a wall.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WallTouch {
+    /// Overlap δ > 0, m.
+    pub overlap: f64,
+    /// Unit normal from the wall toward the sphere centre.
+    pub normal: DVec3,
+}
+
+fn in_extent(extent: Option<(f64, f64)>, h: f64) -> bool {
+    extent.is_none_or(|(a, b)| h >= a && h <= b)
+}
+
+impl WallShape {
+    /// Signed distance from the wall surface to `x`, positive on the domain side, m, with
+    /// the unit normal pointing into the domain; `None` outside a finite cylinder's extent.
+    pub fn distance(&self, x: DVec3) -> Option<(f64, DVec3)> {
+        match *self {
+            WallShape::Plane { point, normal } => Some(((x - point).dot(normal), normal)),
+            WallShape::CylinderInside {
+                center,
+                axis,
+                radius,
+                extent,
+            } => {
+                let rel = x - center;
+                let h = rel.dot(axis);
+                if !in_extent(extent, h) {
+                    return None;
+                }
+                let r = rel - h * axis;
+                let rho = r.length();
+                // On the axis any direction is as good; pick one perpendicular to the axis.
+                let outward = if rho > 0.0 {
+                    r / rho
+                } else {
+                    axis.any_orthonormal_vector()
+                };
+                Some((radius - rho, -outward))
+            }
+            WallShape::CylinderOutside {
+                center,
+                axis,
+                radius,
+                extent,
+            } => {
+                let rel = x - center;
+                let h = rel.dot(axis);
+                if !in_extent(extent, h) {
+                    return None;
+                }
+                let r = rel - h * axis;
+                let rho = r.length();
+                let outward = if rho > 0.0 {
+                    r / rho
+                } else {
+                    axis.any_orthonormal_vector()
+                };
+                Some((rho - radius, outward))
+            }
+        }
+    }
+
+    /// Contact of a sphere of radius `radius` (m) centred at `x`, if it overlaps the wall.
+    #[inline]
+    pub fn touch(&self, x: DVec3, radius: f64) -> Option<WallTouch> {
+        let (dist, normal) = self.distance(x)?;
+        let overlap = radius - dist;
+        (overlap > 0.0).then_some(WallTouch { overlap, normal })
+    }
+
+    /// True when a sphere centre `x` is on the domain side (distance ≥ 0).
+    pub fn contains(&self, x: DVec3) -> bool {
+        self.distance(x).is_none_or(|(d, _)| d >= 0.0)
+    }
+
+    /// Line strips that draw the wall; `size` (m) sets the drawn size of infinite shapes.
+    pub fn outline(&self, size: f64) -> Vec<Vec<[f64; 3]>> {
+        let p = |v: DVec3| [v.x, v.y, v.z];
+        match *self {
+            WallShape::Plane { point, normal } => {
+                let (a, b) = normal.any_orthonormal_pair();
+                let h = 0.5 * size;
+                let c = [(-h, -h), (h, -h), (h, h), (-h, h), (-h, -h)];
+                vec![c.iter().map(|(s, t)| p(point + a * *s + b * *t)).collect()]
+            }
+            WallShape::CylinderInside {
+                center,
+                axis,
+                radius,
+                extent,
+            }
+            | WallShape::CylinderOutside {
+                center,
+                axis,
+                radius,
+                extent,
+            } => {
+                let (a, b) = axis.any_orthonormal_pair();
+                let (h0, h1) = extent.unwrap_or((-0.5 * size, 0.5 * size));
+                let ring = |h: f64| -> Vec<[f64; 3]> {
+                    (0..=48)
+                        .map(|k| {
+                            let phi = TAU * k as f64 / 48.0;
+                            p(center + axis * h + radius * (a * phi.cos() + b * phi.sin()))
+                        })
+                        .collect()
+                };
+                let mut strips = vec![ring(h0), ring(h1)];
+                for k in 0..4 {
+                    let phi = TAU * k as f64 / 4.0;
+                    let off = radius * (a * phi.cos() + b * phi.sin());
+                    strips.push(vec![
+                        p(center + axis * h0 + off),
+                        p(center + axis * h1 + off),
+                    ]);
+                }
+                strips
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cylinder_inside_touch() {
+        let w = WallShape::CylinderInside {
+            center: DVec3::ZERO,
+            axis: DVec3::Z,
+            radius: 1.0,
+            extent: None,
+        };
+        let t = w.touch(DVec3::new(0.95, 0.0, 3.0), 0.1).unwrap();
+        assert!((t.overlap - 0.05).abs() < 1e-12);
+        assert_eq!(t.normal, DVec3::new(-1.0, 0.0, 0.0));
+        assert!(w.touch(DVec3::ZERO, 0.1).is_none());
+        // On the axis the distance is well defined and finite.
+        let (d, n) = w.distance(DVec3::ZERO).unwrap();
+        assert_eq!(d, 1.0);
+        assert!(n.is_finite());
+    }
+
+    #[test]
+    fn plane_touch() {
+        let w = WallShape::Plane {
+            point: DVec3::ZERO,
+            normal: DVec3::Z,
+        };
+        assert!(w.touch(DVec3::new(0.0, 0.0, 0.2), 0.1).is_none());
+        let t = w.touch(DVec3::new(5.0, 1.0, 0.05), 0.1).unwrap();
+        assert!((t.overlap - 0.05).abs() < 1e-15);
+        assert!(!w.contains(DVec3::new(0.0, 0.0, -1.0)));
+    }
+
+    #[test]
+    fn outside_cylinder_with_extent() {
+        let w = WallShape::CylinderOutside {
+            center: DVec3::ZERO,
+            axis: DVec3::Z,
+            radius: 0.5,
+            extent: Some((0.0, 1.0)),
+        };
+        assert!(w.touch(DVec3::new(0.55, 0.0, 0.5), 0.1).is_some());
+        assert!(w.touch(DVec3::new(0.55, 0.0, 1.5), 0.1).is_none());
+    }
+}

@@ -1,0 +1,234 @@
+//! Names and formats shared by the writers and the reader: entity paths and timelines of the
+//! Rerun recording, topics, fields and metadata keys of the MCAP file.
+//!
+//! `docs/recordings.md` describes the same layouts for users of other tools.
+
+use serde::de::{MapAccess, Visitor};
+use serde::ser::SerializeMap;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+use scg_core::frame::{GroupMeta, Outline};
+
+// ---------------------------------------------------------------------------------------------
+// Rerun (.rrd)
+
+/// Application id of the Rerun recordings.
+pub const RRD_APPLICATION_ID: &str = "scg";
+/// Timeline holding the simulation time (a duration, s).
+pub const TIMELINE_SIM_TIME: &str = "sim_time";
+/// Timeline holding the step counter (a sequence).
+pub const TIMELINE_STEP: &str = "step";
+/// Parent entity of the particle groups: `particles/<group name>` holds a `Points3D`.
+pub const ENTITY_PARTICLES: &str = "particles";
+/// Parent entity of the static geometry: `geometry/<outline name>` holds a `LineStrips3D`.
+pub const ENTITY_GEOMETRY: &str = "geometry";
+/// Parent entity of the scalars: `stats/<name>` holds `Scalars` (a `/` in a name nests).
+pub const ENTITY_STATS: &str = "stats";
+/// Entity of the static `TextLog` holding the scene check's warnings (one line each).
+pub const ENTITY_WARNINGS: &str = "warnings";
+/// Entity of the static `TextDocument` holding the scene file.
+pub const ENTITY_SCENE: &str = "scene";
+/// Name of the recording property (under `/__properties`) holding the run description.
+pub const RRD_PROPERTY: &str = "scg";
+/// Extra component logged with each group's `Points3D`: the particle ids (UInt32, one per
+/// point, in the same order as the positions).
+pub const COMPONENT_PARTICLE_ID: &str = "particle_id";
+
+// ---------------------------------------------------------------------------------------------
+// MCAP
+
+/// Topic of the particle state: one `foxglove.PointCloud` (protobuf) per frame.
+pub const TOPIC_PARTICLES: &str = "/particles";
+/// Topic of the scalars: one JSON message per frame, see [`STATS_JSON_SCHEMA`].
+pub const TOPIC_STATS: &str = "/stats";
+/// `frame_id` of the point clouds.
+pub const FRAME_ID: &str = "world";
+/// Name of the MCAP metadata record holding the run description (see `META_*` keys).
+pub const METADATA_NAME: &str = "scg";
+/// Name of the attachment holding the scene file.
+pub const SCENE_ATTACHMENT: &str = "scene.toml";
+/// Media type of the scene attachment.
+pub const SCENE_MEDIA_TYPE: &str = "application/toml";
+/// Bytes per point in the point clouds.
+pub const POINT_STRIDE: u32 = 72;
+
+/// Numeric type of a point field (values of `foxglove.PackedElementField.NumericType`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FieldType {
+    /// Little-endian IEEE 754 double (`FLOAT64` = 8).
+    Float64,
+    /// Little-endian unsigned 32-bit integer (`UINT32` = 5).
+    Uint32,
+}
+
+/// The point fields: name, byte offset within a point, type. Units: m (x y z), m/s
+/// (vx vy vz), m (diameter), kg/m³ (density); `id` is the particle id, `group` the index into
+/// the `groups` metadata entry.
+pub const POINT_FIELDS: [(&str, u32, FieldType); 10] = [
+    ("x", 0, FieldType::Float64),
+    ("y", 8, FieldType::Float64),
+    ("z", 16, FieldType::Float64),
+    ("vx", 24, FieldType::Float64),
+    ("vy", 32, FieldType::Float64),
+    ("vz", 40, FieldType::Float64),
+    ("diameter", 48, FieldType::Float64),
+    ("density", 56, FieldType::Float64),
+    ("id", 64, FieldType::Uint32),
+    ("group", 68, FieldType::Uint32),
+];
+
+/// Schema name of the `/stats` channel.
+pub const STATS_SCHEMA_NAME: &str = "scg.Stats";
+/// JSON schema of the `/stats` messages.
+///
+/// `values` keeps the order in which the run produced the scalars; a value that is not a
+/// finite number is written as `null`.
+pub const STATS_JSON_SCHEMA: &str = r#"{
+  "$schema": "https://json-schema.org/draft/2020-12/schema",
+  "title": "scg.Stats",
+  "description": "Scalars measured at one recorded frame of an scg run",
+  "type": "object",
+  "properties": {
+    "step": {"type": "integer", "minimum": 0, "description": "step counter"},
+    "time": {"type": "number", "description": "simulation time, s"},
+    "values": {
+      "type": "object",
+      "additionalProperties": {"type": ["number", "null"]},
+      "description": "scalar name -> value (SI units)"
+    }
+  },
+  "required": ["step", "time", "values"]
+}"#;
+
+/// Metadata key: layout version of the file (currently [`FORMAT_VERSION`]).
+pub const META_FORMAT: &str = "format";
+/// Layout version written in [`META_FORMAT`].
+pub const FORMAT_VERSION: &str = "scg-record/1";
+/// Metadata key: scg version that made the recording.
+pub const META_SCG_VERSION: &str = "scg_version";
+/// Metadata key: case name.
+pub const META_CASE: &str = "case";
+/// Metadata key: random seed (decimal integer).
+pub const META_SEED: &str = "seed";
+/// Metadata key: time step, s (JSON number).
+pub const META_DT: &str = "dt";
+/// Metadata key: steps between recorded frames (decimal integer).
+pub const META_RECORD_EVERY: &str = "record_every";
+/// Metadata key: JSON array of `{name, law, alpha, original_diameter, color}`.
+pub const META_GROUPS: &str = "groups";
+/// Metadata key: JSON array of strings.
+pub const META_WARNINGS: &str = "warnings";
+/// Metadata key: JSON array of `{name, strips}` (strips: arrays of `[x, y, z]`, m).
+pub const META_OUTLINES: &str = "outlines";
+
+/// A group as stored in the [`META_GROUPS`] metadata entry.
+#[derive(Serialize, Deserialize)]
+pub(crate) struct GroupJson {
+    pub name: String,
+    pub law: String,
+    pub alpha: f64,
+    pub original_diameter: f64,
+    pub color: [u8; 3],
+}
+
+impl From<&GroupMeta> for GroupJson {
+    fn from(g: &GroupMeta) -> Self {
+        Self {
+            name: g.name.clone(),
+            law: g.law.clone(),
+            alpha: g.alpha,
+            original_diameter: g.original_diameter,
+            color: g.color,
+        }
+    }
+}
+
+impl From<GroupJson> for GroupMeta {
+    fn from(g: GroupJson) -> Self {
+        Self {
+            name: g.name,
+            law: g.law,
+            alpha: g.alpha,
+            original_diameter: g.original_diameter,
+            color: g.color,
+        }
+    }
+}
+
+/// An outline as stored in the [`META_OUTLINES`] metadata entry.
+#[derive(Serialize, Deserialize)]
+pub(crate) struct OutlineJson {
+    pub name: String,
+    pub strips: Vec<Vec<[f64; 3]>>,
+}
+
+impl From<&Outline> for OutlineJson {
+    fn from(o: &Outline) -> Self {
+        Self {
+            name: o.name.clone(),
+            strips: o.strips.clone(),
+        }
+    }
+}
+
+impl From<OutlineJson> for Outline {
+    fn from(o: OutlineJson) -> Self {
+        Self {
+            name: o.name,
+            strips: o.strips,
+        }
+    }
+}
+
+/// A `/stats` message being written.
+#[derive(Serialize)]
+pub(crate) struct StatsOut<'a> {
+    pub step: u64,
+    pub time: f64,
+    pub values: OrderedValues<'a>,
+}
+
+/// Scalars serialized as a JSON object in their original order.
+pub(crate) struct OrderedValues<'a>(pub &'a [(String, f64)]);
+
+impl Serialize for OrderedValues<'_> {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (name, value) in self.0 {
+            // serde_json writes a non-finite number as `null`.
+            map.serialize_entry(name, value)?;
+        }
+        map.end()
+    }
+}
+
+/// A `/stats` message being read.
+#[derive(Deserialize)]
+pub(crate) struct StatsIn {
+    pub step: u64,
+    pub time: f64,
+    pub values: OrderedValuesIn,
+}
+
+/// Scalars read from a JSON object, in file order (`null` reads as NaN).
+pub(crate) struct OrderedValuesIn(pub Vec<(String, f64)>);
+
+impl<'de> Deserialize<'de> for OrderedValuesIn {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = OrderedValuesIn;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("an object of scalar values")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+                let mut out = Vec::with_capacity(map.size_hint().unwrap_or(0));
+                while let Some((name, value)) = map.next_entry::<String, Option<f64>>()? {
+                    out.push((name, value.unwrap_or(f64::NAN)));
+                }
+                Ok(OrderedValuesIn(out))
+            }
+        }
+        deserializer.deserialize_map(V)
+    }
+}

@@ -1,0 +1,332 @@
+//! Reading an MCAP recording back: [`read_mcap`].
+
+use std::collections::{BTreeMap, HashMap};
+use std::fs::File;
+use std::io::Read;
+use std::path::Path;
+
+use foxglove::Decode;
+use foxglove::messages::PointCloud;
+use foxglove::messages::packed_element_field::NumericType;
+use mcap::records::Record;
+use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
+use scg_core::frame::{Frame, GroupMeta, Outline, RunMeta};
+
+use crate::layout::{
+    FORMAT_VERSION, FieldType, GroupJson, META_CASE, META_DT, META_FORMAT, META_GROUPS,
+    META_OUTLINES, META_RECORD_EVERY, META_SCG_VERSION, META_SEED, META_WARNINGS, METADATA_NAME,
+    OutlineJson, POINT_FIELDS, SCENE_ATTACHMENT, StatsIn, TOPIC_PARTICLES, TOPIC_STATS,
+};
+use crate::{RecordError, Recording};
+
+/// Largest read handed to the MCAP reader at once (the reader asks for whole records; this
+/// keeps a damaged length field from allocating more than the file holds).
+const READ_BLOCK: usize = 4 << 20;
+
+/// Reads an MCAP recording written by [`crate::McapSink`].
+///
+/// The file is read sequentially, with every chunk's CRC checked before its messages are
+/// used (and the data and summary section CRCs when present). A file cut short, e.g. by a
+/// killed run (no summary, last chunk incomplete), is recovered: every complete frame is
+/// returned and [`Recording::complete`] is false. Reading also stops, keeping the frames read
+/// so far, at the first damaged record (bad CRC…).
+///
+/// Errors: the file cannot be read, is not an MCAP file, or holds no `scg` metadata record.
+pub fn read_mcap(path: &Path) -> Result<Recording, RecordError> {
+    let io = |e| RecordError::io(path, e);
+    let format = |reason: String| RecordError::Format {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let mut file = File::open(path).map_err(io)?;
+    let file_len = file.metadata().map_err(io)?.len();
+    // A record can't be longer than the file; a chunk can decompress to more, but not
+    // absurdly more.
+    let limit = usize::try_from(file_len.saturating_mul(100).max(64 << 20)).unwrap_or(usize::MAX);
+    let mut reader = LinearReader::new_with_options(
+        LinearReaderOptions::default()
+            .with_emit_chunks(false)
+            .with_validate_chunk_crcs(true)
+            .with_prevalidate_chunk_crcs(true)
+            .with_validate_data_section_crc(true)
+            .with_validate_summary_section_crc(true)
+            .with_record_length_limit(limit),
+    );
+
+    let mut state = ReadState::default();
+    let outcome: Result<(), String> = loop {
+        match reader.next_event() {
+            None => break Ok(()),
+            Some(Err(err)) => break Err(err.to_string()),
+            Some(Ok(LinearReadEvent::ReadRequest(need))) => {
+                let buf = reader.insert(need.clamp(1, READ_BLOCK));
+                let got = loop {
+                    match file.read(buf) {
+                        Ok(n) => break n,
+                        Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                        Err(e) => return Err(io(e)),
+                    }
+                };
+                reader.notify_read(got);
+            }
+            Some(Ok(LinearReadEvent::Record { opcode, data })) => {
+                let handled = mcap::parse_record(opcode, data)
+                    .map_err(|e| e.to_string())
+                    .and_then(|record| state.handle(record));
+                if let Err(err) = handled {
+                    break Err(err);
+                }
+            }
+        }
+    };
+
+    if !state.saw_header {
+        return Err(format(match outcome {
+            Err(err) => format!("not an MCAP file ({err})"),
+            Ok(()) => "not an MCAP file".to_owned(),
+        }));
+    }
+    let Some(mut meta) = state.meta.take() else {
+        return Err(format(format!(
+            "no `{METADATA_NAME}` metadata record{}",
+            outcome.err().map_or(String::new(), |e| format!(" ({e})"))
+        )));
+    };
+    meta.scene_toml = state.scene_toml.take().unwrap_or_default();
+    let complete = outcome.is_ok() && state.saw_footer;
+
+    let mut frames = Vec::with_capacity(state.pending.len());
+    for (sequence, pending) in std::mem::take(&mut state.pending) {
+        match pending {
+            Pending {
+                particles: Some(mut frame),
+                stats: Some(stats),
+            } => {
+                frame.step = stats.step;
+                frame.time = stats.time;
+                frame.stats = stats.values.0;
+                frames.push(frame);
+            }
+            // A killed run can't separate the two messages of a frame (they share a chunk),
+            // so this is damage; in a file that was closed properly it is an error.
+            _ if complete => {
+                return Err(format(format!(
+                    "frame {sequence} lacks its `{TOPIC_PARTICLES}` or `{TOPIC_STATS}` message"
+                )));
+            }
+            _ => {}
+        }
+    }
+    Ok(Recording {
+        meta,
+        frames,
+        complete,
+    })
+}
+
+/// What a channel carries.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum ChannelKind {
+    Particles,
+    Stats,
+    Other,
+}
+
+/// The two halves of a frame, matched by sequence number.
+#[derive(Default)]
+struct Pending {
+    particles: Option<Frame>,
+    stats: Option<StatsIn>,
+}
+
+#[derive(Default)]
+struct ReadState {
+    saw_header: bool,
+    saw_footer: bool,
+    /// Schema id → (name, encoding).
+    schemas: HashMap<u16, (String, String)>,
+    channels: HashMap<u16, ChannelKind>,
+    meta: Option<RunMeta>,
+    scene_toml: Option<String>,
+    pending: BTreeMap<u32, Pending>,
+}
+
+impl ReadState {
+    fn handle(&mut self, record: Record<'_>) -> Result<(), String> {
+        match record {
+            Record::Header(_) => self.saw_header = true,
+            Record::Footer(_) => self.saw_footer = true,
+            Record::Schema { header, .. } => {
+                self.schemas
+                    .insert(header.id, (header.name, header.encoding));
+            }
+            Record::Channel(channel) => {
+                let kind = match channel.topic.as_str() {
+                    TOPIC_PARTICLES => ChannelKind::Particles,
+                    TOPIC_STATS => ChannelKind::Stats,
+                    _ => ChannelKind::Other,
+                };
+                let schema = self.schemas.get(&channel.schema_id);
+                let expected = match kind {
+                    ChannelKind::Particles => Some(("protobuf", "foxglove.PointCloud")),
+                    ChannelKind::Stats => Some(("json", "")),
+                    ChannelKind::Other => None,
+                };
+                if let Some((encoding, schema_name)) = expected {
+                    let schema_ok = schema_name.is_empty()
+                        || schema.is_some_and(|(name, _)| name == schema_name);
+                    if channel.message_encoding != encoding || !schema_ok {
+                        return Err(format!(
+                            "channel `{}` has encoding `{}` (schema {:?}), expected `{encoding}` {schema_name}",
+                            channel.topic,
+                            channel.message_encoding,
+                            schema.map(|(name, _)| name)
+                        ));
+                    }
+                }
+                self.channels.insert(channel.id, kind);
+            }
+            Record::Message { header, data } => {
+                let kind = self
+                    .channels
+                    .get(&header.channel_id)
+                    .copied()
+                    .ok_or_else(|| format!("message on unknown channel {}", header.channel_id))?;
+                match kind {
+                    ChannelKind::Particles => {
+                        let frame = decode_particles(&data)
+                            .map_err(|e| format!("frame {}: {e}", header.sequence))?;
+                        self.pending.entry(header.sequence).or_default().particles = Some(frame);
+                    }
+                    ChannelKind::Stats => {
+                        let stats: StatsIn = serde_json::from_slice(&data).map_err(|e| {
+                            format!(
+                                "frame {}: bad `{TOPIC_STATS}` message: {e}",
+                                header.sequence
+                            )
+                        })?;
+                        self.pending.entry(header.sequence).or_default().stats = Some(stats);
+                    }
+                    ChannelKind::Other => {}
+                }
+            }
+            Record::Metadata(metadata) if metadata.name == METADATA_NAME => {
+                self.meta = Some(parse_meta(&metadata.metadata)?);
+            }
+            Record::Attachment { header, data, .. } if header.name == SCENE_ATTACHMENT => {
+                let text = String::from_utf8(data.into_owned())
+                    .map_err(|_| format!("attachment `{SCENE_ATTACHMENT}` is not UTF-8"))?;
+                self.scene_toml = Some(text);
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+}
+
+/// Rebuilds a [`RunMeta`] (without its scene text) from the `scg` metadata record.
+fn parse_meta(entries: &BTreeMap<String, String>) -> Result<RunMeta, String> {
+    let get = |key: &str| {
+        entries
+            .get(key)
+            .ok_or_else(|| format!("metadata key `{key}` missing"))
+    };
+    let bad = |key: &str, err: &dyn std::fmt::Display| format!("metadata key `{key}`: {err}");
+    if let Some(format) = entries.get(META_FORMAT)
+        && format != FORMAT_VERSION
+    {
+        return Err(format!(
+            "unsupported layout `{format}` (this reader knows `{FORMAT_VERSION}`)"
+        ));
+    }
+    let groups: Vec<GroupJson> =
+        serde_json::from_str(get(META_GROUPS)?).map_err(|e| bad(META_GROUPS, &e))?;
+    let warnings: Vec<String> = match entries.get(META_WARNINGS) {
+        Some(text) => serde_json::from_str(text).map_err(|e| bad(META_WARNINGS, &e))?,
+        None => Vec::new(),
+    };
+    let outlines: Vec<OutlineJson> = match entries.get(META_OUTLINES) {
+        Some(text) => serde_json::from_str(text).map_err(|e| bad(META_OUTLINES, &e))?,
+        None => Vec::new(),
+    };
+    Ok(RunMeta {
+        case: get(META_CASE)?.clone(),
+        scg_version: get(META_SCG_VERSION)?.clone(),
+        seed: get(META_SEED)?.parse().map_err(|e| bad(META_SEED, &e))?,
+        dt: get(META_DT)?.parse().map_err(|e| bad(META_DT, &e))?,
+        record_every: get(META_RECORD_EVERY)?
+            .parse()
+            .map_err(|e| bad(META_RECORD_EVERY, &e))?,
+        groups: groups.into_iter().map(GroupMeta::from).collect(),
+        scene_toml: String::new(),
+        outlines: outlines.into_iter().map(Outline::from).collect(),
+        warnings,
+    })
+}
+
+/// Decodes a `/particles` point cloud into a frame (step, time and stats left empty).
+///
+/// Fields are looked up by name, so any stride and field order is accepted as long as the
+/// ten fields of [`POINT_FIELDS`] are there with their types.
+fn decode_particles(data: &[u8]) -> Result<Frame, String> {
+    let cloud = PointCloud::decode(data).map_err(|e| format!("bad point cloud: {e}"))?;
+    let stride = cloud.point_stride as usize;
+    let mut offsets = [0usize; POINT_FIELDS.len()];
+    for (slot, &(name, _, ty)) in offsets.iter_mut().zip(POINT_FIELDS.iter()) {
+        let (expected, size) = match ty {
+            FieldType::Float64 => (NumericType::Float64, 8),
+            FieldType::Uint32 => (NumericType::Uint32, 4),
+        };
+        let field = cloud
+            .fields
+            .iter()
+            .find(|f| f.name == name)
+            .ok_or_else(|| format!("point field `{name}` missing"))?;
+        if field.r#type != expected as i32 {
+            return Err(format!("point field `{name}` has type {}", field.r#type));
+        }
+        let offset = field.offset as usize;
+        if offset + size > stride {
+            return Err(format!("point field `{name}` overruns the stride {stride}"));
+        }
+        *slot = offset;
+    }
+    let bytes = cloud.data.as_ref();
+    if stride == 0 || bytes.len() % stride != 0 {
+        return Err(format!(
+            "{} data bytes are not a whole number of {stride}-byte points",
+            bytes.len()
+        ));
+    }
+
+    let n = bytes.len() / stride;
+    let mut frame = Frame {
+        id: Vec::with_capacity(n),
+        group: Vec::with_capacity(n),
+        position: Vec::with_capacity(n),
+        velocity: Vec::with_capacity(n),
+        diameter: Vec::with_capacity(n),
+        density: Vec::with_capacity(n),
+        ..Frame::default()
+    };
+    let [x, y, z, vx, vy, vz, d, rho, id, group] = offsets;
+    for point in bytes.chunks_exact(stride) {
+        let f = |at: usize| {
+            let mut b = [0u8; 8];
+            b.copy_from_slice(&point[at..at + 8]);
+            f64::from_le_bytes(b)
+        };
+        let u = |at: usize| {
+            let mut b = [0u8; 4];
+            b.copy_from_slice(&point[at..at + 4]);
+            u32::from_le_bytes(b)
+        };
+        frame.position.push([f(x), f(y), f(z)]);
+        frame.velocity.push([f(vx), f(vy), f(vz)]);
+        frame.diameter.push(f(d));
+        frame.density.push(f(rho));
+        frame.id.push(u(id));
+        frame.group.push(u(group));
+    }
+    Ok(frame)
+}

@@ -1,0 +1,380 @@
+//! Rerun recordings (`.rrd`): [`RrdSink`] and [`write_rrd`].
+//!
+//! The sink logs through an ordinary [`RecordingStream`] (which batches rows into chunks on
+//! its own thread) into a small [`LogSink`] of ours that owns the `.rrd` encoder, so that
+//! encoding and I/O errors reach the caller and the footer is written at a known point:
+//! [`RrdSink::close`] drops the stream (which flushes it), finishes the encoder (footer),
+//! syncs the file and renames `<path>.partial` to `<path>`.
+
+use std::collections::HashMap;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, PoisonError};
+use std::time::Duration;
+
+use rerun::external::arrow::array::{
+    ArrayRef, Float64Array, StringArray, UInt32Array, UInt64Array,
+};
+use rerun::external::re_build_info::CrateVersion;
+use rerun::external::re_log_encoding::{Encoder, EncodingOptions};
+use rerun::log::LogMsg;
+use rerun::sink::{LogSink, SinkFlushError};
+use rerun::{
+    AnyValues, AsComponents, Color, EntityPath, EntityPathPart, LineStrips3D, MediaType, Points3D,
+    RecordingInfo, RecordingStream, Scalars, TextDocument, TextLog, TextLogLevel,
+};
+use scg_core::frame::{Frame, FrameSink, RunMeta};
+
+use crate::layout::{
+    COMPONENT_PARTICLE_ID, ENTITY_GEOMETRY, ENTITY_PARTICLES, ENTITY_SCENE, ENTITY_STATS,
+    ENTITY_WARNINGS, RRD_APPLICATION_ID, RRD_PROPERTY, TIMELINE_SIM_TIME, TIMELINE_STEP,
+};
+use crate::{RecordError, Recording, check_frame, commit_partial, partial_path};
+
+/// The `.rrd` encoder, shared between the [`RrdSink`] and the stream's sink thread.
+struct EncoderState {
+    /// `None` once finished.
+    encoder: Option<Encoder<BufWriter<File>>>,
+    /// First encoding/I/O error, reported by the next call on the [`RrdSink`].
+    error: Option<String>,
+}
+
+type SharedEncoder = Arc<Mutex<EncoderState>>;
+
+fn lock(state: &SharedEncoder) -> std::sync::MutexGuard<'_, EncoderState> {
+    state.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// The [`LogSink`] the recording stream writes to: appends each message to the encoder.
+struct EncoderSink(SharedEncoder);
+
+impl LogSink for EncoderSink {
+    fn send(&self, msg: LogMsg) {
+        let mut state = lock(&self.0);
+        if state.error.is_some() {
+            return;
+        }
+        if let Some(encoder) = state.encoder.as_mut()
+            && let Err(err) = encoder.append(&msg)
+        {
+            state.error = Some(format!("could not encode a message: {err}"));
+        }
+    }
+
+    fn flush_blocking(&self, _timeout: Duration) -> Result<(), SinkFlushError> {
+        let mut state = lock(&self.0);
+        if let Some(err) = &state.error {
+            return Err(SinkFlushError::failed(err.clone()));
+        }
+        if let Some(encoder) = state.encoder.as_mut() {
+            encoder
+                .flush_blocking()
+                .map_err(|err| SinkFlushError::failed(format!("could not flush: {err}")))?;
+        }
+        Ok(())
+    }
+
+    fn defers_finalization_to_shutdown(&self) -> bool {
+        // The footer (a manifest of every chunk) is written when the sink is closed.
+        true
+    }
+}
+
+/// Entity and colour of one particle group.
+struct GroupEntity {
+    path: EntityPath,
+    color: Color,
+}
+
+/// A [`FrameSink`] writing a Rerun recording.
+///
+/// Layout (see `docs/recordings.md`):
+/// * timelines `sim_time` (duration, s) and `step` (sequence);
+/// * `particles/<group>`: `Points3D` with positions (m, as f32), radii = diameter/2 (m, f32),
+///   one colour per group, and the extra component `particle_id` (UInt32, one per point);
+///   a group without particles in a frame is logged as an empty point set;
+/// * `stats/<name>`: `Scalars`, one per entry of [`Frame::stats`] (a `/` in a name nests);
+/// * static: `geometry/<outline>` (`LineStrips3D`), `warnings` (`TextLog`, one warning per
+///   line), `scene` (`TextDocument` with the scene file), and the recording property `scg`
+///   (case, scg_version, seed, dt, record_every, groups).
+///
+/// The file is written as `<path>.partial` and renamed to `<path>` by [`RrdSink::close`]
+/// (or [`FrameSink::finish`]). Dropping an unfinished sink still closes the stream and writes
+/// the footer, but leaves the file under its `.partial` name.
+pub struct RrdSink {
+    /// `None` once closed.
+    stream: Option<RecordingStream>,
+    encoder: SharedEncoder,
+    path: PathBuf,
+    partial: PathBuf,
+    groups: Vec<GroupEntity>,
+    stats_paths: HashMap<String, EntityPath>,
+}
+
+fn rerun_err(err: impl std::fmt::Display) -> RecordError {
+    RecordError::Rerun(err.to_string())
+}
+
+/// `parent/<name>` with `name` taken literally (escaped if needed).
+fn child_path(parent: &str, name: &str) -> EntityPath {
+    EntityPath::new(vec![EntityPathPart::new(parent), EntityPathPart::new(name)])
+}
+
+/// `stats/<a>/<b>…` for a scalar named `a/b…`.
+fn stats_path(name: &str) -> EntityPath {
+    let parts = std::iter::once(ENTITY_STATS)
+        .chain(name.split('/').filter(|p| !p.is_empty()))
+        .map(EntityPathPart::new)
+        .collect();
+    EntityPath::new(parts)
+}
+
+fn one<T>(array: T) -> ArrayRef
+where
+    T: rerun::external::arrow::array::Array + 'static,
+{
+    Arc::new(array)
+}
+
+impl RrdSink {
+    /// Creates `<path>.partial` and logs the static part of the recording (geometry, warnings,
+    /// scene, run description).
+    pub fn create(path: &Path, meta: &RunMeta) -> Result<Self, RecordError> {
+        let partial = partial_path(path);
+        let file = File::create(&partial).map_err(|e| RecordError::io(&partial, e))?;
+        let result = Self::start(path, &partial, file, meta);
+        if result.is_err() {
+            // Best effort: do not leave an empty `.partial` behind.
+            let _ = std::fs::remove_file(&partial);
+        }
+        result
+    }
+
+    fn start(path: &Path, partial: &Path, file: File, meta: &RunMeta) -> Result<Self, RecordError> {
+        let encoder = Encoder::new_eager(
+            CrateVersion::LOCAL,
+            EncodingOptions::PROTOBUF_COMPRESSED,
+            BufWriter::new(file),
+        )
+        .map_err(rerun_err)?;
+        let encoder = Arc::new(Mutex::new(EncoderState {
+            encoder: Some(encoder),
+            error: None,
+        }));
+
+        let info = RecordingInfo::new()
+            .with_name(meta.case.clone())
+            .with_start_time(rerun::components::Timestamp::now());
+        let stream = RecordingStream::new(
+            rerun::new_store_info(RRD_APPLICATION_ID),
+            Some(info),
+            None,
+            Default::default(),
+            Box::new(EncoderSink(encoder.clone())),
+        )
+        .map_err(rerun_err)?;
+        // Only our own timelines.
+        stream.set_log_time_enabled(false);
+        stream.set_log_tick_enabled(false);
+
+        let groups = meta
+            .groups
+            .iter()
+            .map(|g| GroupEntity {
+                path: child_path(ENTITY_PARTICLES, &g.name),
+                color: Color::from_rgb(g.color[0], g.color[1], g.color[2]),
+            })
+            .collect();
+
+        let mut sink = Self {
+            stream: Some(stream),
+            encoder,
+            path: path.to_path_buf(),
+            partial: partial.to_path_buf(),
+            groups,
+            stats_paths: HashMap::new(),
+        };
+        sink.log_static(meta)?;
+        Ok(sink)
+    }
+
+    /// The final path of the recording (valid once closed).
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn stream(&self) -> Result<&RecordingStream, RecordError> {
+        self.stream.as_ref().ok_or(RecordError::Finished)
+    }
+
+    /// Reports the first encoding/I/O error of the sink thread, if any.
+    fn check_encoder(&self) -> Result<(), RecordError> {
+        match &lock(&self.encoder).error {
+            Some(err) => Err(RecordError::Rerun(err.clone())),
+            None => Ok(()),
+        }
+    }
+
+    fn log_static(&mut self, meta: &RunMeta) -> Result<(), RecordError> {
+        let rec = self.stream()?;
+
+        let group_names: Vec<&str> = meta.groups.iter().map(|g| g.name.as_str()).collect();
+        let properties = AnyValues::default()
+            .with_component_from_data("case", one(StringArray::from(vec![meta.case.as_str()])))
+            .with_component_from_data(
+                "scg_version",
+                one(StringArray::from(vec![meta.scg_version.as_str()])),
+            )
+            .with_component_from_data("seed", one(UInt64Array::from(vec![meta.seed])))
+            .with_component_from_data("dt", one(Float64Array::from(vec![meta.dt])))
+            .with_component_from_data(
+                "record_every",
+                one(UInt64Array::from(vec![meta.record_every])),
+            )
+            .with_component_from_data("groups", one(StringArray::from(group_names)));
+        rec.send_property(RRD_PROPERTY, &properties)
+            .map_err(rerun_err)?;
+
+        for outline in &meta.outlines {
+            let strips = outline.strips.iter().map(|strip| {
+                strip
+                    .iter()
+                    .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32])
+                    .collect::<Vec<_>>()
+            });
+            rec.log_static(
+                child_path(ENTITY_GEOMETRY, &outline.name),
+                &LineStrips3D::new(strips).with_colors([Color::from_rgb(160, 160, 160)]),
+            )
+            .map_err(rerun_err)?;
+        }
+
+        if !meta.warnings.is_empty() {
+            rec.log_static(
+                ENTITY_WARNINGS,
+                &TextLog::new(meta.warnings.join("\n")).with_level(TextLogLevel::WARN),
+            )
+            .map_err(rerun_err)?;
+        }
+
+        if !meta.scene_toml.is_empty() {
+            rec.log_static(
+                ENTITY_SCENE,
+                &TextDocument::new(meta.scene_toml.clone())
+                    .with_media_type(MediaType::plain_text()),
+            )
+            .map_err(rerun_err)?;
+        }
+        Ok(())
+    }
+
+    /// Logs one frame at `step` / `sim_time`.
+    pub fn push(&mut self, frame: &Frame) -> Result<(), RecordError> {
+        check_frame(frame, self.groups.len())?;
+        self.check_encoder()?;
+        let step = i64::try_from(frame.step).map_err(|_| RecordError::InvalidFrame {
+            step: frame.step,
+            reason: "step does not fit in an i64".into(),
+        })?;
+        let rec = self.stream.as_ref().ok_or(RecordError::Finished)?;
+        rec.set_time_sequence(TIMELINE_STEP, step);
+        rec.set_duration_secs(TIMELINE_SIM_TIME, frame.time);
+
+        // Split the particles by group in one pass.
+        let mut positions: Vec<Vec<[f32; 3]>> = vec![Vec::new(); self.groups.len()];
+        let mut radii: Vec<Vec<f32>> = vec![Vec::new(); self.groups.len()];
+        let mut ids: Vec<Vec<u32>> = vec![Vec::new(); self.groups.len()];
+        for i in 0..frame.len() {
+            let g = frame.group[i] as usize;
+            let p = frame.position[i];
+            positions[g].push([p[0] as f32, p[1] as f32, p[2] as f32]);
+            radii[g].push((0.5 * frame.diameter[i]) as f32);
+            ids[g].push(frame.id[i]);
+        }
+        for (((group, positions), radii), ids) in
+            self.groups.iter().zip(positions).zip(radii).zip(ids)
+        {
+            let points = Points3D::new(positions)
+                .with_radii(radii)
+                .with_colors([group.color]);
+            let ids = AnyValues::default()
+                .with_component_from_data(COMPONENT_PARTICLE_ID, one(UInt32Array::from(ids)));
+            rec.log(group.path.clone(), &[&points as &dyn AsComponents, &ids])
+                .map_err(rerun_err)?;
+        }
+
+        for (name, value) in &frame.stats {
+            let path = self
+                .stats_paths
+                .entry(name.clone())
+                .or_insert_with(|| stats_path(name));
+            rec.log(path.clone(), &Scalars::single(*value))
+                .map_err(rerun_err)?;
+        }
+        Ok(())
+    }
+
+    /// Flushes the stream, writes the footer, syncs the file and renames `<path>.partial` to
+    /// `<path>`. Idempotent.
+    pub fn close(&mut self) -> Result<(), RecordError> {
+        let Some(stream) = self.stream.take() else {
+            return Ok(());
+        };
+        let flushed = stream.flush_blocking().map_err(rerun_err);
+        // Dropping the last handle joins the stream's threads: every message is encoded.
+        drop(stream);
+        let closed = close_encoder(&self.encoder, &self.partial);
+        flushed?;
+        closed?;
+        commit_partial(&self.partial, &self.path)
+    }
+}
+
+/// Writes the footer, flushes and syncs the file.
+fn close_encoder(state: &SharedEncoder, partial: &Path) -> Result<(), RecordError> {
+    let mut state = lock(state);
+    if let Some(err) = state.error.take() {
+        return Err(RecordError::Rerun(err));
+    }
+    let Some(mut encoder) = state.encoder.take() else {
+        return Ok(());
+    };
+    encoder.finish().map_err(rerun_err)?;
+    let writer = encoder.into_inner().map_err(rerun_err)?;
+    let file = writer
+        .into_inner()
+        .map_err(|e| RecordError::io(partial, e.into_error()))?;
+    file.sync_all().map_err(|e| RecordError::io(partial, e))
+}
+
+impl FrameSink for RrdSink {
+    fn write_frame(&mut self, frame: &Frame) -> Result<(), String> {
+        self.push(frame).map_err(|e| e.to_string())
+    }
+
+    fn finish(&mut self) -> Result<(), String> {
+        self.close().map_err(|e| e.to_string())
+    }
+}
+
+impl Drop for RrdSink {
+    fn drop(&mut self) {
+        if let Some(stream) = self.stream.take() {
+            // Not finished: still produce a readable file (with footer), left as `.partial`.
+            drop(stream);
+            let _ = close_encoder(&self.encoder, &self.partial);
+        }
+    }
+}
+
+/// Rebuilds a Rerun recording from a [`Recording`] (e.g. read by [`crate::read_mcap`]), with
+/// the same layout as a live run. Returns the number of frames written.
+pub fn write_rrd(rec: &Recording, path: &Path) -> Result<usize, RecordError> {
+    let mut sink = RrdSink::create(path, &rec.meta)?;
+    for frame in &rec.frames {
+        sink.push(frame)?;
+    }
+    sink.close()?;
+    Ok(rec.frames.len())
+}

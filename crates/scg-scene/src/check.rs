@@ -1,0 +1,463 @@
+//! `scg check`: derived quantities per group and warnings where the model's assumptions
+//! break. Also the `auto` time-step rule.
+
+use glam::DVec3;
+
+use scg_core::contact::NormalLaw;
+use scg_core::contact::normal::{hertz_contact_time, linear_contact_time};
+use scg_core::drag::{DragLaw, particle_reynolds, stokes_response_time};
+use scg_core::flow::FlowField;
+use scg_core::integrate::Integrator;
+use scg_core::scaling::coarse_grain;
+use scg_core::walls::WallShape;
+
+use crate::{Placement, Scene};
+
+/// Derived quantities of one group.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GroupReport {
+    /// Group name.
+    pub name: String,
+    /// Law name.
+    pub law: &'static str,
+    /// α.
+    pub alpha: f64,
+    /// Particles at the start.
+    pub count: usize,
+    /// Simulated diameter, m.
+    pub diameter: f64,
+    /// Simulated density, kg/m³.
+    pub density: f64,
+    /// Stokes response time τ, s (∞ without drag).
+    pub tau: f64,
+    /// Estimated slip speed, m/s.
+    pub slip: f64,
+    /// Estimated particle Reynolds number.
+    pub reynolds: f64,
+    /// ρ_p/ρ_f (∞ without fluid).
+    pub density_ratio: f64,
+    /// Hertz contact time at the reference speed, s (with walls).
+    pub contact_time: Option<f64>,
+}
+
+/// Severity of a finding.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Level {
+    /// The run goes on, but a model assumption breaks.
+    Warning,
+    /// The run would be meaningless; `scg run` refuses it.
+    Error,
+}
+
+/// A warning or error about a scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Finding {
+    /// Severity.
+    pub level: Level,
+    /// Message.
+    pub message: String,
+}
+
+/// The whole check.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Report {
+    /// Per group.
+    pub groups: Vec<GroupReport>,
+    /// Stokes number of paper eq. 1 (τ_v/τ_c), the whole scene.
+    pub stokes_number: f64,
+    /// Time step, s.
+    pub dt: f64,
+    /// Steps.
+    pub steps: u64,
+    /// Findings.
+    pub findings: Vec<Finding>,
+}
+
+impl Report {
+    /// Warning messages (for recordings).
+    pub fn messages(&self) -> Vec<String> {
+        self.findings
+            .iter()
+            .map(|f| format!("{:?}: {}", f.level, f.message).to_lowercase_first())
+            .collect()
+    }
+
+    /// True when a finding is an error.
+    pub fn has_errors(&self) -> bool {
+        self.findings.iter().any(|f| f.level == Level::Error)
+    }
+}
+
+trait LowerFirst {
+    fn to_lowercase_first(self) -> String;
+}
+impl LowerFirst for String {
+    fn to_lowercase_first(self) -> String {
+        let mut c = self.chars();
+        match c.next() {
+            Some(f) => f.to_lowercase().collect::<String>() + c.as_str(),
+            None => self,
+        }
+    }
+}
+
+/// Largest distance of a particle (or a cylinder wall) from a rotating flow's axis, m.
+fn max_radius(scene: &Scene) -> f64 {
+    let (FlowField::Vortex(v) | FlowField::Classifier { vortex: v, .. }) = scene.flow else {
+        return 0.0;
+    };
+    let mut r: f64 = 0.0;
+    for w in &scene.walls {
+        if let WallShape::CylinderInside { radius, .. } = w.shape {
+            r = r.max(radius);
+        }
+    }
+    for g in &scene.groups {
+        match &g.placement {
+            Placement::Explicit { positions, .. } => {
+                for p in positions {
+                    r = r.max(v.radial(*p).length());
+                }
+            }
+            Placement::Random { region, .. } => {
+                if let crate::Region::Cylinder { radius_max, .. } = region {
+                    r = r.max(*radius_max);
+                }
+            }
+        }
+    }
+    r
+}
+
+fn group_velocities(g: &crate::Group) -> Vec<(DVec3, DVec3)> {
+    match &g.placement {
+        Placement::Explicit {
+            positions,
+            velocities,
+        } => positions
+            .iter()
+            .copied()
+            .zip(velocities.iter().copied())
+            .collect(),
+        Placement::Random {
+            velocity, region, ..
+        } => {
+            let c = match region {
+                crate::Region::Box { min, max } => 0.5 * (*min + *max),
+                crate::Region::Cylinder { center, .. } => *center,
+            };
+            vec![(c, *velocity)]
+        }
+    }
+}
+
+/// Reference impact speed for contact-time estimates, m/s.
+fn reference_speed(scene: &Scene, tau: f64, g: &crate::Group) -> f64 {
+    let mut v: f64 = 0.01;
+    let rmax = max_radius(scene);
+    let omega = match scene.flow {
+        FlowField::Vortex(v) | FlowField::Classifier { vortex: v, .. } => {
+            v.omega.abs() * (1.0 + v.inflow_ratio.abs())
+        }
+        _ => 0.0,
+    };
+    v = v.max(omega * rmax);
+    for (x, u) in group_velocities(g) {
+        v = v.max(u.length()).max(scene.flow.velocity(x).length());
+    }
+    if let Some(gr) = scene.gravity {
+        v = v.max((gr.length() * tau.min(1.0)).min(10.0));
+    }
+    v
+}
+
+fn contact_time(scene: &Scene, d: f64, rho: f64, v: f64) -> Option<f64> {
+    let mat = scene.material?;
+    let m = scg_core::scaling::sphere_mass(d, rho);
+    let e_eff = mat.effective_modulus();
+    match scene.normal_law? {
+        // Wall contact: R* = d/2, m* = m.
+        NormalLaw::Hertz { .. } => Some(hertz_contact_time(m, 0.5 * d, e_eff, v)),
+        NormalLaw::Linear { stiffness, zeta } => Some(linear_contact_time(m, stiffness, zeta)),
+    }
+}
+
+fn group_report(scene: &Scene, g: &crate::Group) -> GroupReport {
+    let s = coarse_grain(g.law, g.alpha, g.diameter, g.density);
+    let (tau, slip, re, ratio) = match (scene.fluid, scene.drag) {
+        (Some(f), Some(_)) => {
+            let tau = stokes_response_time(s.mass(), f.viscosity, s.drag_diameter, s.force_scale);
+            let mut slip: f64 = 0.0;
+            for (x, v) in group_velocities(g) {
+                slip = slip.max((scene.flow.velocity(x) - v).length());
+            }
+            let omega = match scene.flow {
+                FlowField::Vortex(v) | FlowField::Classifier { vortex: v, .. } => v.omega.abs(),
+                _ => 0.0,
+            };
+            // Centrifugal drift at the largest radius, and settling under gravity.
+            slip = slip.max(tau * omega * omega * max_radius(scene));
+            if let Some(gr) = scene.gravity {
+                slip = slip.max(tau * gr.length());
+            }
+            let re = particle_reynolds(s.drag_diameter, slip, f.density, f.viscosity);
+            (tau, slip, re, s.density / f.density)
+        }
+        (Some(f), None) => (f64::INFINITY, 0.0, 0.0, s.density / f.density),
+        _ => (f64::INFINITY, 0.0, 0.0, f64::INFINITY),
+    };
+    let contact_time = (!scene.walls.is_empty())
+        .then(|| contact_time(scene, s.diameter, s.density, reference_speed(scene, tau, g)))
+        .flatten();
+    GroupReport {
+        name: g.name.clone(),
+        law: g.law.name(),
+        alpha: g.alpha,
+        count: g.count(),
+        diameter: s.diameter,
+        density: s.density,
+        tau,
+        slip,
+        reynolds: re,
+        density_ratio: ratio,
+        contact_time,
+    }
+}
+
+/// Shortest particle–particle contact time over all pairs of groups (the stiffest pair),
+/// s, when the scene declares `[contacts]`: Hertz t_c at the approach speed v_i + v_j of the
+/// two groups' reference speeds with m*, R* of the pair, or the linear law's t_c.
+pub fn particle_contact_time(scene: &Scene) -> Option<f64> {
+    let c = scene.contacts?;
+    let e_eff = c.material.effective_modulus();
+    let gs: Vec<(f64, f64, f64)> = scene
+        .groups
+        .iter()
+        .map(|g| {
+            let s = coarse_grain(g.law, g.alpha, g.diameter, g.density);
+            let r = group_report(scene, g);
+            (s.mass(), 0.5 * s.diameter, reference_speed(scene, r.tau, g))
+        })
+        .collect();
+    let mut tc = f64::INFINITY;
+    for (i, a) in gs.iter().enumerate() {
+        for b in &gs[i..] {
+            let m = scg_core::contact::normal::effective(a.0, b.0);
+            let r = scg_core::contact::normal::effective(a.1, b.1);
+            let t = match c.law {
+                NormalLaw::Hertz { .. } => hertz_contact_time(m, r, e_eff, a.2 + b.2),
+                NormalLaw::Linear { stiffness, zeta } => linear_contact_time(m, stiffness, zeta),
+            };
+            tc = tc.min(t);
+        }
+    }
+    tc.is_finite().then_some(tc)
+}
+
+/// Stokes number of paper eq. 1: St = 4√π·n·ρ_p·d̄⁴·|u_r| / (18·μ), with n the number
+/// density over the vessel (or the particles' bounding box) and group means.
+pub fn stokes_number(scene: &Scene, reports: &[GroupReport]) -> f64 {
+    let Some(f) = scene.fluid else { return 0.0 };
+    let n_total: usize = reports.iter().map(|r| r.count).sum();
+    if n_total == 0 {
+        return 0.0;
+    }
+    let w = |sel: &dyn Fn(&GroupReport) -> f64| -> f64 {
+        reports.iter().map(|r| sel(r) * r.count as f64).sum::<f64>() / n_total as f64
+    };
+    let d = w(&|r| r.diameter);
+    let rho = w(&|r| r.density);
+    let ur = w(&|r| r.slip);
+    let mut volume = None;
+    for wall in &scene.walls {
+        if let WallShape::CylinderInside {
+            radius,
+            extent: Some((a, b)),
+            ..
+        } = wall.shape
+        {
+            volume = Some(std::f64::consts::PI * radius * radius * (b - a));
+        }
+    }
+    let volume = volume.unwrap_or_else(|| scene.extent().powi(3));
+    let n = n_total as f64 / volume;
+    4.0 * std::f64::consts::PI.sqrt() * n * rho * d.powi(4) * ur / (18.0 * f.viscosity)
+}
+
+/// The `auto` time step: the smallest of
+/// * 1/(100·ω(1 + k)) in a rotating flow (ω the angular speed, k the inflow ratio);
+/// * t_c/50 with walls, t_c the Hertz contact time of the lightest particle of each group
+///   against a wall at the reference speed (largest of the initial speeds, the flow speed
+///   at the vessel radius, and 0.01 m/s);
+/// * t_c/50 of the stiffest particle–particle pair with `[contacts]`
+///   ([`particle_contact_time`]);
+/// * τ/2 of the fastest-responding group with the explicit integrator;
+/// * duration/100.
+pub fn auto_dt(scene: &Scene) -> f64 {
+    let mut dt = scene.duration / 100.0;
+    let rate = scene.flow.rate();
+    if rate > 0.0 {
+        dt = dt.min(1.0 / (100.0 * rate));
+    }
+    for g in &scene.groups {
+        let r = group_report(scene, g);
+        if let Some(tc) = r.contact_time {
+            dt = dt.min(tc / 50.0);
+        }
+        if scene.integrator == Integrator::Explicit && r.tau.is_finite() {
+            dt = dt.min(0.5 * r.tau);
+        }
+    }
+    if let Some(tc) = particle_contact_time(scene) {
+        dt = dt.min(tc / 50.0);
+    }
+    dt
+}
+
+/// Check a scene.
+pub fn check(scene: &Scene) -> Report {
+    let groups: Vec<GroupReport> = scene
+        .groups
+        .iter()
+        .map(|g| group_report(scene, g))
+        .collect();
+    let mut findings = Vec::new();
+    let mut warn = |m: String| {
+        findings.push(Finding {
+            level: Level::Warning,
+            message: m,
+        })
+    };
+    for r in &groups {
+        if scene.drag == Some(DragLaw::Stokes) && r.reynolds > 0.1 {
+            warn(format!(
+                "group `{}`: particle Reynolds number ≈ {:.3} > 0.1, outside Stokes drag (C_d = 24/Re) validity",
+                r.name, r.reynolds
+            ));
+        }
+        if r.density_ratio < 10.0 {
+            warn(format!(
+                "group `{}`: simulated density {:.4} kg/m³ is only {:.2}× the fluid's; added mass, buoyancy and pressure forces are not negligible",
+                r.name, r.density, r.density_ratio
+            ));
+        }
+        if scene.integrator == Integrator::Explicit && r.tau.is_finite() && scene.dt > 0.5 * r.tau {
+            warn(format!(
+                "group `{}`: explicit integrator with dt = {:.3e} s > τ/2 = {:.3e} s; the run sub-steps it {} times per step",
+                r.name,
+                scene.dt,
+                0.5 * r.tau,
+                scg_core::integrate::explicit_substeps(r.tau, scene.dt)
+            ));
+        }
+        if let Some(tc) = r.contact_time
+            && scene.dt > tc / 20.0
+        {
+            warn(format!(
+                "group `{}`: dt = {:.3e} s gives {:.1} steps per wall contact (t_c ≈ {:.3e} s); at least 20 are needed",
+                r.name,
+                scene.dt,
+                tc / scene.dt,
+                tc
+            ));
+        }
+    }
+    if let Some(tc) = particle_contact_time(scene)
+        && scene.dt > tc / 20.0
+    {
+        warn(format!(
+            "dt = {:.3e} s gives {:.1} steps per particle–particle contact (t_c ≈ {:.3e} s); at least 20 are needed",
+            scene.dt,
+            tc / scene.dt,
+            tc
+        ));
+    }
+    let st = stokes_number(scene, &groups);
+    if st >= 100.0 {
+        warn(format!(
+            "Stokes number of eq. 1 ≈ {st:.3e} ≥ 100: a dense system, collisions dominate and the SCG model's dilute assumption breaks"
+        ));
+    }
+    // Particles that start outside a wall.
+    for (gi, g) in scene.groups.iter().enumerate() {
+        if let Placement::Explicit { positions, .. } = &g.placement {
+            for (pi, p) in positions.iter().enumerate() {
+                for w in &scene.walls {
+                    if !w.shape.contains(*p) {
+                        findings.push(Finding {
+                            level: Level::Error,
+                            message: format!(
+                                "groups[{gi}] (`{}`) particle {pi} at {:?} starts outside wall `{}`",
+                                g.name,
+                                p.to_array(),
+                                w.name
+                            ),
+                        });
+                    }
+                }
+            }
+        }
+    }
+    Report {
+        groups,
+        stokes_number: st,
+        dt: scene.dt,
+        steps: scene.steps(),
+        findings,
+    }
+}
+
+/// Render the report as text.
+pub fn render(scene: &Scene, r: &Report) -> String {
+    let mut s = format!(
+        "scene `{}` ({}): {} steps of dt = {:.4e} s ({}), duration {} s, integrator {}\n",
+        scene.name,
+        scene.file,
+        r.steps,
+        r.dt,
+        match scene.dt_choice {
+            crate::DtChoice::Auto => "auto",
+            crate::DtChoice::Fixed => "fixed",
+        },
+        scene.duration,
+        scene.integrator.name()
+    );
+    s.push_str(&format!(
+        "{:<16} {:>6} {:>4} {:>8} {:>11} {:>11} {:>11} {:>10} {:>10} {:>10}\n",
+        "group", "law", "α", "count", "d [m]", "ρ [kg/m³]", "τ [s]", "slip[m/s]", "Re_p", "ρ/ρ_f"
+    ));
+    for g in &r.groups {
+        s.push_str(&format!(
+            "{:<16} {:>6} {:>4} {:>8} {:>11.4e} {:>11.5} {:>11.4e} {:>10.3e} {:>10.3e} {:>10.4}\n",
+            g.name,
+            g.law,
+            g.alpha,
+            g.count,
+            g.diameter,
+            g.density,
+            g.tau,
+            g.slip,
+            g.reynolds,
+            g.density_ratio
+        ));
+    }
+    s.push_str(&format!(
+        "Stokes number (paper eq. 1): {:.4e}\n",
+        r.stokes_number
+    ));
+    if r.findings.is_empty() {
+        s.push_str("no warnings\n");
+    }
+    for f in &r.findings {
+        s.push_str(&format!(
+            "{}: {}\n",
+            if f.level == Level::Error {
+                "error"
+            } else {
+                "warning"
+            },
+            f.message
+        ));
+    }
+    s
+}

@@ -1,0 +1,4 @@
+//! The `scg` binary.
+fn main() {
+    std::process::exit(scg_cli::main());
+}

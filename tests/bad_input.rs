@@ -1,0 +1,145 @@
+//! Bad input: exit status 2 and a message naming the file, the key and the line; never a panic.
+
+mod common;
+
+use std::process::Command;
+
+const GOOD: &str = r#"duration = 0.01
+dt = 1e-3
+[fluid]
+density = 1.2
+viscosity = 1.8e-5
+[flow]
+kind = "uniform"
+velocity = [1.0, 0.0, 0.0]
+[drag]
+law = "stokes"
+[[groups]]
+name = "a"
+diameter = 1e-4
+density = 1000.0
+positions = [[0.0, 0.0, 0.0]]
+"#;
+
+fn check(text: &str) -> (i32, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.toml");
+    std::fs::write(&path, text).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_scg"))
+        .arg("check")
+        .arg(&path)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!err.contains("panicked"), "panic: {err}");
+    (out.status.code().unwrap_or(-1), err)
+}
+
+fn expect(text: &str, key: &str, line: usize) {
+    let (code, err) = check(text);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("bad.toml"), "file named: {err}");
+    assert!(
+        err.contains(&format!("`{key}`")),
+        "key `{key}` named: {err}"
+    );
+    assert!(
+        err.contains(&format!("bad.toml:{line}:")),
+        "line {line}: {err}"
+    );
+}
+
+#[test]
+fn good_scene_passes() {
+    let (code, err) = check(GOOD);
+    assert_eq!(code, 0, "{err}");
+}
+
+#[test]
+fn malformed_toml() {
+    let (code, err) = check(&GOOD.replace("[drag]", "[drag"));
+    assert_eq!(code, 2);
+    assert!(err.contains("bad.toml:9:"), "{err}");
+}
+
+#[test]
+fn unknown_key() {
+    expect(
+        &GOOD.replace("law = \"stokes\"", "law = \"stokes\"\nspeed = 3"),
+        "drag.speed",
+        11,
+    );
+}
+
+#[test]
+fn negative_and_zero_values() {
+    expect(
+        &GOOD.replace("diameter = 1e-4", "diameter = -1e-4"),
+        "groups[0].diameter",
+        13,
+    );
+    expect(
+        &GOOD.replace("density = 1000.0", "density = 0.0"),
+        "groups[0].density",
+        14,
+    );
+    expect(&GOOD.replace("dt = 1e-3", "dt = 0.0"), "dt", 2);
+    expect(&GOOD.replace("dt = 1e-3", "dt = -1.0"), "dt", 2);
+    expect(
+        &GOOD.replace("viscosity = 1.8e-5", "viscosity = -1"),
+        "fluid.viscosity",
+        5,
+    );
+}
+
+#[test]
+fn nan_and_infinity() {
+    expect(
+        &GOOD.replace("diameter = 1e-4", "diameter = nan"),
+        "groups[0].diameter",
+        13,
+    );
+    expect(
+        &GOOD.replace("velocity = [1.0, 0.0, 0.0]", "velocity = [inf, 0.0, 0.0]"),
+        "flow.velocity",
+        8,
+    );
+}
+
+#[test]
+fn wrong_types_and_words() {
+    let (code, err) = check(&GOOD.replace("duration = 0.01", "duration = \"long\""));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("bad.toml:1:"), "{err}");
+    expect(
+        &GOOD.replace("kind = \"uniform\"", "kind = \"swirl\""),
+        "flow.kind",
+        7,
+    );
+    expect(&GOOD.replace("dt = 1e-3", "dt = \"often\""), "dt", 2);
+}
+
+#[test]
+fn missing_file() {
+    let out = Command::new(env!("CARGO_BIN_EXE_scg"))
+        .args(["run", "/nonexistent/scene.toml", "--no-record"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("/nonexistent/scene.toml") && err.contains("cannot read"),
+        "{err}"
+    );
+}
+
+#[test]
+fn bad_override() {
+    let out = Command::new(env!("CARGO_BIN_EXE_scg"))
+        .args(["run", "--no-record", "--set", "groups.9.alpha=2"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("groups.9.alpha"), "{err}");
+}

@@ -1,0 +1,247 @@
+#!/usr/bin/env python3
+"""Check that an scg recording pair opens in the reference tools.
+
+Usage:
+    .venv-interop/bin/python tests/interop/check.py REC.rrd REC.mcap
+
+REC.rrd and REC.mcap must hold the same run (e.g. both written by one `scg run`, or the
+.rrd rebuilt from the .mcap). Checks, each printed as PASS or FAIL:
+
+1. `rerun rrd verify REC.rrd` reports "1 file verified without error";
+2. the particle positions read with `rerun.experimental.RrdReader` equal the MCAP's positions
+   (same steps, same particle ids) to float32 precision;
+3. the MCAP file reads with `mcap.reader.make_reader(..., validate_crcs=True)`, every
+   `/particles` message decodes as `foxglove.PointCloud`, and its summary, metadata and
+   attachment are present;
+4. `rerun mcap convert REC.mcap -o OUT.rrd` succeeds and `rerun rrd verify OUT.rrd` passes.
+
+Exits with status 1 if any check fails. Set up the environment with tests/interop/setup.sh.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import subprocess
+import sys
+import tempfile
+import traceback
+from pathlib import Path
+
+import numpy as np
+
+VERIFIED = "1 file verified without error"
+POINT_FIELDS = ["x", "y", "z", "vx", "vy", "vz", "diameter", "density", "id", "group"]
+POINT_STRIDE = 72
+FLOAT64, UINT32 = 8, 5  # foxglove.PackedElementField.NumericType
+
+
+def rerun_cli() -> str:
+    """The `rerun` executable of this Python environment (or the one on PATH)."""
+    beside = Path(sys.executable).parent / "rerun"
+    if beside.exists():
+        return str(beside)
+    found = shutil.which("rerun")
+    if found is None:
+        raise RuntimeError("no `rerun` executable (install rerun-sdk, see tests/interop/setup.sh)")
+    return found
+
+
+def run(args: list[str]) -> str:
+    """Runs a command and returns its stdout+stderr; raises if it exits non-zero."""
+    proc = subprocess.run(args, capture_output=True, text=True, check=False)
+    output = proc.stdout + proc.stderr
+    if proc.returncode != 0:
+        raise RuntimeError(f"`{' '.join(args)}` exited with {proc.returncode}:\n{output}")
+    return output
+
+
+def rrd_verify(path: Path) -> str:
+    """`rerun rrd verify PATH`; its exit status is 0 even on garbage, so read what it says."""
+    output = run([rerun_cli(), "rrd", "verify", str(path)])
+    if VERIFIED not in output:
+        raise RuntimeError(f"`rerun rrd verify {path}` did not report {VERIFIED!r}:\n{output}")
+    return output.strip().splitlines()[-1]
+
+
+def point_dtype(cloud) -> np.dtype:
+    """A numpy dtype for the packed points of a foxglove PointCloud."""
+    names, formats, offsets = [], [], []
+    for field in cloud.fields:
+        if field.type == FLOAT64:
+            fmt = "<f8"
+        elif field.type == UINT32:
+            fmt = "<u4"
+        else:
+            raise ValueError(f"unexpected type {field.type} of point field {field.name!r}")
+        names.append(field.name)
+        formats.append(fmt)
+        offsets.append(field.offset)
+    return np.dtype({"names": names, "formats": formats, "offsets": offsets,
+                     "itemsize": cloud.point_stride})
+
+
+def read_mcap(path: Path, validate_crcs: bool) -> dict:
+    """Reads an scg MCAP file: frames (by sequence), metadata, attachment, summary."""
+    from foxglove_schemas_protobuf.PointCloud_pb2 import PointCloud
+    from mcap.reader import make_reader
+
+    clouds: dict[int, np.ndarray] = {}
+    stats: dict[int, dict] = {}
+    log_times: dict[int, int] = {}
+    with open(path, "rb") as f:
+        reader = make_reader(f, validate_crcs=validate_crcs)
+        summary = reader.get_summary()
+        metadata = {m.name: dict(m.metadata) for m in reader.iter_metadata()}
+        attachments = {a.name: bytes(a.data) for a in reader.iter_attachments()}
+        for schema, channel, message in reader.iter_messages():
+            if channel.topic == "/particles":
+                if schema.name != "foxglove.PointCloud" or channel.message_encoding != "protobuf":
+                    raise ValueError(f"/particles: schema {schema.name}, "
+                                     f"encoding {channel.message_encoding}")
+                cloud = PointCloud()
+                cloud.ParseFromString(message.data)
+                names = [field.name for field in cloud.fields]
+                if names != POINT_FIELDS or cloud.point_stride != POINT_STRIDE:
+                    raise ValueError(f"unexpected point layout {names}, stride {cloud.point_stride}")
+                if cloud.frame_id != "world" or cloud.pose.orientation.w != 1.0:
+                    raise ValueError("unexpected frame_id or pose")
+                if len(cloud.data) % cloud.point_stride:
+                    raise ValueError("point data is not a whole number of points")
+                stamp = cloud.timestamp.seconds * 1_000_000_000 + cloud.timestamp.nanos
+                if stamp != message.log_time:
+                    raise ValueError(f"timestamp {stamp} != log_time {message.log_time}")
+                clouds[message.sequence] = np.frombuffer(cloud.data, dtype=point_dtype(cloud))
+                log_times[message.sequence] = message.log_time
+            elif channel.topic == "/stats":
+                stats[message.sequence] = json.loads(message.data)
+    if clouds.keys() != stats.keys():
+        raise ValueError("/particles and /stats messages do not pair up")
+    return {"clouds": clouds, "stats": stats, "log_times": log_times, "summary": summary,
+            "metadata": metadata, "attachments": attachments}
+
+
+def mcap_positions(mcap: dict) -> dict[tuple[int, int], np.ndarray]:
+    """(step, particle id) -> position (float64) from a read MCAP file."""
+    out = {}
+    for sequence, points in mcap["clouds"].items():
+        step = int(mcap["stats"][sequence]["step"])
+        xyz = np.stack([points["x"], points["y"], points["z"]], axis=1)
+        for pid, p in zip(points["id"].tolist(), xyz):
+            out[(step, pid)] = p
+    return out
+
+
+def rrd_positions(path: Path) -> dict[tuple[int, int], np.ndarray]:
+    """(step, particle id) -> position (float32) from the `/particles/*` entities."""
+    from rerun.experimental import RrdReader
+
+    out = {}
+    for chunk in RrdReader(path).stream():
+        if not chunk.entity_path.startswith("/particles/") or chunk.is_static:
+            continue
+        batch = chunk.to_record_batch()
+        steps = batch.column("step").to_numpy()
+        positions = batch.column("Points3D:positions")
+        ids = batch.column("particle_id")
+        for row in range(batch.num_rows):
+            row_ids = ids[row].values.to_numpy(zero_copy_only=False)
+            row_pos = np.asarray(positions[row].values.flatten(), dtype=np.float32).reshape(-1, 3)
+            if len(row_ids) != len(row_pos):
+                raise ValueError(f"{chunk.entity_path}: {len(row_ids)} ids, {len(row_pos)} points")
+            for pid, p in zip(row_ids.tolist(), row_pos):
+                key = (int(steps[row]), pid)
+                if key in out:
+                    raise ValueError(f"particle {pid} twice at step {key[0]}")
+                out[key] = p
+    return out
+
+
+def check_verify(rrd: Path, mcap: Path) -> str:
+    return rrd_verify(rrd)
+
+
+def check_positions(rrd: Path, mcap: Path) -> str:
+    want = mcap_positions(read_mcap(mcap, validate_crcs=False))
+    got = rrd_positions(rrd)
+    if got.keys() != want.keys():
+        missing = sorted(want.keys() - got.keys())[:5]
+        extra = sorted(got.keys() - want.keys())[:5]
+        raise ValueError(f"(step, id) sets differ: missing from rrd {missing}, extra {extra}")
+    keys = sorted(want)
+    a = np.array([got[k] for k in keys], dtype=np.float32)
+    with np.errstate(over="ignore"):  # |x| > 3.4e38 is inf in float32, in Rerun too
+        b = np.array([want[k] for k in keys], dtype=np.float64).astype(np.float32)
+    if not np.array_equal(a, b):
+        bad = np.argwhere(a != b)[:5]
+        raise ValueError(f"positions differ, e.g. {[(keys[i], a[i], b[i]) for i, _ in bad]}")
+    steps = len({k[0] for k in keys})
+    return f"{len(keys)} positions over {steps} frames match"
+
+
+def check_mcap(rrd: Path, mcap: Path) -> str:
+    data = read_mcap(mcap, validate_crcs=True)
+    summary = data["summary"]
+    if summary is None or summary.statistics is None or not summary.chunk_indexes:
+        raise ValueError("no summary, statistics or chunk indexes")
+    meta = data["metadata"].get("scg")
+    if meta is None:
+        raise ValueError("no `scg` metadata record")
+    groups = json.loads(meta["groups"])
+    for key in ("scg_version", "case", "seed", "dt", "record_every", "warnings"):
+        if key not in meta:
+            raise ValueError(f"metadata key {key!r} missing")
+    if "scene.toml" not in data["attachments"]:
+        raise ValueError("no scene.toml attachment")
+    for points in data["clouds"].values():
+        if len(points) and points["group"].max() >= len(groups):
+            raise ValueError("group index out of range")
+    n_points = sum(len(p) for p in data["clouds"].values())
+    return (f"{len(data['clouds'])} point clouds ({n_points} points), "
+            f"{summary.statistics.message_count} messages in {len(summary.chunk_indexes)} chunks, "
+            f"{len(groups)} groups, case {meta['case']!r}")
+
+
+def check_convert(rrd: Path, mcap: Path) -> str:
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "converted.rrd"
+        run([rerun_cli(), "mcap", "convert", str(mcap), "-o", str(out)])
+        verdict = rrd_verify(out)
+        from rerun.experimental import RrdReader
+
+        paths = {chunk.entity_path for chunk in RrdReader(out).stream()}
+        if not any("particles" in p for p in paths):
+            raise ValueError(f"no /particles entity in the converted recording: {sorted(paths)}")
+        return f"{verdict}; {len(paths)} entities"
+
+
+CHECKS = [
+    ("rerun rrd verify", check_verify),
+    ("positions rrd == mcap", check_positions),
+    ("mcap reader + foxglove PointCloud", check_mcap),
+    ("rerun mcap convert + verify", check_convert),
+]
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("rrd", type=Path, help="Rerun recording (.rrd)")
+    parser.add_argument("mcap", type=Path, help="MCAP recording of the same run")
+    args = parser.parse_args()
+
+    failures = 0
+    for number, (name, check) in enumerate(CHECKS, start=1):
+        try:
+            detail = check(args.rrd, args.mcap)
+            print(f"PASS {number}. {name}: {detail}")
+        except Exception as err:  # noqa: BLE001 - report every failure and go on
+            failures += 1
+            print(f"FAIL {number}. {name}: {err}")
+            traceback.print_exc(limit=3, file=sys.stderr)
+    print(f"{len(CHECKS) - failures} passed, {failures} failed")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
