@@ -73,18 +73,15 @@ pub struct FluidCoupling {
 
 /// Stokes-drag factors precomputed once per particle for a fixed dt (exponential scheme).
 ///
-/// `tau` is the Stokes response time, s; `decay` = e^(−dt/τ); `relax` = τ·(1 − e^(−dt/τ)), s;
-/// `half_relax` = τ·(1 − e^(−dt/(2τ))), s (the mid-step predictor's).
+/// `tau` is the Stokes response time, s; `gain` = 1 − e^(−dt/τ); `relax` = τ·(1 − e^(−dt/τ)), s.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
 pub struct StokesFactors {
     /// Momentum response time τ = m / (3π·μ·d_drag·force_scale), s.
     pub tau: f64,
-    /// e^(−dt/τ), dimensionless.
-    pub decay: f64,
+    /// 1 − e^(−dt/τ), dimensionless.
+    pub gain: f64,
     /// τ·(1 − e^(−dt/τ)), s.
     pub relax: f64,
-    /// τ·(1 − e^(−dt/(2τ))), s.
-    pub half_relax: f64,
 }
 
 /// Marker: the particle left the domain (drained through an outlet or lost); it is

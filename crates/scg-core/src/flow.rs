@@ -28,7 +28,7 @@ pub struct Vortex {
 
 impl Vortex {
     /// Component of `x − center` perpendicular to the axis (the radial vector), m.
-    #[inline]
+    #[inline(always)]
     pub fn radial(&self, x: DVec3) -> DVec3 {
         let rel = x - self.center;
         rel - rel.dot(self.axis) * self.axis
@@ -65,7 +65,7 @@ pub enum FlowField {
 
 impl FlowField {
     /// Fluid velocity at `x`, m/s. Finite for every finite `x`, including on an axis.
-    #[inline]
+    #[inline(always)]
     pub fn velocity(&self, x: DVec3) -> DVec3 {
         match self {
             FlowField::Still => DVec3::ZERO,

@@ -38,30 +38,31 @@ impl Integrator {
 }
 
 /// Precomputed exponential factors for response time `tau` (s) and step `dt` (s):
-/// (e^(−dt/τ), τ·(1 − e^(−dt/τ))). An infinite τ (no drag) gives (1, dt).
+/// (1 − e^(−dt/τ), τ·(1 − e^(−dt/τ))), both via `exp_m1` for precision. An infinite τ
+/// (no drag) gives (0, dt).
 #[inline]
 pub fn exponential_factors(tau: f64, dt: f64) -> (f64, f64) {
     if !tau.is_finite() {
-        return (1.0, dt);
+        return (0.0, dt);
     }
     let x = dt / tau;
-    let decay = (-x).exp();
+    let gain = -(-x).exp_m1();
     // τ·(1 − e^(−x)) = dt·(1 − e^(−x))/x, evaluated with exp_m1 to keep precision for small x.
     let relax = -tau * (-x).exp_m1();
-    (decay, relax)
+    (gain, relax)
 }
 
 /// Exact solution over one step of dv/dt = (u − v)/τ + a with u and a constant.
 ///
-/// `decay`, `relax` come from [`exponential_factors`]`(tau, dt)`. Returns (x', v').
-#[inline]
+/// `gain`, `relax` come from [`exponential_factors`]`(tau, dt)`. Returns (x', v').
+#[inline(always)]
 pub fn exponential_drift(
     x: DVec3,
     v: DVec3,
     u: DVec3,
     a: DVec3,
     tau: f64,
-    decay: f64,
+    gain: f64,
     relax: f64,
     dt: f64,
 ) -> (DVec3, DVec3) {
@@ -71,7 +72,9 @@ pub fn exponential_drift(
     }
     let w = u + a * tau;
     let dv = v - w;
-    (x + w * dt + dv * relax, w + dv * decay)
+    // v' = w + (v − w)·e^(−x), written as v + (w − v)·(1 − e^(−x)) so that a slow
+    // relaxation (e^(−x) ≈ 1) does not cancel digits.
+    (x + w * dt + dv * relax, v - dv * gain)
 }
 
 /// One semi-implicit Euler step of dv/dt = (u − v)/τ + a: v' = v + dt·((u − v)/τ + a),

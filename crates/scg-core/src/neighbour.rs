@@ -245,7 +245,9 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    fn cloud() -> impl Strategy<Value = (Vec<(f64, f64, f64, f64)>, f64, bool)> {
+    type Cloud = (Vec<(f64, f64, f64, f64)>, f64, bool);
+
+    fn cloud() -> impl Strategy<Value = Cloud> {
         (
             prop::collection::vec((0.0..1.0f64, 0.0..1.0f64, 0.0..1.0f64, 0.0..1.0f64), 0..250),
             0.0..0.05f64,

@@ -149,9 +149,8 @@ fn base_bundle(spec: &ParticleSpec, id: u32) -> impl Bundle {
             },
             StokesFactors {
                 tau: f64::INFINITY,
-                decay: 1.0,
+                gain: 0.0,
                 relax: 0.0,
-                half_relax: 0.0,
             },
         ),
     )

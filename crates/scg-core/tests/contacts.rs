@@ -179,9 +179,9 @@ fn particle_restitution_within_1_percent() {
 
 /// One sphere on the plane z = 0 with (v_t, 0, −v_n); returns (velocity, angular velocity)
 /// after the contact, and the contact-point tangential velocity before and after.
-fn oblique(e: f64, mu: f64, vt: f64, vn: f64) -> (DVec3, DVec3) {
+fn oblique(e: f64, mu: f64, vt: f64, vn: f64, steps_per_contact: f64) -> (DVec3, DVec3) {
     let m = sphere_mass(D, RHO);
-    let dt = hertz_contact_time(m, 0.5 * D, e_eff(), vn) / 50.0;
+    let dt = hertz_contact_time(m, 0.5 * D, e_eff(), vn) / steps_per_contact;
     let walls = WallSet {
         walls: vec![Wall {
             name: "floor".into(),
@@ -220,7 +220,7 @@ fn oblique(e: f64, mu: f64, vt: f64, vn: f64) -> (DVec3, DVec3) {
 fn oblique_wall_impact_sliding_follows_coulomb_impulse() {
     // Sliding throughout needs v_t > (7/2)·μ·(1 + e)·v_n.
     let (e, mu, vt, vn) = (0.8, 0.3, 3.0, 0.5);
-    let (v, w) = oblique(e, mu, vt, vn);
+    let (v, w) = oblique(e, mu, vt, vn, 50.0);
     let r = 0.5 * D;
     // Normal impulse J_n = m·(v_n + v_n'); tangential J_t = μ·J_n.
     let en = v.z / vn;
@@ -244,24 +244,58 @@ fn oblique_wall_impact_sliding_follows_coulomb_impulse() {
     assert!(v.y.abs() < 1e-12);
 }
 
+/// Reference: the same no-slip Hertz–Mindlin sphere–wall impact integrated on its own
+/// (δ, contact-point slip u, contact-point velocity v_c = v_t − r·ω) with `n` steps per
+/// contact; returns v_c after / v_c before.
+fn sticking_reference(mu: f64, vt: f64, vn: f64, n: f64) -> f64 {
+    let m = sphere_mass(D, RHO);
+    let r = 0.5 * D;
+    let mat = material(1.0, mu);
+    let (es, gs) = (mat.effective_modulus(), mat.effective_shear_modulus());
+    let k = hertz_stiffness(es, r);
+    let dt = hertz_contact_time(m, r, es, vn) / n;
+    let (mut d, mut vd, mut u, mut vc) = (0.0_f64, vn, 0.0_f64, vt);
+    loop {
+        let fnn = k * d.max(0.0).powf(1.5);
+        let kt = 8.0 * gs * (r * d.max(0.0)).sqrt();
+        u += vc * dt;
+        let mut ft = -kt * u;
+        if ft.abs() > mu * fnn {
+            ft = (mu * fnn).copysign(ft);
+            u = if kt > 0.0 { -ft / kt } else { 0.0 };
+        }
+        vd -= fnn / m * dt;
+        // A tangential force at the contact point changes v_c by (1 + m·r²/I)·F/m = 3.5·F/m.
+        vc += 3.5 * ft / m * dt;
+        d += vd * dt;
+        if d < 0.0 {
+            return vc / vt;
+        }
+    }
+}
+
 #[test]
-fn oblique_wall_impact_sticking_reverses_contact_point_velocity() {
-    // Small incidence angle, high friction: the contact sticks and the tangential spring
-    // drives the contact point back (Maw, Barber & Fawcett 1976; Di Renzo & Di Maio 2004).
+fn oblique_wall_impact_sticking_follows_mindlin_no_slip() {
+    // Small incidence angle, high friction: the contact sticks (apart from micro-slip as
+    // the load vanishes) and the Mindlin spring (k_t = 8·G*·√(R*·δ)) oscillates the contact
+    // point. NOTE: for ν = 0.3 (k_t/k_n = 2(1−ν)/(2−ν) ≈ 0.82) this spring model gives a
+    // tangential phase close to 2π over the contact, so the contact-point velocity comes
+    // out *with the same sign* (ratio ≈ +0.955 converged), not reversed as Maw, Barber &
+    // Fawcett's full micro-slip theory gives at small angles. The test checks the model
+    // against its own converged solution and the conservation of angular momentum about
+    // the contact point.
     let (e, mu, vt, vn) = (1.0, 0.8, 0.05, 0.5);
-    let (v, w) = oblique(e, mu, vt, vn);
+    let reference = sticking_reference(mu, vt, vn, 20_000.0);
+    let (v, w) = oblique(e, mu, vt, vn, 500.0);
     let r = 0.5 * D;
     // Contact point at −r·ẑ: velocity v + ω × (−r·ẑ).
     let vc = v + w.cross(DVec3::new(0.0, 0.0, -r));
     eprintln!(
-        "contact point tangential velocity: before {vt}, after {:.5}",
-        vc.x
+        "contact point tangential velocity: before {vt}, after {:.5} (ratio {:.4}, reference {reference:.4}; v = {v:?}, w = {w:?})",
+        vc.x,
+        vc.x / vt
     );
-    assert!(
-        vc.x < 0.0,
-        "contact point velocity should reverse: {}",
-        vc.x
-    );
+    assert!((vc.x / vt - reference).abs() < 0.01);
     // Angular momentum about the contact point is conserved: m·r·v_t + I·ω_y = const
     // (sign: ω_y > 0 rolls along +x).
     let m = sphere_mass(D, RHO);
@@ -275,7 +309,11 @@ fn oblique_wall_impact_sticking_reverses_contact_point_velocity() {
 
 /// A periodic box of `n` polydisperse particles with random velocities.
 fn periodic_box(n: usize, e: f64, mu: f64, seed: u64) -> (Simulation, f64) {
-    let l = 12.0 * D;
+    periodic_box_sized(n, e, mu, seed, 12.0 * D)
+}
+
+/// Same in a box of edge `l` (10.5·D for 1000 particles: ~6 candidate pairs each).
+fn periodic_box_sized(n: usize, e: f64, mu: f64, seed: u64, l: f64) -> (Simulation, f64) {
     let mut cfg = contact_cfg(e, mu, Some(DVec3::splat(l)));
     cfg.skin = 0.2 * D;
     let v = 0.5;
@@ -367,7 +405,11 @@ fn periodic_box_conserves_momentum_and_dissipates() {
     );
     assert!(worst_dp < 1e-12);
     assert!(ke < 0.9 * ke0);
-    assert!(worst_rise < 1e-3);
+    // Measured: the total never rose in any step (worst rise 0).
+    assert!(
+        worst_rise <= 1e-12,
+        "energy rose by {worst_rise:e}·E0 in one step"
+    );
 }
 
 /// Relative drift of total energy (kinetic + Hertz elastic) of an elastic, frictionless
@@ -390,11 +432,13 @@ fn elastic_drift(steps: u64) -> (f64, u64) {
 
 #[test]
 fn elastic_energy_drift_is_bounded() {
-    // 5000 steps (a few seconds in release). Symplectic Euler on a Hertz contact keeps
-    // the energy bounded; the measured drift is of order 1e-3 (see the report), assert 1 %.
-    let (worst, collisions) = elastic_drift(5000);
-    eprintln!("elastic box: 5000 steps, {collisions} contacts, worst |E/E0 − 1| = {worst:.3e}");
-    assert!(worst < 1e-2);
+    // 60 000 steps (≈ 10 s in release, ~55 000 contacts started). Symplectic Euler keeps the
+    // energy of the Hertz contacts bounded rather than drifting: measured worst
+    // |E/E0 − 1| = 3.0e-4 over 5 000 steps and 4.3e-4 over 10⁵ steps (dt = t_c/50 at 4× the
+    // rms speed). Asserted bound: 2e-3.
+    let (worst, collisions) = elastic_drift(60_000);
+    eprintln!("elastic box: 60000 steps, {collisions} contacts, worst |E/E0 − 1| = {worst:.3e}");
+    assert!(worst < 2e-3);
 }
 
 /// The 10⁵-step version; run with
@@ -404,7 +448,7 @@ fn elastic_energy_drift_is_bounded() {
 fn elastic_energy_drift_long() {
     let (worst, collisions) = elastic_drift(100_000);
     eprintln!("elastic box: 1e5 steps, {collisions} contacts, worst |E/E0 − 1| = {worst:.3e}");
-    assert!(worst < 1e-2);
+    assert!(worst < 2e-3);
 }
 
 fn state_bits(sim: &mut Simulation) -> Vec<u64> {
@@ -426,13 +470,19 @@ fn state_bits(sim: &mut Simulation) -> Vec<u64> {
 }
 
 fn run_box_bits(steps: u64) -> Vec<u64> {
-    let (mut sim, _) = periodic_box(1000, 0.8, 0.3, 3);
+    let (mut sim, _) = periodic_box_sized(1000, 0.8, 0.3, 3, 10.5 * D);
     sim.run(steps, |_| true).unwrap();
     state_bits(&mut sim)
 }
 
 #[test]
 fn same_run_twice_is_bit_identical() {
+    // The box has more candidate pairs than one parallel chunk (1024), so the pair forces
+    // really are computed in several tasks.
+    let (mut sim, _) = periodic_box_sized(1000, 0.8, 0.3, 3, 10.5 * D);
+    sim.step().unwrap();
+    let pairs = sim.world.resource::<ContactState>().pairs.len();
+    assert!(pairs > 2 * 1024, "{pairs} pairs");
     assert_eq!(run_box_bits(300), run_box_bits(300));
 }
 
@@ -471,7 +521,10 @@ fn one_and_two_threads_give_identical_results() {
             .unwrap();
         let s = String::from_utf8_lossy(&out.stdout).into_owned();
         s.lines()
-            .find_map(|l| l.strip_prefix("STATE_DIGEST=").map(str::to_string))
+            .find_map(|l| {
+                l.split_once("STATE_DIGEST=")
+                    .map(|(_, d)| d.trim().to_string())
+            })
             .unwrap_or_else(|| panic!("no digest from child: {s}"))
     };
     let (a, b) = (digest("1"), digest("2"));
@@ -495,4 +548,49 @@ fn no_contacts_no_neighbour_search() {
     assert!(pos("clear_forces") < pos("particle_contact_forces"));
     assert!(pos("integrate_ballistic") < pos("integrate_rotation"));
     assert!(pos("integrate_rotation") < pos("advance_clock"));
+}
+
+#[test]
+fn rolling_resistance_decelerates_a_rolling_sphere() {
+    // A sphere rolling on a floor under gravity with rolling friction μ_r: the constant
+    // torque μ_r·F_n·r (F_n = m·g) against the rolling motion, with the contact point held
+    // by the tangential spring, gives dv/dt = −μ_r·g/(1 + I/(m·r²)) = −μ_r·g/1.4.
+    let (mu_r, g, v0) = (0.1, 9.81, 0.05);
+    let mut c = contact_cfg(0.5, 0.5, None);
+    c.rolling_friction = mu_r;
+    let walls = WallSet {
+        walls: vec![Wall {
+            name: "floor".into(),
+            shape: WallShape::Plane {
+                point: DVec3::ZERO,
+                normal: DVec3::Z,
+            },
+        }],
+        law: NormalLaw::hertz(0.5),
+        material: material(0.5, 0.5),
+    };
+    let dt = 2e-7;
+    let mut cfg = config(dt, Some(c), Some(walls));
+    cfg.gravity = Some(DVec3::new(0.0, 0.0, -g));
+    let mut sim = Simulation::new(cfg);
+    let m = sphere_mass(D, RHO);
+    let r = 0.5 * D;
+    let k = hertz_stiffness(e_eff(), r);
+    let delta = (m * g / k).powf(2.0 / 3.0);
+    sim.spawn(&spec(
+        DVec3::new(0.0, 0.0, r - delta),
+        DVec3::new(v0, 0.0, 0.0),
+        D,
+    ));
+    sim.scale_new_particles();
+    {
+        let mut q = sim.world.query::<&mut AngularVelocity>();
+        q.single_mut(&mut sim.world).unwrap().0 = DVec3::new(0.0, v0 / r, 0.0);
+    }
+    let t = 0.02;
+    sim.run((t / dt) as u64, |_| true).unwrap();
+    let v = sim.particles()[0].velocity.x;
+    let expect = v0 - mu_r * g / 1.4 * t;
+    eprintln!("rolling: v = {v:.5} m/s after {t} s (theory {expect:.5})");
+    assert!((v / expect - 1.0).abs() < 0.03);
 }

@@ -34,7 +34,8 @@ use crate::{RecordError, check_frame, commit_partial, partial_path};
 pub struct McapOptions {
     /// Target uncompressed chunk size, bytes (0: one chunk per frame). Default 1 MiB.
     pub chunk_bytes: usize,
-    /// Longest wall-clock time a frame may wait in an open chunk. Default 1 s.
+    /// Close the chunk at the first frame written this long (wall clock) or longer after the
+    /// previous close. Default 1 s.
     pub chunk_interval: Duration,
     /// zstd compression level (0: zstd's default, 3). Default 0.
     pub compression_level: u32,

@@ -18,7 +18,7 @@ use rerun::external::arrow::array::{
 };
 use rerun::external::re_build_info::CrateVersion;
 use rerun::external::re_log_encoding::{Encoder, EncodingOptions};
-use rerun::log::LogMsg;
+use rerun::log::{ChunkBatcherConfig, LogMsg};
 use rerun::sink::{LogSink, SinkFlushError};
 use rerun::{
     AnyValues, AsComponents, Color, EntityPath, EntityPathPart, LineStrips3D, MediaType, Points3D,
@@ -137,6 +137,21 @@ where
     Arc::new(array)
 }
 
+/// How the stream groups rows into chunks.
+///
+/// Rerun's default (flush every 200 ms) gives every entity a chunk five times a second; with
+/// a few dozen entities of small rows that is mostly per-chunk overhead (and per-chunk footer
+/// entries held in memory until the end). Frames are not viewed live, so flush every 2 s or
+/// 8 MiB. The usual `RERUN_FLUSH_*` environment variables still override this.
+fn batcher_config() -> ChunkBatcherConfig {
+    let config = ChunkBatcherConfig {
+        flush_tick: Duration::from_secs(2),
+        flush_num_bytes: 8 << 20,
+        ..ChunkBatcherConfig::DEFAULT
+    };
+    config.apply_env().unwrap_or(config)
+}
+
 impl RrdSink {
     /// Creates `<path>.partial` and logs the static part of the recording (geometry, warnings,
     /// scene, run description).
@@ -169,7 +184,7 @@ impl RrdSink {
         let stream = RecordingStream::new(
             rerun::new_store_info(RRD_APPLICATION_ID),
             Some(info),
-            None,
+            Some(batcher_config()),
             Default::default(),
             Box::new(EncoderSink(encoder.clone())),
         )

@@ -136,8 +136,11 @@ fn kick(v: DVec3, f: Option<&Force>, m: f64, dt: f64) -> DVec3 {
     }
 }
 
-/// One exponential-midpoint step for response time `tau` with factors for dt and dt/2.
-#[inline]
+/// One exponential-midpoint step for response time `tau` with factors for dt.
+///
+/// The fluid velocity is frozen at the predicted mid-step position x + v·dt/2 (one flow
+/// evaluation per step); in a uniform flow the result is exact whatever the predictor.
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub fn exponential_midpoint(
     flow: &FlowField,
@@ -145,16 +148,12 @@ pub fn exponential_midpoint(
     v: DVec3,
     a: DVec3,
     tau: f64,
-    decay: f64,
+    gain: f64,
     relax: f64,
-    half_relax: f64,
     dt: f64,
 ) -> (DVec3, DVec3) {
-    let u0 = flow.velocity(x);
-    let w0 = u0 + a * tau;
-    let xh = x + w0 * (0.5 * dt) + (v - w0) * half_relax;
-    let u = flow.velocity(xh);
-    exponential_drift(x, v, u, a, tau, decay, relax, dt)
+    let u = flow.velocity(x + v * (0.5 * dt));
+    exponential_drift(x, v, u, a, tau, gain, relax, dt)
 }
 
 type MoveQuery<'w, 's, T> = Query<
@@ -170,7 +169,8 @@ type MoveQuery<'w, 's, T> = Query<
     ),
 >;
 
-/// Stokes drag, exponential scheme, precomputed factors: the fast path.
+/// Stokes drag, exponential scheme, precomputed factors: the fast path. Iterates over
+/// contiguous component slices (one tight loop per table chunk, both cores).
 pub fn integrate_stokes_exponential(
     motion: Res<Motion>,
     flow: Res<FlowField>,
@@ -180,26 +180,39 @@ pub fn integrate_stokes_exponential(
     let dt = motion.dt;
     let flow = *flow;
     let health = &*health;
-    q.par_iter_mut().for_each(|(mut x, mut v, sf, m, f, g)| {
+    let step = |x: &mut DVec3,
+                v: &mut DVec3,
+                sf: &StokesFactors,
+                m: f64,
+                f: Option<&Force>,
+                g: Option<&BodyAcceleration>| {
         let a = g.map_or(DVec3::ZERO, |g| g.0);
-        let vk = kick(v.0, f, m.0, dt);
-        let (x1, v1) = exponential_midpoint(
-            &flow,
-            x.0,
-            vk,
-            a,
-            sf.tau,
-            sf.decay,
-            sf.relax,
-            sf.half_relax,
-            dt,
-        );
+        let vk = kick(*v, f, m, dt);
+        let (x1, v1) = exponential_midpoint(&flow, *x, vk, a, sf.tau, sf.gain, sf.relax, dt);
         if !(x1.is_finite() && v1.is_finite()) {
             health.raise();
         }
-        x.0 = x1;
-        v.0 = v1;
-    });
+        *x = x1;
+        *v = v1;
+    };
+    match q.contiguous_par_iter_mut() {
+        Ok(it) => it.for_each(|(mut xs, mut vs, sfs, ms, fs, gs)| {
+            let (xs, vs) = (&mut *xs, &mut *vs);
+            for i in 0..xs.len() {
+                step(
+                    &mut xs[i].0,
+                    &mut vs[i].0,
+                    &sfs[i],
+                    ms[i].0,
+                    fs.map(|f| &f[i]),
+                    gs.map(|g| &g[i]),
+                );
+            }
+        }),
+        Err(_) => q.par_iter_mut().for_each(|(mut x, mut v, sf, m, f, g)| {
+            step(&mut x.0, &mut v.0, sf, m.0, f, g);
+        }),
+    }
 }
 
 /// Response time under `law` for the current slip, s.
@@ -227,10 +240,8 @@ pub fn integrate_drag_exponential(
             let vk = kick(v.0, f, m.0, dt);
             let slip = (flow.velocity(x.0) - vk).length();
             let tau = effective_tau(law, sf.tau, fc, &fluid, slip);
-            let (decay, relax) = exponential_factors(tau, dt);
-            let (_, half_relax) = exponential_factors(tau, 0.5 * dt);
-            let (x1, v1) =
-                exponential_midpoint(&flow, x.0, vk, a, tau, decay, relax, half_relax, dt);
+            let (gain, relax) = exponential_factors(tau, dt);
+            let (x1, v1) = exponential_midpoint(&flow, x.0, vk, a, tau, gain, relax, dt);
             if !(x1.is_finite() && v1.is_finite()) {
                 health.raise();
             }

@@ -35,8 +35,7 @@ pub fn derive(
         }
         _ => f64::INFINITY,
     };
-    let (decay, relax) = exponential_factors(tau, dt);
-    let (_, half_relax) = exponential_factors(tau, 0.5 * dt);
+    let (gain, relax) = exponential_factors(tau, dt);
     (
         Diameter(s.diameter),
         Density(s.density),
@@ -45,12 +44,7 @@ pub fn derive(
             drag_diameter: s.drag_diameter,
             force_scale: s.force_scale,
         },
-        StokesFactors {
-            tau,
-            decay,
-            relax,
-            half_relax,
-        },
+        StokesFactors { tau, gain, relax },
     )
 }
 
