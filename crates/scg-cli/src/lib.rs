@@ -1,6 +1,7 @@
 //! The `scg` command line: run, check, bench, replay.
 
 mod bench;
+pub mod replay;
 mod run;
 
 use std::path::PathBuf;
@@ -29,6 +30,8 @@ enum Command {
     },
     /// Benchmarks.
     Bench(bench::BenchArgs),
+    /// Work from an MCAP recording: rebuild .rrd, analyse, verify.
+    Replay(replay::ReplayArgs),
 }
 
 /// Exit status for bad input (scene, arguments, files).
@@ -51,6 +54,7 @@ pub fn main() -> i32 {
         Some(Command::Run(a)) => run::run(a),
         Some(Command::Check { case, set }) => check(case, set),
         Some(Command::Bench(a)) => bench::bench(a),
+        Some(Command::Replay(a)) => replay::replay(a),
     }
 }
 

@@ -1,0 +1,307 @@
+//! `scg replay`: work from an MCAP recording without re-simulating.
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+use clap::Args;
+use glam::DVec3;
+
+use scg_core::flow::FlowField;
+use scg_core::frame::{Frame, FrameSink};
+use scg_record::{Recording, read_mcap, write_rrd};
+
+use crate::EXIT_BAD_INPUT;
+
+/// Arguments of `scg replay`.
+#[derive(Args, Debug)]
+pub struct ReplayArgs {
+    /// The MCAP recording (a `.partial` file of a killed run works too).
+    pub recording: PathBuf,
+    /// Rebuild a Rerun recording at this path, with the live layout.
+    #[arg(long, value_name = "OUT.rrd")]
+    pub rrd: Option<PathBuf>,
+    /// Print per-group statistics of the radial distance from the flow axis, and write CSV.
+    #[arg(long)]
+    pub analyze: bool,
+    /// Analysis window start, s.
+    #[arg(long, default_value_t = 0.0)]
+    pub from: f64,
+    /// Analysis window end, s.
+    #[arg(long, default_value_t = f64::INFINITY)]
+    pub to: f64,
+    /// CSV output of `--analyze` (default: next to the recording, `<stem>.analysis.csv`).
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+    /// Re-run the embedded scene and check every recorded frame bit for bit.
+    #[arg(long)]
+    pub verify: bool,
+    /// Open the Rerun viewer on the rebuilt (or a sibling) .rrd when `rerun` is installed.
+    #[arg(long)]
+    pub spawn: bool,
+}
+
+/// Run `scg replay`; returns the exit status.
+pub fn replay(a: ReplayArgs) -> i32 {
+    let rec = match read_mcap(&a.recording) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {}: {e}", a.recording.display());
+            return EXIT_BAD_INPUT;
+        }
+    };
+    eprintln!(
+        "{}: case `{}`, {} frames{}",
+        a.recording.display(),
+        rec.meta.case,
+        rec.frames.len(),
+        if rec.complete {
+            ""
+        } else {
+            " recovered from an incomplete file"
+        }
+    );
+    let mut status = 0;
+    if let Some(out) = &a.rrd {
+        match write_rrd(&rec, out) {
+            Ok(n) => eprintln!("wrote {} ({n} frames)", out.display()),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return 1;
+            }
+        }
+    }
+    if a.analyze {
+        let csv = a
+            .csv
+            .clone()
+            .unwrap_or_else(|| a.recording.with_extension("analysis.csv"));
+        match analyze(&rec, a.from, a.to) {
+            Ok((text, table)) => {
+                print!("{text}");
+                if let Err(e) = std::fs::write(&csv, table) {
+                    eprintln!("error: cannot write {}: {e}", csv.display());
+                    return 1;
+                }
+                eprintln!("wrote {}", csv.display());
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                return EXIT_BAD_INPUT;
+            }
+        }
+    }
+    if a.verify {
+        match verify(&rec) {
+            Ok(n) => println!("verify: {n} frames bit-identical"),
+            Err(e) => {
+                println!("verify: FAILED: {e}");
+                status = 1;
+            }
+        }
+    }
+    if a.spawn {
+        let target = a
+            .rrd
+            .clone()
+            .unwrap_or_else(|| a.recording.with_extension("rrd"));
+        match std::process::Command::new("rerun").arg(&target).spawn() {
+            Ok(_) => eprintln!("opened the Rerun viewer on {}", target.display()),
+            Err(e) => eprintln!("cannot start the Rerun viewer (`rerun` not installed?): {e}"),
+        }
+    }
+    status
+}
+
+fn axis_distance(flow: &FlowField, p: [f64; 3]) -> f64 {
+    let x = DVec3::from_array(p);
+    match flow {
+        FlowField::Vortex(v) | FlowField::Classifier { vortex: v, .. } => v.radial(x).length(),
+        _ => DVec3::new(x.x, x.y, 0.0).length(),
+    }
+}
+
+fn percentile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let i = ((sorted.len() - 1) as f64 * q).round() as usize;
+    sorted[i]
+}
+
+/// Statistics per group over the frames in [from, to]: text report and CSV.
+pub fn analyze(rec: &Recording, from: f64, to: f64) -> Result<(String, String), String> {
+    let scene = scg_scene::parse(&rec.meta.scene_toml, "<recording>", &rec.meta.case, &[])
+        .map_err(|e| format!("the recording's scene: {e}"))?;
+    let frames: Vec<&Frame> = rec
+        .frames
+        .iter()
+        .filter(|f| f.time >= from && f.time <= to)
+        .collect();
+    if frames.is_empty() {
+        return Err(format!("no frame between {from} s and {to} s"));
+    }
+    let ng = rec.meta.groups.len();
+    let mut r: Vec<Vec<f64>> = vec![Vec::new(); ng];
+    for f in &frames {
+        for (i, g) in f.group.iter().enumerate() {
+            if let Some(v) = r.get_mut(*g as usize) {
+                v.push(axis_distance(&scene.flow, f.position[i]));
+            }
+        }
+    }
+    let last = frames[frames.len() - 1];
+    let stat = |name: &str| {
+        last.stats
+            .iter()
+            .find(|(k, _)| k == name)
+            .map_or(0.0, |(_, v)| *v)
+    };
+    let rmax = r.iter().flatten().copied().fold(0.0, f64::max).max(1e-300);
+    let bins = 20;
+    let mut text = format!(
+        "window {:.6}–{:.6} s, {} frames; radial distance from the flow axis, m\n{:<16} {:>8} {:>8} {:>12} {:>12} {:>12} {:>12}\n",
+        frames[0].time,
+        last.time,
+        frames.len(),
+        "group",
+        "count",
+        "drained",
+        "mean",
+        "p10",
+        "p50",
+        "p90"
+    );
+    let mut csv = String::from("group,count,drained,samples,mean_r_m,p10_m,p50_m,p90_m");
+    for b in 0..bins {
+        csv.push_str(&format!(",bin{b}"));
+    }
+    csv.push('\n');
+    for (gi, g) in rec.meta.groups.iter().enumerate() {
+        let v = &mut r[gi];
+        v.sort_by(f64::total_cmp);
+        let mean = if v.is_empty() {
+            f64::NAN
+        } else {
+            v.iter().sum::<f64>() / v.len() as f64
+        };
+        let (count, drained) = (
+            stat(&format!("count/{}", g.name)),
+            stat(&format!("drained/{}", g.name)),
+        );
+        text.push_str(&format!(
+            "{:<16} {:>8} {:>8} {:>12.5e} {:>12.5e} {:>12.5e} {:>12.5e}\n",
+            g.name,
+            count,
+            drained,
+            mean,
+            percentile(v, 0.1),
+            percentile(v, 0.5),
+            percentile(v, 0.9)
+        ));
+        let mut hist = vec![0u64; bins];
+        for x in v.iter() {
+            hist[((x / rmax * bins as f64) as usize).min(bins - 1)] += 1;
+        }
+        csv.push_str(&format!(
+            "{},{},{},{},{:e},{:e},{:e},{:e}",
+            g.name,
+            count,
+            drained,
+            v.len(),
+            mean,
+            percentile(v, 0.1),
+            percentile(v, 0.5),
+            percentile(v, 0.9)
+        ));
+        for h in hist {
+            csv.push_str(&format!(",{h}"));
+        }
+        csv.push('\n');
+    }
+    text.push_str(&format!(
+        "histogram: {bins} bins over 0–{rmax:e} m (in the CSV)\n"
+    ));
+    Ok((text, csv))
+}
+
+/// Compares regenerated frames with recorded ones.
+struct VerifySink {
+    recorded: Arc<Vec<Frame>>,
+    next: usize,
+    mismatch: Arc<Mutex<Option<String>>>,
+}
+
+fn first_difference(a: &Frame, b: &Frame) -> Option<String> {
+    if a.step != b.step || a.time.to_bits() != b.time.to_bits() {
+        return Some(format!(
+            "step/time {} {} vs {} {}",
+            a.step, a.time, b.step, b.time
+        ));
+    }
+    if a.len() != b.len() {
+        return Some(format!("particle count {} vs {}", a.len(), b.len()));
+    }
+    for i in 0..a.len() {
+        let bits = |v: [f64; 3]| v.map(f64::to_bits);
+        let fields: [(&str, bool); 6] = [
+            ("id", a.id[i] == b.id[i]),
+            ("group", a.group[i] == b.group[i]),
+            ("position", bits(a.position[i]) == bits(b.position[i])),
+            ("velocity", bits(a.velocity[i]) == bits(b.velocity[i])),
+            (
+                "diameter",
+                a.diameter[i].to_bits() == b.diameter[i].to_bits(),
+            ),
+            ("density", a.density[i].to_bits() == b.density[i].to_bits()),
+        ];
+        if let Some((f, _)) = fields.iter().find(|(_, ok)| !ok) {
+            return Some(format!("particle {} field {f}", a.id[i]));
+        }
+    }
+    None
+}
+
+impl FrameSink for VerifySink {
+    fn write_frame(&mut self, frame: &Frame) -> Result<(), String> {
+        let Some(rec) = self.recorded.get(self.next) else {
+            return Ok(());
+        };
+        if let Some(d) = first_difference(rec, frame) {
+            let mut m = self.mismatch.lock().map_err(|e| e.to_string())?;
+            if m.is_none() {
+                *m = Some(format!("frame {} (step {}): {d}", self.next, rec.step));
+            }
+            return Err("mismatch".into());
+        }
+        self.next += 1;
+        Ok(())
+    }
+    fn finish(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+}
+
+/// Re-run the recording's scene and compare every frame; returns the frames checked.
+pub fn verify(rec: &Recording) -> Result<usize, String> {
+    let scene = scg_scene::parse(&rec.meta.scene_toml, "<recording>", &rec.meta.case, &[])
+        .map_err(|e| format!("the recording's scene: {e}"))?;
+    let Some(last) = rec.frames.last() else {
+        return Err("the recording holds no frame".into());
+    };
+    let recorded = Arc::new(rec.frames.clone());
+    let mismatch = Arc::new(Mutex::new(None));
+    let mut sim = scene.build(true);
+    sim.add_recorder(Box::new(VerifySink {
+        recorded: recorded.clone(),
+        next: 0,
+        mismatch: mismatch.clone(),
+    }));
+    let run = sim
+        .record_now()
+        .and_then(|_| sim.run(last.step, |_| true).map(|_| ()));
+    if let Some(m) = mismatch.lock().map_err(|e| e.to_string())?.take() {
+        return Err(m);
+    }
+    run.map_err(|e| e.to_string())?;
+    Ok(recorded.len())
+}
