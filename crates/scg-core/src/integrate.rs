@@ -56,6 +56,7 @@ pub fn exponential_factors(tau: f64, dt: f64) -> (f64, f64) {
 ///
 /// `gain`, `relax` come from [`exponential_factors`]`(tau, dt)`. Returns (x', v').
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 pub fn exponential_drift(
     x: DVec3,
     v: DVec3,
