@@ -1,8 +1,11 @@
 //! The `scg` command line: run, check, bench, replay.
 
 mod bench;
+pub mod classify;
+pub mod cost;
 pub mod replay;
 mod run;
+pub mod study;
 
 use std::path::PathBuf;
 
@@ -30,6 +33,10 @@ enum Command {
     },
     /// Benchmarks.
     Bench(bench::BenchArgs),
+    /// What accuracy costs in time: sweep α, law, dt, integrator and stiffness on a scene.
+    Cost(cost::CostArgs),
+    /// Studies: `classifier` and `classifier-psd` (paper Section 5, Figs 8–10).
+    Study(study::StudyArgs),
     /// Work from an MCAP recording: rebuild .rrd, analyse, verify.
     Replay(replay::ReplayArgs),
 }
@@ -55,6 +62,8 @@ pub fn main() -> i32 {
         Some(Command::Check { case, set }) => check(case, set),
         Some(Command::Bench(a)) => bench::bench(a),
         Some(Command::Replay(a)) => replay::replay(a),
+        Some(Command::Study(a)) => study::study(a),
+        Some(Command::Cost(a)) => cost::cost(a),
     }
 }
 

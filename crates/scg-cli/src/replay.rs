@@ -89,6 +89,9 @@ pub fn replay(a: ReplayArgs) -> i32 {
                 return EXIT_BAD_INPUT;
             }
         }
+        if let Err(code) = classify_recording(&rec, &a) {
+            return code;
+        }
     }
     if a.verify {
         match verify(&rec) {
@@ -110,6 +113,44 @@ pub fn replay(a: ReplayArgs) -> i32 {
         }
     }
     status
+}
+
+/// For a recording with an outlet (the classifier): the per-class radial distributions,
+/// drained fractions and histogram of `scg study`, written to `<stem>.radial.csv` (the same
+/// text as the study's `radial-<variant>.csv` for the same window).
+fn classify_recording(rec: &Recording, a: &ReplayArgs) -> Result<(), i32> {
+    let Ok(scene) = scg_scene::parse(&rec.meta.scene_toml, "<recording>", &rec.meta.case, &[])
+    else {
+        return Ok(()); // `analyze` already reported it
+    };
+    if scene.outlet.is_none() {
+        return Ok(());
+    }
+    let last = rec.frames.last().map_or(0.0, |f| f.time);
+    let r = crate::classify::analyze_recording(rec, a.from, a.to.min(last)).map_err(|e| {
+        eprintln!("error: {e}");
+        EXIT_BAD_INPUT
+    })?;
+    let path = a.recording.with_extension("radial.csv");
+    std::fs::write(&path, crate::classify::radial_csv(&r)).map_err(|e| {
+        eprintln!("error: cannot write {}: {e}", path.display());
+        1
+    })?;
+    println!(
+        "classifier: {:<10} {:>12} {:>9} {:>10}",
+        "class", "mean_r[m]", "drained", "samples"
+    );
+    for c in &r.classes {
+        println!(
+            "classifier: {:<10} {:>12.5e} {:>9.4} {:>10}",
+            c.name,
+            c.mean_r,
+            c.drained_fraction,
+            c.radii.len()
+        );
+    }
+    eprintln!("wrote {}", path.display());
+    Ok(())
 }
 
 fn axis_distance(flow: &FlowField, p: [f64; 3]) -> f64 {

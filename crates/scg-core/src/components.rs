@@ -93,3 +93,8 @@ pub struct Removed;
 /// Present with walls; empty while the particle touches no wall.
 #[derive(Component, Clone, Debug, Default, PartialEq)]
 pub struct WallHistory(pub Vec<(u32, DVec3)>);
+
+/// Marker: spawned but not yet coarse-grained; the scaling stage scales the particle and
+/// removes the marker.
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct Unscaled;

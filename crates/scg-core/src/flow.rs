@@ -1,7 +1,7 @@
 //! Prescribed fluid: its properties and its velocity field (one-way coupling).
 
 use bevy_ecs::prelude::Resource;
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 
 /// Fluid properties (resource).
 #[derive(Resource, Clone, Copy, Debug, PartialEq)]
@@ -87,6 +87,34 @@ impl FlowField {
         }
     }
 
+    /// The field as u(x) = M·x + b when it is affine (still, uniform, vortex), for fast
+    /// kernels; `None` for the classifier (its nozzle makes it piecewise).
+    pub fn affine(&self) -> Option<Affine> {
+        match *self {
+            FlowField::Still => Some(Affine {
+                m: DMat3::ZERO,
+                b: DVec3::ZERO,
+            }),
+            FlowField::Uniform(u) => Some(Affine {
+                m: DMat3::ZERO,
+                b: u,
+            }),
+            FlowField::Vortex(v) => {
+                // u = ω·(a × r − k·r), r = P·(x − c), P = I − a·aᵀ; a × (P y) = a × y.
+                let a = v.axis;
+                let cross =
+                    DMat3::from_cols(a.cross(DVec3::X), a.cross(DVec3::Y), a.cross(DVec3::Z));
+                let proj = DMat3::IDENTITY - DMat3::from_cols(a * a.x, a * a.y, a * a.z);
+                let m = v.omega * (cross - v.inflow_ratio * proj);
+                Some(Affine {
+                    m,
+                    b: -(m * v.center),
+                })
+            }
+            FlowField::Classifier { .. } => None,
+        }
+    }
+
     /// Characteristic rate of change of the flow along a path, 1/s (ω for rotating flows,
     /// 0 for uniform ones). Used by the `auto` time step.
     pub fn rate(&self) -> f64 {
@@ -96,6 +124,23 @@ impl FlowField {
                 v.omega.abs() * (1.0 + v.inflow_ratio.abs())
             }
         }
+    }
+}
+
+/// An affine velocity field u(x) = M·x + b.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Affine {
+    /// Velocity gradient M, 1/s.
+    pub m: DMat3,
+    /// Velocity at the origin, m/s.
+    pub b: DVec3,
+}
+
+impl Affine {
+    /// Fluid velocity at `x`, m/s.
+    #[inline(always)]
+    pub fn velocity(&self, x: DVec3) -> DVec3 {
+        self.m * x + self.b
     }
 }
 
@@ -126,6 +171,35 @@ mod tests {
         assert!((u.y - v.omega * 2e-4).abs() < 1e-18);
         assert!((u.x + 0.1 * v.omega * 2e-4).abs() < 1e-18);
         assert_eq!(u.z, 0.0);
+    }
+
+    #[test]
+    fn affine_form_matches_the_field() {
+        let v = Vortex {
+            center: DVec3::new(1e-3, -2e-3, 0.5),
+            axis: DVec3::new(0.3, -0.2, 0.9).normalize(),
+            omega: 523.6,
+            inflow_ratio: 5.0,
+        };
+        for f in [
+            FlowField::Vortex(v),
+            FlowField::Uniform(DVec3::new(1.0, 2.0, 3.0)),
+            FlowField::Still,
+        ] {
+            let aff = f.affine().unwrap();
+            for x in [
+                DVec3::new(3e-3, 1e-3, 0.2),
+                DVec3::ZERO,
+                v.center,
+                DVec3::new(-0.1, 0.2, 7.0),
+            ] {
+                let (a, b) = (aff.velocity(x), f.velocity(x));
+                assert!(
+                    (a - b).length() <= 1e-12 * (1.0 + b.length()),
+                    "{f:?} at {x}: {a} vs {b}"
+                );
+            }
+        }
     }
 
     #[test]

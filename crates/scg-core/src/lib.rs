@@ -12,6 +12,8 @@ pub mod flow;
 pub mod frame;
 pub mod integrate;
 pub mod neighbour;
+pub mod par;
+pub mod region;
 pub mod scaling;
 pub mod sim;
 pub mod step;

@@ -8,11 +8,13 @@ use glam::DVec3;
 use crate::components::*;
 use crate::drag::DragLaw;
 use crate::effects::contacts::ContactConfig;
+use crate::effects::feeder::FeederSpec;
 use crate::effects::guard::{Health, NonFinite};
 use crate::effects::motion::{BodyAcceleration, Motion, SimClock};
+use crate::effects::outlet::OutletSpec;
 use crate::effects::recording::{RecordingParams, Tally};
 use crate::effects::walls::{WallSet, WallTangential};
-use crate::effects::{contacts, guard, motion, recording, scaling, walls};
+use crate::effects::{contacts, feeder, guard, motion, outlet, recording, scaling, walls};
 use crate::flow::{FlowField, Fluid};
 use crate::frame::{FrameSink, Recorders};
 use crate::integrate::Integrator;
@@ -44,6 +46,17 @@ pub struct SimConfig {
     pub record_every: Option<u64>,
     /// Group names, indexed by [`GroupId`].
     pub groups: Vec<String>,
+}
+
+/// Feeders and outlet of a scene (the inlet/outlet stage).
+#[derive(Clone, Debug, Default)]
+pub struct InletOutlet {
+    /// Feeders, in scene order.
+    pub feeders: Vec<FeederSpec>,
+    /// The outlet, if any.
+    pub outlet: Option<OutletSpec>,
+    /// Scene seed (feeders' random streams derive from it).
+    pub seed: u64,
 }
 
 /// An original particle to spawn; the scaling stage coarse-grains it.
@@ -130,6 +143,7 @@ fn base_bundle(spec: &ParticleSpec, id: u32) -> impl Bundle {
     (
         ParticleId(id),
         GroupId(spec.group),
+        Unscaled,
         Position(spec.position),
         Velocity(spec.velocity),
         CoarseGrain {
@@ -201,6 +215,11 @@ pub fn init_threads(threads: usize) {
 impl Simulation {
     /// Build the world and the step schedule from `cfg`, adding only the effects it declares.
     pub fn new(cfg: SimConfig) -> Self {
+        Self::with_inlet_outlet(cfg, InletOutlet::default())
+    }
+
+    /// Same as [`Simulation::new`], with feeders and an outlet.
+    pub fn with_inlet_outlet(cfg: SimConfig, io: InletOutlet) -> Self {
         init_threads(
             std::env::var("SCG_THREADS")
                 .ok()
@@ -283,6 +302,10 @@ impl Simulation {
             walls::plugin(&mut world, &mut b, Some(t));
         }
         motion::plugin(&mut b, &motion_res, rotation);
+        if let Some(o) = io.outlet {
+            outlet::plugin(&mut world, &mut b, o, ng);
+        }
+        feeder::plugin(&mut world, &mut b, &io.feeders, io.seed);
         guard::plugin(&mut b);
         if cfg.record_every.is_some() {
             recording::plugin(&mut b);
@@ -316,7 +339,6 @@ impl Simulation {
     /// Apply the scaling stage now (normally the first thing a step does), so the
     /// simulated quantities can be inspected before the first step.
     pub fn scale_new_particles(&mut self) {
-        // A system run once sees every particle as new; later steps see only newer ones.
         let _ = self
             .world
             .run_system_once(scaling::coarse_grain_new_particles);

@@ -112,6 +112,11 @@ fn max_radius(scene: &Scene) -> f64 {
             r = r.max(radius);
         }
     }
+    for f in &scene.feeders {
+        if let crate::Region::Cylinder { radius_max, .. } = f.region {
+            r = r.max(radius_max);
+        }
+    }
     for g in &scene.groups {
         match &g.placement {
             Placement::Explicit { positions, .. } => {
@@ -129,7 +134,61 @@ fn max_radius(scene: &Scene) -> f64 {
     r
 }
 
-fn group_velocities(g: &crate::Group) -> Vec<(DVec3, DVec3)> {
+/// Representative (position, velocity) pairs of a group: its initial particles and the
+/// centres of the regions its feeders feed, with the feeding velocity.
+fn group_velocities(scene: &Scene, g: &crate::Group) -> Vec<(DVec3, DVec3)> {
+    let mut out = placement_velocities(g);
+    for f in &scene.feeders {
+        if scene.groups[f.group].name == g.name {
+            let c = match &f.region {
+                crate::Region::Box { min, max } => 0.5 * (*min + *max),
+                crate::Region::Cylinder {
+                    center,
+                    axis,
+                    radius_max,
+                    height,
+                    ..
+                } => {
+                    *center
+                        + *axis * (0.5 * (height.0 + height.1))
+                        + *radius_max * axis.any_orthonormal_vector()
+                }
+            };
+            out.push((c, f.velocity));
+        }
+    }
+    out
+}
+
+/// Particles of group `gi` fed over the whole run (0 without feeders).
+pub fn fed_count(scene: &Scene, gi: usize) -> f64 {
+    scene
+        .feeders
+        .iter()
+        .filter(|f| f.group == gi)
+        .map(|f| f.rate * (scene.duration.min(f.window.1) - f.window.0).max(0.0))
+        .sum()
+}
+
+/// Largest fluid speed inside the vessel (rotating flows), m/s.
+fn max_flow_speed(scene: &Scene) -> f64 {
+    match scene.flow {
+        FlowField::Vortex(v) => {
+            v.omega.abs() * max_radius(scene) * (1.0 + v.inflow_ratio.powi(2)).sqrt()
+        }
+        FlowField::Classifier {
+            vortex: v,
+            axial_speed,
+            ..
+        } => {
+            v.omega.abs() * max_radius(scene) * (1.0 + v.inflow_ratio.powi(2)).sqrt()
+                + axial_speed.abs()
+        }
+        _ => f64::INFINITY,
+    }
+}
+
+fn placement_velocities(g: &crate::Group) -> Vec<(DVec3, DVec3)> {
     match &g.placement {
         Placement::Explicit {
             positions,
@@ -162,7 +221,7 @@ fn reference_speed(scene: &Scene, tau: f64, g: &crate::Group) -> f64 {
         _ => 0.0,
     };
     v = v.max(omega * rmax);
-    for (x, u) in group_velocities(g) {
+    for (x, u) in group_velocities(scene, g) {
         v = v.max(u.length()).max(scene.flow.velocity(x).length());
     }
     if let Some(gr) = scene.gravity {
@@ -188,15 +247,16 @@ fn group_report(scene: &Scene, g: &crate::Group) -> GroupReport {
         (Some(f), Some(_)) => {
             let tau = stokes_response_time(s.mass(), f.viscosity, s.drag_diameter, s.force_scale);
             let mut slip: f64 = 0.0;
-            for (x, v) in group_velocities(g) {
+            for (x, v) in group_velocities(scene, g) {
                 slip = slip.max((scene.flow.velocity(x) - v).length());
             }
             let omega = match scene.flow {
                 FlowField::Vortex(v) | FlowField::Classifier { vortex: v, .. } => v.omega.abs(),
                 _ => 0.0,
             };
-            // Centrifugal drift at the largest radius, and settling under gravity.
-            slip = slip.max(tau * omega * omega * max_radius(scene));
+            // Centrifugal drift at the largest radius (at most the largest fluid speed: a
+            // particle cannot slip faster than the flow that drives it), and settling.
+            slip = slip.max((tau * omega * omega * max_radius(scene)).min(max_flow_speed(scene)));
             if let Some(gr) = scene.gravity {
                 slip = slip.max(tau * gr.length());
             }
@@ -255,15 +315,26 @@ pub fn particle_contact_time(scene: &Scene) -> Option<f64> {
 }
 
 /// Stokes number of paper eq. 1: St = 4√π·n·ρ_p·d̄⁴·|u_r| / (18·μ), with n the number
-/// density over the vessel (or the particles' bounding box) and group means.
+/// density over the vessel (or the particles' bounding box) and group means. A fed group
+/// counts the particles fed over the whole run (an upper bound of those resident).
 pub fn stokes_number(scene: &Scene, reports: &[GroupReport]) -> f64 {
     let Some(f) = scene.fluid else { return 0.0 };
-    let n_total: usize = reports.iter().map(|r| r.count).sum();
-    if n_total == 0 {
+    let counts: Vec<f64> = reports
+        .iter()
+        .enumerate()
+        .map(|(i, r)| r.count as f64 + fed_count(scene, i))
+        .collect();
+    let n_total: f64 = counts.iter().sum();
+    if n_total <= 0.0 {
         return 0.0;
     }
     let w = |sel: &dyn Fn(&GroupReport) -> f64| -> f64 {
-        reports.iter().map(|r| sel(r) * r.count as f64).sum::<f64>() / n_total as f64
+        reports
+            .iter()
+            .zip(&counts)
+            .map(|(r, c)| sel(r) * c)
+            .sum::<f64>()
+            / n_total
     };
     let d = w(&|r| r.diameter);
     let rho = w(&|r| r.density);
@@ -280,7 +351,7 @@ pub fn stokes_number(scene: &Scene, reports: &[GroupReport]) -> f64 {
         }
     }
     let volume = volume.unwrap_or_else(|| scene.extent().powi(3));
-    let n = n_total as f64 / volume;
+    let n = n_total / volume;
     4.0 * std::f64::consts::PI.sqrt() * n * rho * d.powi(4) * ur / (18.0 * f.viscosity)
 }
 
@@ -314,6 +385,44 @@ pub fn auto_dt(scene: &Scene) -> f64 {
     dt
 }
 
+/// α from which `scg check` calls coarse graining extreme.
+pub const EXTREME_ALPHA: f64 = 16.0;
+
+/// Listed (explicit) positions checked for initial overlaps; larger scenes skip the check.
+const OVERLAP_CHECK_LIMIT: usize = 4096;
+
+/// Pairs of listed particles (spawn indices) that overlap at the start, with the overlap as
+/// a fraction of the smaller simulated diameter (at most 20 pairs reported).
+pub fn initial_overlaps(scene: &Scene) -> Vec<(usize, usize, f64)> {
+    let mut ps: Vec<(usize, DVec3, f64)> = Vec::new();
+    let mut index = 0;
+    for g in &scene.groups {
+        let d = coarse_grain(g.law, g.alpha, g.diameter, g.density).diameter;
+        match &g.placement {
+            Placement::Explicit { positions, .. } => {
+                for p in positions {
+                    ps.push((index, *p, d));
+                    index += 1;
+                }
+            }
+            Placement::Random { count, .. } => index += count,
+        }
+    }
+    let mut out = Vec::new();
+    if ps.len() > OVERLAP_CHECK_LIMIT {
+        return out;
+    }
+    for (i, a) in ps.iter().enumerate() {
+        for b in &ps[i + 1..] {
+            let delta = 0.5 * (a.2 + b.2) - (a.1 - b.1).length();
+            if delta > 0.0 && out.len() < 20 {
+                out.push((a.0, b.0, delta / a.2.min(b.2)));
+            }
+        }
+    }
+    out
+}
+
 /// Check a scene.
 pub fn check(scene: &Scene) -> Report {
     let groups: Vec<GroupReport> = scene
@@ -335,7 +444,23 @@ pub fn check(scene: &Scene) -> Report {
                 r.name, r.reynolds
             ));
         }
-        if r.density_ratio < 10.0 {
+        if r.alpha >= EXTREME_ALPHA {
+            warn(format!(
+                "group `{}`: α = {} is extreme coarse graining: one particle stands for {:.0} originals and is {} m across; check that it still resolves the flow and the walls",
+                r.name,
+                r.alpha,
+                r.alpha.powi(3),
+                r.diameter
+            ));
+        }
+        if r.density_ratio < 1.0 {
+            warn(format!(
+                "group `{}`: simulated density {:.4} kg/m³ is below the fluid's ({:.4} kg/m³): the particle would float; buoyancy, added mass and pressure forces dominate and are not modelled",
+                r.name,
+                r.density,
+                r.density / r.density_ratio
+            ));
+        } else if r.density_ratio < 10.0 {
             warn(format!(
                 "group `{}`: simulated density {:.4} kg/m³ is only {:.2}× the fluid's; added mass, buoyancy and pressure forces are not negligible",
                 r.name, r.density, r.density_ratio
@@ -371,6 +496,14 @@ pub fn check(scene: &Scene) -> Report {
             tc / scene.dt,
             tc
         ));
+    }
+    if scene.contacts.is_some() {
+        for (a, b, frac) in initial_overlaps(scene) {
+            warn(format!(
+                "particles {a} and {b} start overlapping by {:.1} % of the smaller diameter; the contact turns its elastic energy into separation speed (bounded by that energy, not capped further)",
+                100.0 * frac
+            ));
+        }
     }
     let st = stokes_number(scene, &groups);
     if st >= 100.0 {

@@ -10,18 +10,21 @@ mod raw;
 use std::path::Path;
 
 use glam::DVec3;
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use scg_core::contact::tangential::TangentialStiffness;
 use scg_core::contact::{Material, NormalLaw};
 use scg_core::drag::DragLaw;
 use scg_core::effects::contacts::ContactConfig;
+use scg_core::effects::feeder::FeederSpec;
+use scg_core::effects::outlet::OutletSpec;
 use scg_core::effects::walls::{Wall, WallSet};
 use scg_core::flow::{FlowField, Fluid, Vortex, rpm_to_rad_per_s};
 use scg_core::frame::{GroupMeta, Outline, RunMeta};
 use scg_core::integrate::Integrator;
 use scg_core::scaling::CoarseGrainLaw;
+use scg_core::sim::InletOutlet;
 use scg_core::walls::WallShape;
 use scg_core::{ParticleSpec, SimConfig, Simulation};
 
@@ -52,56 +55,7 @@ pub enum Placement {
     },
 }
 
-/// A region for random placement.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Region {
-    /// Axis-aligned box, m.
-    Box {
-        /// Lower corner.
-        min: DVec3,
-        /// Upper corner.
-        max: DVec3,
-    },
-    /// Annular cylinder (radius_min..radius_max, height range along the axis), m.
-    Cylinder {
-        /// Point on the axis.
-        center: DVec3,
-        /// Unit axis.
-        axis: DVec3,
-        /// Inner radius.
-        radius_min: f64,
-        /// Outer radius.
-        radius_max: f64,
-        /// Height range along the axis from `center`.
-        height: (f64, f64),
-    },
-}
-
-impl Region {
-    fn sample(&self, rng: &mut ChaCha8Rng) -> DVec3 {
-        match *self {
-            Region::Box { min, max } => DVec3::new(
-                rng.random_range(min.x..=max.x),
-                rng.random_range(min.y..=max.y),
-                rng.random_range(min.z..=max.z),
-            ),
-            Region::Cylinder {
-                center,
-                axis,
-                radius_min,
-                radius_max,
-                height,
-            } => {
-                let (a, b) = axis.any_orthonormal_pair();
-                // Uniform in area: r² uniform between the radii.
-                let r2 = rng.random_range(radius_min * radius_min..=radius_max * radius_max);
-                let phi = rng.random_range(0.0..std::f64::consts::TAU);
-                let h = rng.random_range(height.0..=height.1);
-                center + axis * h + r2.sqrt() * (a * phi.cos() + b * phi.sin())
-            }
-        }
-    }
-}
+pub use scg_core::region::Region;
 
 /// A particle group (one size class, one coarse-graining law).
 #[derive(Clone, Debug, PartialEq)]
@@ -184,6 +138,25 @@ pub struct Scene {
     pub contacts: Option<ContactConfig>,
     /// Groups.
     pub groups: Vec<Group>,
+    /// Feeders (`[[feeders]]`), in file order.
+    pub feeders: Vec<Feeder>,
+    /// The outlet (`[outlet]`), if declared.
+    pub outlet: Option<OutletSpec>,
+}
+
+/// A feeder: particles of one group enter at a constant rate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Feeder {
+    /// Index of the group fed.
+    pub group: usize,
+    /// Simulated particles per second (from `rate`, or `volume_rate` / simulated volume).
+    pub rate: f64,
+    /// Where particles appear.
+    pub region: Region,
+    /// Their velocity, m/s.
+    pub velocity: DVec3,
+    /// Start and stop time, s.
+    pub window: (f64, f64),
 }
 
 const PALETTE: [[u8; 3]; 10] = [
@@ -467,8 +440,22 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
         return Err(cx.err("groups", "a scene needs at least one [[groups]] entry"));
     }
     let mut groups = Vec::new();
+    let fed: Vec<&str> = raw.feeders.iter().map(|f| f.group.as_str()).collect();
     for (i, g) in raw.groups.iter().enumerate() {
-        let grp = group(g, i, cx, seed)?;
+        let mut grp = group(g, i, cx, fed.contains(&g.name.as_str()))?;
+        if let Some(c) = &raw.coarse_grain {
+            if let Some(a) = c.alpha {
+                grp.alpha = cx.positive("coarse_grain.alpha", a)?;
+            }
+            if let Some(l) = &c.law {
+                grp.law = CoarseGrainLaw::from_name(l).ok_or_else(|| {
+                    cx.err(
+                        "coarse_grain.law",
+                        format!("unknown law `{l}` (scg, none, mass, parcel)"),
+                    )
+                })?;
+            }
+        }
         if groups.iter().any(|o: &Group| o.name == grp.name) {
             return Err(cx.err(
                 &format!("groups[{i}].name"),
@@ -477,6 +464,17 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
         }
         groups.push(grp);
     }
+    let feed_scale = cx.non_negative("feed_scale", raw.feed_scale.unwrap_or(1.0))?;
+    let mut feeders = Vec::new();
+    for (i, f) in raw.feeders.iter().enumerate() {
+        let mut fd = feeder(f, i, &groups, duration, cx)?;
+        fd.rate *= feed_scale;
+        feeders.push(fd);
+    }
+    let outlet = match &raw.outlet {
+        None => None,
+        Some(o) => Some(outlet(o, cx)?),
+    };
     let mut scene = Scene {
         name: raw.name.clone().unwrap_or_else(|| stem.to_string()),
         file: cx.file.to_string(),
@@ -498,6 +496,8 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
         walls,
         contacts: None,
         groups,
+        feeders,
+        outlet,
     };
     if let (Some(c), Some(mat), Some(law)) = (&contacts_raw, material, normal_law) {
         scene.contacts = Some(contacts(c, mat, law, &scene.groups, cx)?);
@@ -679,7 +679,83 @@ fn wall(w: &RawWall, i: usize, cx: &Ctx) -> Result<Wall, SceneError> {
     })
 }
 
-fn group(g: &RawGroup, i: usize, cx: &Ctx, _seed: u64) -> Result<Group, SceneError> {
+fn feeder(
+    f: &RawFeeder,
+    i: usize,
+    groups: &[Group],
+    duration: f64,
+    cx: &Ctx,
+) -> Result<Feeder, SceneError> {
+    let k = |s: &str| format!("feeders[{i}].{s}");
+    let group = groups
+        .iter()
+        .position(|g| g.name == f.group)
+        .ok_or_else(|| cx.err(&k("group"), format!("no group named `{}`", f.group)))?;
+    let g = &groups[group];
+    let rate = match (f.rate, f.volume_rate) {
+        (Some(r), None) => cx.non_negative(&k("rate"), r)?,
+        (None, Some(v)) => {
+            let v = cx.non_negative(&k("volume_rate"), v)?;
+            let d = scg_core::scaling::coarse_grain(g.law, g.alpha, g.diameter, g.density).diameter;
+            v / (std::f64::consts::PI / 6.0 * d * d * d)
+        }
+        (Some(_), Some(_)) => {
+            return Err(cx.err(&k("volume_rate"), "give `rate` or `volume_rate`, not both"));
+        }
+        (None, None) => return Err(cx.err(&k("rate"), "a feeder needs `rate` or `volume_rate`")),
+    };
+    if rate * duration > 5.0e7 {
+        return Err(cx.err(
+            &k("rate"),
+            format!(
+                "{:.3e} particles over the run is more than scg will feed",
+                rate * duration
+            ),
+        ));
+    }
+    let start = cx.non_negative(&k("start"), f.start.unwrap_or(0.0))?;
+    let stop = cx.finite(&k("stop"), f.stop.unwrap_or(f64::MAX))?;
+    if stop < start {
+        return Err(cx.err(&k("stop"), "must be ≥ start"));
+    }
+    Ok(Feeder {
+        group,
+        rate,
+        region: region(&f.region, &k("region"), cx)?,
+        velocity: cx.vec3(&k("velocity"), f.velocity.unwrap_or([0.0; 3]))?,
+        window: (start, stop),
+    })
+}
+
+fn outlet(o: &RawOutlet, cx: &Ctx) -> Result<OutletSpec, SceneError> {
+    let nozzle_radius = cx.positive("outlet.nozzle_radius", o.nozzle_radius)?;
+    let domain_radius = cx.positive("outlet.domain_radius", o.domain_radius)?;
+    let [h0, h1] = o.domain_height;
+    let (h0, h1) = (
+        cx.finite("outlet.domain_height", h0)?,
+        cx.finite("outlet.domain_height", h1)?,
+    );
+    if h0 >= h1 {
+        return Err(cx.err("outlet.domain_height", "must be [from, to] with from < to"));
+    }
+    let plane = cx.finite("outlet.plane", o.plane)?;
+    if !(h0..=h1).contains(&plane) {
+        return Err(cx.err("outlet.plane", "must lie inside domain_height"));
+    }
+    if nozzle_radius > domain_radius {
+        return Err(cx.err("outlet.nozzle_radius", "must be ≤ domain_radius"));
+    }
+    Ok(OutletSpec {
+        center: cx.vec3("outlet.center", o.center.unwrap_or([0.0; 3]))?,
+        axis: cx.unit("outlet.axis", o.axis.unwrap_or([0.0, 0.0, 1.0]))?,
+        nozzle_radius,
+        plane,
+        domain_radius,
+        domain_height: (h0, h1),
+    })
+}
+
+fn group(g: &RawGroup, i: usize, cx: &Ctx, fed: bool) -> Result<Group, SceneError> {
     let k = |s: &str| format!("groups[{i}].{s}");
     if g.name.is_empty()
         || !g
@@ -768,10 +844,15 @@ fn group(g: &RawGroup, i: usize, cx: &Ctx, _seed: u64) -> Result<Group, SceneErr
                 velocity,
             }
         }
+        // A group that a feeder feeds may start empty.
+        (None, None) if fed && g.count.is_none() => Placement::Explicit {
+            positions: Vec::new(),
+            velocities: Vec::new(),
+        },
         (None, None) => {
             return Err(cx.err(
                 &k("positions"),
-                "a group needs `positions` or `count` + `region`",
+                "a group needs `positions` or `count` + `region` (or a feeder)",
             ));
         }
     };
@@ -858,6 +939,33 @@ impl Scene {
         }
     }
 
+    /// The feeders and outlet for the core.
+    pub fn inlet_outlet(&self) -> InletOutlet {
+        InletOutlet {
+            feeders: self
+                .feeders
+                .iter()
+                .map(|f| {
+                    let g = &self.groups[f.group];
+                    FeederSpec {
+                        group: f.group as u32,
+                        diameter: g.diameter,
+                        density: g.density,
+                        alpha: g.alpha,
+                        law: g.law,
+                        rate: f.rate,
+                        region: f.region.clone(),
+                        velocity: f.velocity,
+                        start: f.window.0,
+                        stop: f.window.1,
+                    }
+                })
+                .collect(),
+            outlet: self.outlet,
+            seed: self.seed,
+        }
+    }
+
     /// The particles at the start, in spawn order (ids follow this order).
     pub fn initial_particles(&self) -> Vec<ParticleSpec> {
         let mut out = Vec::new();
@@ -897,7 +1005,7 @@ impl Scene {
 
     /// Build the simulation with its particles (recording stage included when `record`).
     pub fn build(&self, record: bool) -> Simulation {
-        let mut sim = Simulation::new(self.sim_config(record));
+        let mut sim = Simulation::with_inlet_outlet(self.sim_config(record), self.inlet_outlet());
         for p in self.initial_particles() {
             sim.spawn(&p);
         }

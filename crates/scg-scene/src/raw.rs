@@ -23,6 +23,41 @@ pub struct RawScene {
     pub walls: Vec<RawWall>,
     #[serde(default)]
     pub groups: Vec<RawGroup>,
+    pub coarse_grain: Option<RawCoarseGrain>,
+    pub feed_scale: Option<f64>,
+    #[serde(default)]
+    pub feeders: Vec<RawFeeder>,
+    pub outlet: Option<RawOutlet>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawCoarseGrain {
+    pub alpha: Option<f64>,
+    pub law: Option<String>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawFeeder {
+    pub group: String,
+    pub rate: Option<f64>,
+    pub volume_rate: Option<f64>,
+    pub region: RawRegion,
+    pub velocity: Option<[f64; 3]>,
+    pub start: Option<f64>,
+    pub stop: Option<f64>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawOutlet {
+    pub center: Option<[f64; 3]>,
+    pub axis: Option<[f64; 3]>,
+    pub nozzle_radius: f64,
+    pub plane: f64,
+    pub domain_radius: f64,
+    pub domain_height: [f64; 2],
 }
 
 #[derive(Deserialize, Debug, Clone)]

@@ -106,6 +106,16 @@ pub fn linear_contact_time(m_eff: f64, k: f64, zeta: f64) -> f64 {
     PI / (k / m_eff * (1.0 - zeta * zeta)).sqrt()
 }
 
+/// Largest overlap the force laws use, as a multiple of the effective radius R*.
+///
+/// Hertz theory holds for δ ≪ R*; beyond δ = R* (a wall contact with the centre on the
+/// wall, two equal spheres overlapping by a quarter of their diameter) the force is held
+/// at its value at δ = R* instead of growing without bound. Resolved contacts never get
+/// there; the cap only matters for particles started inside each other or a wall, or for
+/// contacts the time step does not resolve, which would otherwise gain energy step after
+/// step until the state turns non-finite.
+pub const OVERLAP_CAP: f64 = 1.0;
+
 /// A normal contact law with its damping set from restitution.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum NormalLaw {
@@ -142,9 +152,10 @@ impl NormalLaw {
     /// Normal force magnitude (N, positive = repulsive) and normal stiffness (N/m, for the
     /// tangential spring) for overlap `delta` (m, > 0) and normal relative velocity `vn`
     /// (m/s, positive when separating), with effective modulus `e_eff` (Pa), radius `r_eff`
-    /// (m) and mass `m_eff` (kg).
+    /// (m) and mass `m_eff` (kg). The overlap is capped at [`OVERLAP_CAP`]·R*.
     #[inline]
     pub fn force(self, delta: f64, vn: f64, e_eff: f64, r_eff: f64, m_eff: f64) -> (f64, f64) {
+        let delta = delta.min(OVERLAP_CAP * r_eff);
         match self {
             NormalLaw::Hertz { gamma } => {
                 let k = hertz_stiffness(e_eff, r_eff);

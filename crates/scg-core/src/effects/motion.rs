@@ -108,7 +108,7 @@ pub fn integrate_rotation(
     mut q: Query<(&mut AngularVelocity, &Torque, &Mass, &Diameter)>,
 ) {
     let dt = motion.dt;
-    q.par_iter_mut().for_each(|(mut w, t, m, d)| {
+    crate::par::for_each_mut(&mut q, |(mut w, t, m, d)| {
         let inertia = 0.1 * m.0 * d.0 * d.0;
         w.0 += t.0 * (dt / inertia);
     });
@@ -170,48 +170,75 @@ type MoveQuery<'w, 's, T> = Query<
 >;
 
 /// Stokes drag, exponential scheme, precomputed factors: the fast path. Iterates over
-/// contiguous component slices (one tight loop per table chunk, both cores).
+/// contiguous component slices (one tight loop per table chunk, on every core), with the
+/// flow in affine form where it has one.
 pub fn integrate_stokes_exponential(
     motion: Res<Motion>,
     flow: Res<FlowField>,
     health: Res<Health>,
-    mut q: MoveQuery<&'static StokesFactors>,
+    q: MoveQuery<&'static StokesFactors>,
 ) {
-    let dt = motion.dt;
     let flow = *flow;
-    let health = &*health;
-    let step = |x: &mut DVec3,
-                v: &mut DVec3,
-                sf: &StokesFactors,
-                m: f64,
-                f: Option<&Force>,
-                g: Option<&BodyAcceleration>| {
-        let a = g.map_or(DVec3::ZERO, |g| g.0);
-        let vk = kick(*v, f, m, dt);
-        let (x1, v1) = exponential_midpoint(&flow, *x, vk, a, sf.tau, sf.gain, sf.relax, dt);
-        if !(x1.is_finite() && v1.is_finite()) {
+    match flow.affine() {
+        Some(aff) => stokes_kernel(q, motion.dt, &*health, move |x| aff.velocity(x)),
+        None => stokes_kernel(q, motion.dt, &*health, move |x| flow.velocity(x)),
+    }
+}
+
+type ChunkItem<'a> = (
+    bevy_ecs::change_detection::ContiguousMut<'a, Position>,
+    bevy_ecs::change_detection::ContiguousMut<'a, Velocity>,
+    &'a [StokesFactors],
+    &'a [Mass],
+    Option<&'a [Force]>,
+    Option<&'a [BodyAcceleration]>,
+);
+
+/// The fast-path loop for a flow given as a function of position.
+fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
+    mut q: MoveQuery<&'static StokesFactors>,
+    dt: f64,
+    health: &Health,
+    flow: U,
+) {
+    let step = |x: &mut DVec3, v: &mut DVec3, sf: &StokesFactors, vk: DVec3, a: DVec3| {
+        let u = flow(*x + vk * (0.5 * dt));
+        let (x1, v1) = exponential_drift(*x, vk, u, a, sf.tau, sf.gain, sf.relax, dt);
+        // One test catches any NaN or infinity among the six numbers.
+        if !(x1 + v1).element_sum().is_finite() {
             health.raise();
         }
         *x = x1;
         *v = v1;
     };
-    match q.contiguous_par_iter_mut() {
-        Ok(it) => it.for_each(|(mut xs, mut vs, sfs, ms, fs, gs)| {
-            let (xs, vs) = (&mut *xs, &mut *vs);
-            for i in 0..xs.len() {
-                step(
-                    &mut xs[i].0,
-                    &mut vs[i].0,
-                    &sfs[i],
-                    ms[i].0,
-                    fs.map(|f| &f[i]),
-                    gs.map(|g| &g[i]),
-                );
-            }
-        }),
-        Err(_) => q.par_iter_mut().for_each(|(mut x, mut v, sf, m, f, g)| {
-            step(&mut x.0, &mut v.0, sf, m.0, f, g);
-        }),
+    let chunk = |(mut xs, mut vs, sfs, ms, fs, gs): ChunkItem| {
+        // Nothing filters on changes of position or velocity: skip the tick writes.
+        let (xs, vs) = (xs.bypass_change_detection(), vs.bypass_change_detection());
+        for i in 0..xs.len() {
+            let v = vs[i].0;
+            let vk = match fs {
+                Some(f) => v + f[i].0 * (dt / ms[i].0),
+                None => v,
+            };
+            let a = gs.map_or(DVec3::ZERO, |g| g[i].0);
+            step(&mut xs[i].0, &mut vs[i].0, &sfs[i], vk, a);
+        }
+    };
+    let small = q.iter().len() < crate::par::PARALLEL_THRESHOLD;
+    let contiguous = if small {
+        q.contiguous_iter_mut().map(|it| it.for_each(chunk)).is_ok()
+    } else {
+        q.contiguous_par_iter_mut()
+            .map(|it| it.for_each(chunk))
+            .is_ok()
+    };
+    if !contiguous {
+        // Sparse storage somewhere in the query: per-entity iteration.
+        crate::par::for_each_mut(&mut q, |(mut x, mut v, sf, m, f, g)| {
+            let vk = kick(v.0, f, m.0, dt);
+            let a = g.map_or(DVec3::ZERO, |g| g.0);
+            step(&mut x.0, &mut v.0, sf, vk, a);
+        });
     }
 }
 
@@ -234,20 +261,19 @@ pub fn integrate_drag_exponential(
     let (dt, law) = (motion.dt, motion.drag.unwrap_or_default());
     let (flow, fluid) = (*flow, *fluid);
     let health = &*health;
-    q.par_iter_mut()
-        .for_each(|(mut x, mut v, (sf, fc), m, f, g)| {
-            let a = g.map_or(DVec3::ZERO, |g| g.0);
-            let vk = kick(v.0, f, m.0, dt);
-            let slip = (flow.velocity(x.0) - vk).length();
-            let tau = effective_tau(law, sf.tau, fc, &fluid, slip);
-            let (gain, relax) = exponential_factors(tau, dt);
-            let (x1, v1) = exponential_midpoint(&flow, x.0, vk, a, tau, gain, relax, dt);
-            if !(x1.is_finite() && v1.is_finite()) {
-                health.raise();
-            }
-            x.0 = x1;
-            v.0 = v1;
-        });
+    crate::par::for_each_mut(&mut q, |(mut x, mut v, (sf, fc), m, f, g)| {
+        let a = g.map_or(DVec3::ZERO, |g| g.0);
+        let vk = kick(v.0, f, m.0, dt);
+        let slip = (flow.velocity(x.0) - vk).length();
+        let tau = effective_tau(law, sf.tau, fc, &fluid, slip);
+        let (gain, relax) = exponential_factors(tau, dt);
+        let (x1, v1) = exponential_midpoint(&flow, x.0, vk, a, tau, gain, relax, dt);
+        if !(x1.is_finite() && v1.is_finite()) {
+            health.raise();
+        }
+        x.0 = x1;
+        v.0 = v1;
+    });
 }
 
 /// Any drag law, semi-implicit Euler; sub-stepped so that every sub-step has dt ≤ τ/2.
@@ -261,27 +287,26 @@ pub fn integrate_drag_explicit(
     let (dt, law) = (motion.dt, motion.drag.unwrap_or_default());
     let (flow, fluid) = (*flow, *fluid);
     let health = &*health;
-    q.par_iter_mut()
-        .for_each(|(mut x, mut v, (sf, fc), m, f, g)| {
-            let mut a = g.map_or(DVec3::ZERO, |g| g.0);
-            if let Some(f) = f {
-                a += f.0 / m.0;
-            }
-            let (mut xi, mut vi) = (x.0, v.0);
-            let slip0 = (flow.velocity(xi) - vi).length();
-            let n = explicit_substeps(effective_tau(law, sf.tau, fc, &fluid, slip0), dt);
-            let h = dt / n as f64;
-            for _ in 0..n {
-                let u = flow.velocity(xi);
-                let tau = effective_tau(law, sf.tau, fc, &fluid, (u - vi).length());
-                (xi, vi) = explicit_euler(xi, vi, u, a, tau, h);
-            }
-            if !(xi.is_finite() && vi.is_finite()) {
-                health.raise();
-            }
-            x.0 = xi;
-            v.0 = vi;
-        });
+    crate::par::for_each_mut(&mut q, |(mut x, mut v, (sf, fc), m, f, g)| {
+        let mut a = g.map_or(DVec3::ZERO, |g| g.0);
+        if let Some(f) = f {
+            a += f.0 / m.0;
+        }
+        let (mut xi, mut vi) = (x.0, v.0);
+        let slip0 = (flow.velocity(xi) - vi).length();
+        let n = explicit_substeps(effective_tau(law, sf.tau, fc, &fluid, slip0), dt);
+        let h = dt / n as f64;
+        for _ in 0..n {
+            let u = flow.velocity(xi);
+            let tau = effective_tau(law, sf.tau, fc, &fluid, (u - vi).length());
+            (xi, vi) = explicit_euler(xi, vi, u, a, tau, h);
+        }
+        if !(xi.is_finite() && vi.is_finite()) {
+            health.raise();
+        }
+        x.0 = xi;
+        v.0 = vi;
+    });
 }
 
 /// No fluid: contact kick, then the exact drift under gravity (free fall is exact;
@@ -289,7 +314,7 @@ pub fn integrate_drag_explicit(
 pub fn integrate_ballistic(motion: Res<Motion>, health: Res<Health>, mut q: MoveQuery<()>) {
     let dt = motion.dt;
     let health = &*health;
-    q.par_iter_mut().for_each(|(mut x, mut v, (), m, f, g)| {
+    crate::par::for_each_mut(&mut q, |(mut x, mut v, (), m, f, g)| {
         let a = g.map_or(DVec3::ZERO, |g| g.0);
         let vk = kick(v.0, f, m.0, dt);
         let x1 = x.0 + vk * dt + 0.5 * a * dt * dt;

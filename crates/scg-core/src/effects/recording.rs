@@ -113,7 +113,10 @@ pub fn record_frame(
     mut recorders: ResMut<Recorders>,
     q: FrameQuery,
 ) {
-    if !clock.step.is_multiple_of(params.every) || recorders.error.is_some() || recorders.sinks.is_empty() {
+    if !clock.step.is_multiple_of(params.every)
+        || recorders.error.is_some()
+        || recorders.sinks.is_empty()
+    {
         return;
     }
     let frame = build_frame(&clock, &params, &tally, &q);

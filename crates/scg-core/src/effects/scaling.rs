@@ -48,13 +48,16 @@ pub fn derive(
     )
 }
 
-/// Scale every particle spawned since the last step.
+/// Scale every particle spawned since the last step (those still marked [`Unscaled`]).
+/// The marker is an archetype filter, so a step without new particles costs nothing here.
 #[allow(clippy::type_complexity)]
 pub fn coarse_grain_new_particles(
+    mut commands: Commands,
     motion: Res<Motion>,
     fluid: Option<Res<Fluid>>,
     mut q: Query<
         (
+            Entity,
             &CoarseGrain,
             &mut Diameter,
             &mut Density,
@@ -63,11 +66,12 @@ pub fn coarse_grain_new_particles(
             &mut StokesFactors,
             Option<&mut BodyAcceleration>,
         ),
-        Added<CoarseGrain>,
+        With<Unscaled>,
     >,
 ) {
     let fluid = fluid.as_deref();
-    for (cg, mut d, mut rho, mut m, mut fc, mut sf, g) in &mut q {
+    for (e, cg, mut d, mut rho, mut m, mut fc, mut sf, g) in &mut q {
+        commands.entity(e).remove::<Unscaled>();
         let (d1, rho1, m1, fc1, sf1) = derive(cg, fluid, motion.dt);
         if let Some(mut g) = g {
             let reduce = match fluid {

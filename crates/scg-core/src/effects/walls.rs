@@ -66,7 +66,7 @@ pub fn plugin(world: &mut World, b: &mut StepBuilder, tangential: Option<WallTan
 
 /// Clear the force and torque accumulators (first system of the force stage).
 pub fn clear_forces(mut q: Query<(&mut Force, Option<&mut Torque>)>) {
-    q.par_iter_mut().for_each(|(mut f, t)| {
+    crate::par::for_each_mut(&mut q, |(mut f, t)| {
         f.0 = glam::DVec3::ZERO;
         if let Some(mut t) = t {
             t.0 = glam::DVec3::ZERO;
@@ -81,7 +81,7 @@ pub fn wall_normal_forces(
 ) {
     let walls = &*walls;
     let e_eff = walls.material.effective_modulus();
-    q.par_iter_mut().for_each(|(x, v, d, m, mut f)| {
+    crate::par::for_each_mut(&mut q, |(x, v, d, m, mut f)| {
         let r = 0.5 * d.0;
         for w in &walls.walls {
             if let Some(t) = w.shape.touch(x.0, r) {
@@ -120,42 +120,41 @@ pub fn wall_contact_forces(
     let g_eff = tangential.g_eff;
     let dt = motion.dt;
     let e_eff = walls.material.effective_modulus();
-    q.par_iter_mut()
-        .for_each(|(x, v, w, d, m, mut f, mut torque, mut hist)| {
-            let r = 0.5 * d.0;
-            let hist = &mut hist.0;
-            let old_len = hist.len();
-            for (wi, wall) in walls.walls.iter().enumerate() {
-                let wi = wi as u32;
-                let Some(t) = wall.shape.touch(x.0, r) else {
-                    continue;
-                };
-                let n = t.normal; // from the wall toward the centre
-                // Velocity of the contact point (at −r·n from the centre); the wall is at rest.
-                let vc = v.0 + w.0.cross(-r * n);
-                let vn = vc.dot(n);
-                let (fn_, kn) = walls.law.force(t.overlap, vn, e_eff, r, m.0);
-                f.0 += fn_ * n;
-                let prev = hist[..old_len]
-                    .iter()
-                    .find(|h| h.0 == wi)
-                    .map_or(glam::DVec3::ZERO, |h| h.1);
-                let mut xi = glam::DVec3::ZERO;
-                if tl.friction > 0.0 {
-                    let vt = vc - vn * n;
-                    let kt = tl.stiffness(g_eff, r, t.overlap, kn);
-                    let eta = tl.damping * (m.0 * kt).sqrt();
-                    let u = tangential_force(prev, n, vt, kt, eta, tl.friction * fn_.abs(), dt);
-                    xi = u.history;
-                    f.0 += u.force;
-                    torque.0 += (-r * n).cross(u.force);
-                }
-                if tl.rolling > 0.0 {
-                    torque.0 += rolling_torque(tl.rolling, fn_.abs(), r, w.0);
-                }
-                hist.push((wi, xi));
+    crate::par::for_each_mut(&mut q, |(x, v, w, d, m, mut f, mut torque, mut hist)| {
+        let r = 0.5 * d.0;
+        let hist = &mut hist.0;
+        let old_len = hist.len();
+        for (wi, wall) in walls.walls.iter().enumerate() {
+            let wi = wi as u32;
+            let Some(t) = wall.shape.touch(x.0, r) else {
+                continue;
+            };
+            let n = t.normal; // from the wall toward the centre
+            // Velocity of the contact point (at −r·n from the centre); the wall is at rest.
+            let vc = v.0 + w.0.cross(-r * n);
+            let vn = vc.dot(n);
+            let (fn_, kn) = walls.law.force(t.overlap, vn, e_eff, r, m.0);
+            f.0 += fn_ * n;
+            let prev = hist[..old_len]
+                .iter()
+                .find(|h| h.0 == wi)
+                .map_or(glam::DVec3::ZERO, |h| h.1);
+            let mut xi = glam::DVec3::ZERO;
+            if tl.friction > 0.0 {
+                let vt = vc - vn * n;
+                let kt = tl.stiffness(g_eff, r, t.overlap, kn);
+                let eta = tl.damping * (m.0 * kt).sqrt();
+                let u = tangential_force(prev, n, vt, kt, eta, tl.friction * fn_.abs(), dt);
+                xi = u.history;
+                f.0 += u.force;
+                torque.0 += (-r * n).cross(u.force);
             }
-            // Keep only the contacts of this step (appended after the old entries).
-            hist.drain(..old_len);
-        });
+            if tl.rolling > 0.0 {
+                torque.0 += rolling_torque(tl.rolling, fn_.abs(), r, w.0);
+            }
+            hist.push((wi, xi));
+        }
+        // Keep only the contacts of this step (appended after the old entries).
+        hist.drain(..old_len);
+    });
 }
