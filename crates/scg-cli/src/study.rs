@@ -123,8 +123,8 @@ pub fn run_variant(
     window: (f64, f64),
     mcap: Option<&Path>,
 ) -> Result<VariantRun, String> {
-    let scene = scg_scene::parse(text, &format!("<{name}>"), name, overrides)
-        .map_err(|e| e.to_string())?;
+    let scene =
+        scg_scene::parse(text, &format!("<{name}>"), name, overrides).map_err(|e| e.to_string())?;
     let params = Params::for_window(window.0, window.1, classify::vessel_radius(&scene));
     let mut sim = scene.build(true);
     let meta = scene.run_meta(scg_scene::check::check(&scene).messages());
@@ -230,7 +230,10 @@ pub fn report(runs: &[VariantRun]) -> String {
     let _ = writeln!(
         s,
         "radial distributions over {}–{} s; drained fraction of the particles fed by {} s, gone by {} s",
-        reference.params.from, reference.params.to, reference.params.cohort_until, reference.last_time
+        reference.params.from,
+        reference.params.to,
+        reference.params.cohort_until,
+        reference.last_time
     );
     let _ = writeln!(
         s,
@@ -294,8 +297,8 @@ pub fn plot_radial(runs: &[VariantRun], path: &Path) -> PlotResult {
     let n = runs[0].result.classes.len();
     let cols = n.min(4);
     let rows = n.div_ceil(cols);
-    let root = SVGBackend::new(path, (300 * cols as u32, 260 * rows as u32 + 30))
-        .into_drawing_area();
+    let root =
+        SVGBackend::new(path, (300 * cols as u32, 260 * rows as u32 + 30)).into_drawing_area();
     root.fill(&WHITE).map_err(perr)?;
     let (title, body) = root.split_vertically(30);
     title
@@ -340,10 +343,7 @@ pub fn plot_radial(runs: &[VariantRun], path: &Path) -> PlotResult {
                 pts.push(((b + 1) as f64 / bins as f64, *y));
             }
             chart
-                .draw_series(LineSeries::new(
-                    pts,
-                    VARIANT_COLORS[vi % 3].stroke_width(2),
-                ))
+                .draw_series(LineSeries::new(pts, VARIANT_COLORS[vi % 3].stroke_width(2)))
                 .map_err(perr)?;
         }
     }
@@ -362,7 +362,11 @@ pub fn plot_snapshot(v: &VariantRun, nozzle: f64, path: &Path) -> PlotResult {
     root.fill(&WHITE).map_err(perr)?;
     let mut chart = ChartBuilder::on(&root)
         .caption(
-            format!("{}: top view at t = {t:.4} s ({} particles)", v.name, pts.len()),
+            format!(
+                "{}: top view at t = {t:.4} s ({} particles)",
+                v.name,
+                pts.len()
+            ),
             ("sans-serif", 16),
         )
         .margin(10)
@@ -511,11 +515,15 @@ pub fn plot_time(runs: &[VariantRun], path: &Path) -> PlotResult {
 /// Write every table and plot of a study into `out`.
 pub fn write_outputs(runs: &[VariantRun], nozzle: f64, out: &Path) -> Result<(), String> {
     let w = |name: &str, text: String| {
-        std::fs::write(out.join(name), text).map_err(|e| format!("{}: {e}", out.join(name).display()))
+        std::fs::write(out.join(name), text)
+            .map_err(|e| format!("{}: {e}", out.join(name).display()))
     };
     let mut long = String::from("variant,class_um,bin_lo_r_over_R,bin_hi_r_over_R,fraction\n");
     for v in runs {
-        w(&format!("radial-{}.csv", v.name), classify::radial_csv(&v.result))?;
+        w(
+            &format!("radial-{}.csv", v.name),
+            classify::radial_csv(&v.result),
+        )?;
         let bins = v.result.params.bins;
         for c in &v.result.classes {
             for (b, f) in c.histogram.iter().enumerate() {
@@ -560,7 +568,11 @@ pub fn write_outputs(runs: &[VariantRun], nozzle: f64, out: &Path) -> Result<(),
     part.push_str("d50_um");
     for v in runs {
         let d = classify::d50(&partition(&v.result));
-        let _ = write!(part, ",{}", d.map_or("".into(), |d| format!("{:e}", d * 1e6)));
+        let _ = write!(
+            part,
+            ",{}",
+            d.map_or("".into(), |d| format!("{:e}", d * 1e6))
+        );
     }
     part.push('\n');
     w("w1.csv", w1)?;
@@ -595,7 +607,10 @@ pub fn write_outputs(runs: &[VariantRun], nozzle: f64, out: &Path) -> Result<(),
 /// Run `scg study`; returns the exit status.
 pub fn study(a: StudyArgs) -> i32 {
     let Some(spec) = spec(&a.study) else {
-        eprintln!("error: unknown study `{}` (classifier, classifier-psd)", a.study);
+        eprintln!(
+            "error: unknown study `{}` (classifier, classifier-psd)",
+            a.study
+        );
         return EXIT_BAD_INPUT;
     };
     let out = a.out.clone().unwrap_or_else(|| {
@@ -642,6 +657,9 @@ pub fn study(a: StudyArgs) -> i32 {
         eprintln!("error: {e}");
         return 1;
     }
-    eprintln!("wrote tables, plots and summary.json under {}", out.display());
+    eprintln!(
+        "wrote tables, plots and summary.json under {}",
+        out.display()
+    );
     0
 }

@@ -20,11 +20,13 @@ use std::path::{Path, PathBuf};
 
 use scg_core::frame::{Frame, RunMeta};
 
+mod background;
 pub mod layout;
 mod mcap_read;
 mod mcap_write;
 mod rrd_write;
 
+pub use background::Background;
 pub use mcap_read::read_mcap;
 pub use mcap_write::{McapOptions, McapSink};
 pub use rrd_write::{RrdSink, write_rrd};

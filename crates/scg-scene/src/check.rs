@@ -514,8 +514,22 @@ pub fn check(scene: &Scene) -> Report {
     // Particles that start outside a wall.
     for (gi, g) in scene.groups.iter().enumerate() {
         if let Placement::Explicit { positions, .. } = &g.placement {
+            let radius = 0.5 * coarse_grain(g.law, g.alpha, g.diameter, g.density).diameter;
             for (pi, p) in positions.iter().enumerate() {
                 for w in &scene.walls {
+                    if let Some(t) = w.shape.touch(*p, radius)
+                        && w.shape.contains(*p)
+                    {
+                        findings.push(Finding {
+                            level: Level::Warning,
+                            message: format!(
+                                "groups[{gi}] (`{}`) particle {pi} starts overlapping wall `{}` by {:.1} % of its radius; the wall pushes it off (force capped at an overlap of one radius)",
+                                g.name,
+                                w.name,
+                                100.0 * t.overlap / radius
+                            ),
+                        });
+                    }
                     if !w.shape.contains(*p) {
                         findings.push(Finding {
                             level: Level::Error,
