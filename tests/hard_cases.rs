@@ -419,7 +419,9 @@ fn box_drift(steps: u64) -> f64 {
     sim.run(steps, |_| true).unwrap();
     let e = energy(&mut sim);
     assert!(e.is_finite());
-    ((e - e0) / e0).abs()
+    let drift = ((e - e0) / e0).abs();
+    eprintln!("elastic box: {steps} steps, |ΔE|/E₀ = {drift:.3e}");
+    drift
 }
 
 /// Documented bound (docs/scenes.md, "Stability"): |ΔE|/E₀ < 1 % over the run of a dense
