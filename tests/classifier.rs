@@ -122,3 +122,45 @@ fn feeders_are_deterministic_and_exact() {
         assert!((o.rate / c.rate - 8.0).abs() < 1e-9);
     }
 }
+
+#[test]
+fn feeder_and_outlet_keys_are_validated() {
+    let bad = |set: &[&str], key: &str| {
+        let o: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+        let e = scg::scene::parse(study::CLASSIFIER, "c.toml", "c", &o).unwrap_err();
+        assert_eq!(e.key.as_deref(), Some(key), "{e}");
+    };
+    // The group it fed is now unfed and empty: the group is named first …
+    bad(&["feeders.0.group=\"nope\""], "groups[0].positions");
+    // … and with an initial placement for it, the feeder's unknown group.
+    bad(
+        &[
+            "feeders.0.group=\"nope\"",
+            "groups.0.positions=[[0.01, 0.0, 0.03]]",
+        ],
+        "feeders[0].group",
+    );
+    bad(&["feeders.1.volume_rate=-1.0"], "feeders[1].volume_rate");
+    bad(&["feeders.0.rate=5.0"], "feeders[0].volume_rate");
+    bad(&["feeders.2.stop=-1.0"], "feeders[2].stop");
+    bad(&["outlet.plane=1.0"], "outlet.plane");
+    bad(&["outlet.nozzle_radius=0.0"], "outlet.nozzle_radius");
+    bad(&["outlet.domain_height=[1.0, 0.0]"], "outlet.domain_height");
+    bad(&["coarse_grain.law=\"big\""], "coarse_grain.law");
+    bad(&["coarse_grain.alpha=0.0"], "coarse_grain.alpha");
+    bad(&["feed_scale=-2.0"], "feed_scale");
+}
+
+#[test]
+fn scg_check_reports_a_sensible_stokes_number() {
+    let scene = scg::scene::parse(study::CLASSIFIER, "c.toml", "c", &[]).unwrap();
+    let r = scg::scene::check::check(&scene);
+    // Eq. 1 with the particles fed over the run, the vessel volume and the slip capped by
+    // the flow speed: order 1–10 (the paper quotes 10–100 for its own geometry).
+    assert!(
+        r.stokes_number > 0.1 && r.stokes_number < 100.0,
+        "{}",
+        r.stokes_number
+    );
+    assert!(!r.has_errors());
+}

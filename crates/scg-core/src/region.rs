@@ -31,12 +31,20 @@ pub enum Region {
 
 impl Region {
     /// A point uniformly at random in the region (uniform in area for the annulus).
+    ///
+    /// Written as interpolations so that any finite region (even one spanning ±1e308)
+    /// gives a finite point without overflow, and without the range checks that make
+    /// `random_range` panic.
     pub fn sample(&self, rng: &mut ChaCha8Rng) -> DVec3 {
+        let mut lerp = |lo: f64, hi: f64| {
+            let u: f64 = rng.random();
+            lo * (1.0 - u) + hi * u
+        };
         match *self {
             Region::Box { min, max } => DVec3::new(
-                rng.random_range(min.x..=max.x),
-                rng.random_range(min.y..=max.y),
-                rng.random_range(min.z..=max.z),
+                lerp(min.x, max.x),
+                lerp(min.y, max.y),
+                lerp(min.z, max.z),
             ),
             Region::Cylinder {
                 center,
@@ -46,11 +54,17 @@ impl Region {
                 height,
             } => {
                 let (a, b) = axis.any_orthonormal_pair();
-                // Uniform in area: r² uniform between the radii.
-                let r2 = rng.random_range(radius_min * radius_min..=radius_max * radius_max);
-                let phi = rng.random_range(0.0..std::f64::consts::TAU);
-                let h = rng.random_range(height.0..=height.1);
-                center + axis * h + r2.sqrt() * (a * phi.cos() + b * phi.sin())
+                // Uniform in area: r² uniform between the radii, scaled by radius_max so
+                // that the squares cannot overflow.
+                let q = if radius_max > 0.0 {
+                    radius_min / radius_max
+                } else {
+                    0.0
+                };
+                let r = radius_max * lerp(q * q, 1.0).sqrt();
+                let phi = lerp(0.0, std::f64::consts::TAU);
+                let h = lerp(height.0, height.1);
+                center + axis * h + r * (a * phi.cos() + b * phi.sin())
             }
         }
     }

@@ -157,6 +157,8 @@ pub struct Feeder {
     pub velocity: DVec3,
     /// Start and stop time, s.
     pub window: (f64, f64),
+    /// Time between releases, s (0 = every step).
+    pub interval: f64,
 }
 
 const PALETTE: [[u8; 3]; 10] = [
@@ -471,9 +473,12 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
         fd.rate *= feed_scale;
         feeders.push(fd);
     }
-    let outlet = match &raw.outlet {
-        None => None,
-        Some(o) => Some(outlet(o, cx)?),
+    let (outlet, outlet_interval) = match &raw.outlet {
+        None => (None, 0.0),
+        Some(o) => {
+            let (s, i) = outlet(o, cx)?;
+            (Some(s), i)
+        }
     };
     let mut scene = Scene {
         name: raw.name.clone().unwrap_or_else(|| stem.to_string()),
@@ -525,6 +530,9 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
                 format!("expected a number of seconds or \"auto\", got \"{w}\""),
             ));
         }
+    }
+    if let Some(o) = &mut scene.outlet {
+        o.every = interval_steps(outlet_interval, scene.dt);
     }
     let steps = scene.steps();
     if steps > 10_000_000_000 {
@@ -724,10 +732,17 @@ fn feeder(
         region: region(&f.region, &k("region"), cx)?,
         velocity: cx.vec3(&k("velocity"), f.velocity.unwrap_or([0.0; 3]))?,
         window: (start, stop),
+        interval: cx.non_negative(&k("interval"), f.interval.unwrap_or(0.0))?,
     })
 }
 
-fn outlet(o: &RawOutlet, cx: &Ctx) -> Result<OutletSpec, SceneError> {
+/// Steps per `interval` seconds (at least 1).
+fn interval_steps(interval: f64, dt: f64) -> u64 {
+    ((interval / dt).round() as u64).max(1)
+}
+
+fn outlet(o: &RawOutlet, cx: &Ctx) -> Result<(OutletSpec, f64), SceneError> {
+    let interval = cx.non_negative("outlet.interval", o.interval.unwrap_or(0.0))?;
     let nozzle_radius = cx.positive("outlet.nozzle_radius", o.nozzle_radius)?;
     let domain_radius = cx.positive("outlet.domain_radius", o.domain_radius)?;
     let [h0, h1] = o.domain_height;
@@ -745,14 +760,18 @@ fn outlet(o: &RawOutlet, cx: &Ctx) -> Result<OutletSpec, SceneError> {
     if nozzle_radius > domain_radius {
         return Err(cx.err("outlet.nozzle_radius", "must be ≤ domain_radius"));
     }
-    Ok(OutletSpec {
-        center: cx.vec3("outlet.center", o.center.unwrap_or([0.0; 3]))?,
-        axis: cx.unit("outlet.axis", o.axis.unwrap_or([0.0, 0.0, 1.0]))?,
-        nozzle_radius,
-        plane,
-        domain_radius,
-        domain_height: (h0, h1),
-    })
+    Ok((
+        OutletSpec {
+            center: cx.vec3("outlet.center", o.center.unwrap_or([0.0; 3]))?,
+            axis: cx.unit("outlet.axis", o.axis.unwrap_or([0.0, 0.0, 1.0]))?,
+            nozzle_radius,
+            plane,
+            domain_radius,
+            domain_height: (h0, h1),
+            every: 1,
+        },
+        interval,
+    ))
 }
 
 fn group(g: &RawGroup, i: usize, cx: &Ctx, fed: bool) -> Result<Group, SceneError> {
@@ -958,6 +977,7 @@ impl Scene {
                         velocity: f.velocity,
                         start: f.window.0,
                         stop: f.window.1,
+                        every: interval_steps(f.interval, self.dt),
                     }
                 })
                 .collect(),

@@ -47,6 +47,7 @@ pub struct RawFeeder {
     pub velocity: Option<[f64; 3]>,
     pub start: Option<f64>,
     pub stop: Option<f64>,
+    pub interval: Option<f64>,
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -58,6 +59,7 @@ pub struct RawOutlet {
     pub plane: f64,
     pub domain_radius: f64,
     pub domain_height: [f64; 2],
+    pub interval: Option<f64>,
 }
 
 #[derive(Deserialize, Debug, Clone)]

@@ -37,28 +37,79 @@ pub fn hertz_max_overlap(m_eff: f64, r_eff: f64, e_eff: f64, v: f64) -> f64 {
 /// F_d = −γ·√(m*·K)·δ^(1/4)·v_n that gives restitution `e`.
 ///
 /// With δ scaled by (m*v²/K)^(2/5) the collision obeys x'' = −x^(3/2) − γ·x^(1/4)·x',
-/// so e depends on γ alone; this inverts e(γ) by bisection on an accurate RK4 solution.
+/// so e depends on γ alone; this inverts e(γ) on an accurate RK4 solution by bracketed
+/// regula falsi (Illinois variant: a handful of solutions instead of the ~60 of a
+/// bisection), and remembers the last results (each solution takes milliseconds, and every
+/// scene parse asks for γ).
 pub fn tsuji_damping(e: f64) -> f64 {
-    if e >= 1.0 {
+    use std::sync::Mutex;
+    static CACHE: Mutex<Vec<(u64, f64)>> = Mutex::new(Vec::new());
+    if e >= 1.0 || e.is_nan() {
         return 0.0;
     }
     let e = e.max(1e-3);
+    if let Ok(c) = CACHE.lock()
+        && let Some(&(_, g)) = c.iter().find(|(k, _)| *k == e.to_bits())
+    {
+        return g;
+    }
+    let g = tsuji_damping_solve(e);
+    if let Ok(mut c) = CACHE.lock() {
+        if c.len() >= 64 {
+            c.remove(0);
+        }
+        c.push((e.to_bits(), g));
+    }
+    g
+}
+
+fn tsuji_damping_solve(e: f64) -> f64 {
+    // f(γ) = e(γ) − e decreases from 1 − e > 0 at γ = 0.
+    let f = |g: f64| hertz_restitution(g) - e;
     let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
-    while hertz_restitution(hi) > e {
+    let mut flo = 1.0 - e;
+    let mut fhi = f(hi);
+    while fhi > 0.0 {
+        lo = hi;
+        flo = fhi;
         hi *= 2.0;
+        fhi = f(hi);
         if hi > 1e6 {
-            break;
+            return hi;
         }
     }
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        if hertz_restitution(mid) > e {
+    let mut side = 0;
+    let mut mid = hi;
+    for _ in 0..200 {
+        mid = if flo != fhi {
+            (lo * fhi - hi * flo) / (fhi - flo)
+        } else {
+            0.5 * (lo + hi)
+        };
+        if !(mid > lo && mid < hi) {
+            mid = 0.5 * (lo + hi);
+        }
+        let fm = f(mid);
+        if fm == 0.0 || fm.abs() < 1e-14 || hi - lo < 1e-15 * hi {
+            return mid;
+        }
+        if fm > 0.0 {
             lo = mid;
+            flo = fm;
+            if side == -1 {
+                fhi *= 0.5;
+            }
+            side = -1;
         } else {
             hi = mid;
+            fhi = fm;
+            if side == 1 {
+                flo *= 0.5;
+            }
+            side = 1;
         }
     }
-    0.5 * (lo + hi)
+    mid
 }
 
 /// Restitution of the dimensionless Hertz–Tsuji collision x'' = −x^(3/2) − γ·x^(1/4)·x',

@@ -91,9 +91,7 @@ pub struct PairState {
 /// The particles gathered in id order, the neighbour list and the pair states (resource).
 #[derive(Resource, Debug, Default)]
 pub struct ContactState {
-    /// Entities in id order.
-    pub order: Vec<Entity>,
-    /// Ids in order.
+    /// Ids, in the order of the arrays (the particles' table order).
     pub ids: Vec<u32>,
     /// Groups.
     pub group: Vec<u32>,
@@ -152,7 +150,6 @@ type GatherQuery<'w, 's> = Query<
     'w,
     's,
     (
-        Entity,
         &'static ParticleId,
         &'static GroupId,
         &'static Position,
@@ -163,30 +160,91 @@ type GatherQuery<'w, 's> = Query<
     ),
 >;
 
-/// Gather the particles in id order and rebuild the neighbour list when needed.
+/// Gather the particles' state into contiguous arrays and rebuild the neighbour list when
+/// needed.
+///
+/// Particles are indexed in the query's iteration order (table order), which depends only
+/// on the history of spawns and despawns, never on the thread count. While the set of
+/// particles is unchanged only positions, velocities and spins are copied; when it changes
+/// the list is rebuilt and each pair's history is carried over by (id_i, id_j).
 pub fn maintain_neighbour_list(mut state: ResMut<ContactState>, q: GatherQuery) {
     let st = &mut *state;
-    let mut rows: Vec<_> = q.iter().collect();
-    rows.sort_unstable_by_key(|r| r.1.0);
-    let same_set =
-        rows.len() == st.ids.len() && rows.iter().zip(&st.ids).all(|(r, id)| r.1.0 == *id);
-    let old_ids = std::mem::take(&mut st.ids);
-    st.order.clear();
-    st.group.clear();
-    st.pos.clear();
-    st.vel.clear();
-    st.omega.clear();
-    st.radius.clear();
-    st.mass.clear();
-    for (e, id, g, x, v, w, d, m) in rows {
-        st.order.push(e);
-        st.ids.push(id.0);
-        st.group.push(g.0);
-        st.pos.push(x.0);
-        st.vel.push(v.0);
-        st.omega.push(w.map_or(DVec3::ZERO, |w| w.0));
-        st.radius.push(0.5 * d.0);
-        st.mass.push(m.0);
+    let n = q.iter().len();
+    let mut same_set = n == st.ids.len();
+    if same_set {
+        let mut k = 0;
+        match q.contiguous_iter() {
+            Ok(chunks) => {
+                for (ids, ..) in chunks {
+                    let n = ids.len();
+                    if !ids.iter().zip(&st.ids[k..k + n]).all(|(a, b)| a.0 == *b) {
+                        same_set = false;
+                        break;
+                    }
+                    k += n;
+                }
+            }
+            Err(_) => {
+                for (id, ..) in q.iter() {
+                    if st.ids[k] != id.0 {
+                        same_set = false;
+                        break;
+                    }
+                    k += 1;
+                }
+            }
+        }
+    }
+    let old_ids = if same_set {
+        Vec::new()
+    } else {
+        std::mem::take(&mut st.ids)
+    };
+    if same_set {
+        match q.contiguous_iter() {
+            Ok(chunks) => {
+                let mut k = 0;
+                for (_, _, xs, vs, ws, _, _) in chunks {
+                    let n = xs.len();
+                    for (dst, x) in st.pos[k..k + n].iter_mut().zip(xs) {
+                        *dst = x.0;
+                    }
+                    for (dst, v) in st.vel[k..k + n].iter_mut().zip(vs) {
+                        *dst = v.0;
+                    }
+                    if let Some(ws) = ws {
+                        for (dst, w) in st.omega[k..k + n].iter_mut().zip(ws) {
+                            *dst = w.0;
+                        }
+                    }
+                    k += n;
+                }
+            }
+            Err(_) => {
+                for (k, (_, _, x, v, w, _, _)) in q.iter().enumerate() {
+                    st.pos[k] = x.0;
+                    st.vel[k] = v.0;
+                    st.omega[k] = w.map_or(DVec3::ZERO, |w| w.0);
+                }
+            }
+        }
+    } else {
+        st.ids.clear();
+        st.group.clear();
+        st.pos.clear();
+        st.vel.clear();
+        st.omega.clear();
+        st.radius.clear();
+        st.mass.clear();
+        for (id, g, x, v, w, d, m) in q.iter() {
+            st.ids.push(id.0);
+            st.group.push(g.0);
+            st.pos.push(x.0);
+            st.vel.push(v.0);
+            st.omega.push(w.map_or(DVec3::ZERO, |w| w.0));
+            st.radius.push(0.5 * d.0);
+            st.mass.push(m.0);
+        }
     }
     let rebuilt = if same_set {
         st.list.update(&st.pos, &st.radius)
@@ -197,25 +255,30 @@ pub fn maintain_neighbour_list(mut state: ResMut<ContactState>, q: GatherQuery) 
     if !rebuilt {
         return;
     }
-    // Carry the history of the old pairs over to the new list, matched by (id_i, id_j);
-    // both lists are sorted by id pairs since indices follow ids.
     let old = std::mem::take(&mut st.pairs);
-    let key_old = |p: &PairState| (old_ids[p.i as usize], old_ids[p.j as usize]);
-    let mut k = 0;
+    let ids_before: &[u32] = if same_set { &st.ids } else { &old_ids };
+    // Key (lower id, higher id) → (history, touching, id at the pair's first index).
+    let carried: std::collections::HashMap<(u32, u32), (DVec3, bool, u32)> = old
+        .iter()
+        .filter(|p| p.touching)
+        .map(|p| {
+            let (a, b) = (ids_before[p.i as usize], ids_before[p.j as usize]);
+            ((a.min(b), a.max(b)), (p.history, p.touching, a))
+        })
+        .collect();
     let mut pairs = Vec::with_capacity(st.list.pairs.len());
     for &[i, j] in &st.list.pairs {
-        let key = (st.ids[i as usize], st.ids[j as usize]);
-        while k < old.len() && key_old(&old[k]) < key {
-            k += 1;
-        }
+        let (a, b) = (st.ids[i as usize], st.ids[j as usize]);
         let mut p = PairState {
             i,
             j,
             ..Default::default()
         };
-        if k < old.len() && key_old(&old[k]) == key {
-            p.history = old[k].history;
-            p.touching = old[k].touching;
+        if let Some((h, t, first)) = carried.get(&(a.min(b), a.max(b))) {
+            // The history is stored as seen from the pair's first particle: flip it when
+            // the pair's orientation changed.
+            p.history = if *first == a { *h } else { -*h };
+            p.touching = *t;
         }
         pairs.push(p);
     }
@@ -290,7 +353,7 @@ pub fn particle_contact_forces(
     params: Res<ContactParams>,
     motion: Res<Motion>,
     mut tally: ResMut<Tally>,
-    mut q: Query<(&mut Force, Option<&mut Torque>)>,
+    mut q: Query<(&ParticleId, &mut Force, Option<&mut Torque>)>,
 ) {
     let st = &mut *state;
     let par = *params;
@@ -339,11 +402,57 @@ pub fn particle_contact_forces(
         }
     }
     st.active = active;
-    for (k, e) in st.order.iter().enumerate() {
-        if let Ok((mut f, t)) = q.get_mut(*e) {
-            f.0 += st.force[k];
-            if let Some(mut t) = t {
-                t.0 += st.torque[k];
+    // The force stage iterates the particles in the same table order as the gather; ids
+    // are checked, and any mismatch falls back to a lookup by id.
+    let mut k = 0;
+    let mut in_order = true;
+    if let Ok(chunks) = q.contiguous_iter_mut() {
+        for (ids, mut fs, ts) in chunks {
+            let n = ids.len();
+            if !ids
+                .iter()
+                .zip(&st.ids[k..(k + n).min(st.ids.len())])
+                .all(|(a, b)| a.0 == *b)
+                || k + n > st.ids.len()
+            {
+                in_order = false;
+                break;
+            }
+            for (f, add) in fs
+                .bypass_change_detection()
+                .iter_mut()
+                .zip(&st.force[k..k + n])
+            {
+                f.0 += *add;
+            }
+            if let Some(mut ts) = ts {
+                for (t, add) in ts
+                    .bypass_change_detection()
+                    .iter_mut()
+                    .zip(&st.torque[k..k + n])
+                {
+                    t.0 += *add;
+                }
+            }
+            k += n;
+        }
+    } else {
+        in_order = false;
+    }
+    if !in_order {
+        // Undo nothing: chunks already added were matched by id. Finish by id lookup for
+        // the rest (rare: only when the table order changed within the step).
+        let by_id: std::collections::HashMap<u32, usize> =
+            st.ids.iter().enumerate().map(|(k, id)| (*id, k)).collect();
+        for (i, (id, mut f, t)) in q.iter_mut().enumerate() {
+            if i < k {
+                continue;
+            }
+            if let Some(&slot) = by_id.get(&id.0) {
+                f.0 += st.force[slot];
+                if let Some(mut t) = t {
+                    t.0 += st.torque[slot];
+                }
             }
         }
     }

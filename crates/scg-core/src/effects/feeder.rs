@@ -43,6 +43,9 @@ pub struct FeederSpec {
     pub start: f64,
     /// Feeding stops at this time, s.
     pub stop: f64,
+    /// Steps between releases (≥ 1): particles due are released together every `every`
+    /// steps, so the particle set (and the neighbour list) changes less often.
+    pub every: u64,
 }
 
 /// Number of particles a feeder of `rate` particles/s active over [start, stop) has fed
@@ -124,6 +127,9 @@ pub fn feed_particles(
     let t = clock.time();
     let fluid = fluid.as_deref();
     for f in feeders.list.iter_mut() {
+        if !clock.step.is_multiple_of(f.spec.every.max(1)) {
+            continue;
+        }
         let due = fed_by(f.spec.rate, f.spec.start, f.spec.stop, t);
         while f.fed < due {
             let spec = ParticleSpec {

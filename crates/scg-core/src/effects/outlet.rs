@@ -27,6 +27,8 @@ pub struct OutletSpec {
     pub domain_radius: f64,
     /// Axial range of the domain, m.
     pub domain_height: (f64, f64),
+    /// Steps between checks (≥ 1).
+    pub every: u64,
 }
 
 /// Where a particle is with respect to the outlet.
@@ -99,6 +101,9 @@ pub fn drain_particles(
     mut tally: ResMut<Tally>,
     q: Query<(Entity, &ParticleId, &GroupId, &Position)>,
 ) {
+    if !clock.step.is_multiple_of(outlet.0.every.max(1)) {
+        return;
+    }
     let t = clock.time();
     let mut gone: Vec<(u32, u32, Entity, Fate)> = q
         .iter()
@@ -142,6 +147,7 @@ mod tests {
             plane: 0.05,
             domain_radius: 0.03,
             domain_height: (-0.001, 0.061),
+            every: 1,
         };
         assert_eq!(o.fate(DVec3::new(0.005, 0.0, 0.051)), Fate::Drained);
         assert_eq!(o.fate(DVec3::new(0.005, 0.0, 0.049)), Fate::Inside);
