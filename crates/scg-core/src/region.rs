@@ -32,19 +32,23 @@ pub enum Region {
 impl Region {
     /// A point uniformly at random in the region (uniform in area for the annulus).
     ///
-    /// Written as interpolations so that any finite region (even one spanning ±1e308)
-    /// gives a finite point without overflow, and without the range checks that make
-    /// `random_range` panic.
+    /// Any finite region gives a finite point: a range whose width overflows (a region
+    /// spanning ±1e308) is sampled by interpolation instead of `random_range`, which
+    /// panics on it. Ordinary regions draw exactly as before.
     pub fn sample(&self, rng: &mut ChaCha8Rng) -> DVec3 {
-        let mut lerp = |lo: f64, hi: f64| {
-            let u: f64 = rng.random();
-            lo * (1.0 - u) + hi * u
+        let mut range = |lo: f64, hi: f64| {
+            if (hi - lo).is_finite() {
+                rng.random_range(lo..=hi)
+            } else {
+                let u: f64 = rng.random();
+                lo * (1.0 - u) + hi * u
+            }
         };
         match *self {
             Region::Box { min, max } => DVec3::new(
-                lerp(min.x, max.x),
-                lerp(min.y, max.y),
-                lerp(min.z, max.z),
+                range(min.x, max.x),
+                range(min.y, max.y),
+                range(min.z, max.z),
             ),
             Region::Cylinder {
                 center,
@@ -54,16 +58,16 @@ impl Region {
                 height,
             } => {
                 let (a, b) = axis.any_orthonormal_pair();
-                // Uniform in area: r² uniform between the radii, scaled by radius_max so
-                // that the squares cannot overflow.
-                let q = if radius_max > 0.0 {
-                    radius_min / radius_max
+                // Uniform in area: r² uniform between the radii (scaled by radius_max
+                // when the squares overflow).
+                let r = if (radius_max * radius_max).is_finite() {
+                    range(radius_min * radius_min, radius_max * radius_max).sqrt()
                 } else {
-                    0.0
+                    let q = radius_min / radius_max;
+                    radius_max * range(q * q, 1.0).sqrt()
                 };
-                let r = radius_max * lerp(q * q, 1.0).sqrt();
-                let phi = lerp(0.0, std::f64::consts::TAU);
-                let h = lerp(height.0, height.1);
+                let phi = range(0.0, std::f64::consts::TAU);
+                let h = range(height.0, height.1);
                 center + axis * h + r * (a * phi.cos() + b * phi.sin())
             }
         }
