@@ -42,6 +42,7 @@
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use clap::Args;
@@ -49,12 +50,14 @@ use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use scg_core::contact::NormalLaw;
+use scg_core::frame::{Frame, FrameSink};
 use scg_core::integrate::Integrator;
 use scg_core::scaling::CoarseGrainLaw;
 use scg_core::step::StepSet;
 use scg_scene::{Placement, Scene};
 
 use crate::EXIT_BAD_INPUT;
+use crate::classify;
 
 /// Smallest error shown on the log–log plot.
 pub const ERROR_FLOOR: f64 = 1e-16;
@@ -130,6 +133,21 @@ pub struct Outcome {
     pub sets: [f64; 6],
     /// Why the run stopped early, if it did.
     pub failure: Option<String>,
+    /// Classifier scenes: per-class errors.
+    pub classes: Option<ClassErrors>,
+}
+
+/// Classifier errors of one point against the reference.
+#[derive(Clone, Debug, Default)]
+pub struct ClassErrors {
+    /// Class names.
+    pub names: Vec<String>,
+    /// W1 of each class's radial distribution to the reference's, / vessel radius.
+    pub w1: Vec<f64>,
+    /// Cut size d50, m (None when the partition curve never crosses 0.5).
+    pub d50: Option<f64>,
+    /// |d50 − d50_ref| / d50_ref (NaN when either is missing).
+    pub d50_error: f64,
 }
 
 /// A finished sweep.
@@ -144,7 +162,7 @@ pub struct Sweep {
     /// The plan of the reference run, rendered.
     pub plan: String,
     /// Systems per set in the reference run.
-    pub plan_sets: Vec<(StepSet, Vec<&'static str>)>,
+    pub plan_sets: PlanSets,
     /// Reference point.
     pub reference: Point,
     /// Reference length L, m.
@@ -277,19 +295,11 @@ fn run_point(
     p: &Point,
     steps_base: u64,
     sample_base_steps: u64,
-) -> (
-    Outcome,
-    Vec<DVec3>,
-    String,
-    Vec<(StepSet, Vec<&'static str>)>,
-) {
+) -> (Outcome, Vec<DVec3>, String, PlanSets) {
     let scene = point_scene(base, p);
     let mut sim = scene.build(false);
     let plan = sim.plan().render();
-    let plan_sets = StepSet::ORDER
-        .iter()
-        .map(|s| (*s, sim.plan().in_set(*s).map(|x| x.system).collect()))
-        .collect();
+    let plan_sets = plan_sets(&sim);
     let m = p.dt_mult as u64;
     let chunk = (sample_base_steps / m).max(1);
     let total = steps_base / m;
@@ -330,11 +340,143 @@ fn run_point(
             error: f64::NAN,
             sets,
             failure,
+            classes: None,
         },
         samples,
         plan,
         plan_sets,
     )
+}
+
+/// Frames straight into the classifier analysis.
+struct AnalysisSink(Arc<Mutex<classify::Analysis>>);
+
+impl FrameSink for AnalysisSink {
+    fn write_frame(&mut self, frame: &Frame) -> Result<(), String> {
+        self.0.lock().map_err(|e| e.to_string())?.observe(frame);
+        Ok(())
+    }
+    fn finish(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+}
+
+/// True for classifier scenes (classifier flow): the error is per-class W1 and d50.
+pub fn is_classifier(scene: &Scene) -> bool {
+    matches!(scene.flow, scg_core::flow::FlowField::Classifier { .. })
+}
+
+/// The `--set` overrides of a classifier point: every group at once through
+/// `[coarse_grain]` (feeders keep the solid volume rate, so α³ fewer particles are fed).
+fn classifier_overrides(base: &Scene, p: &Point) -> Vec<String> {
+    let m = p.dt_mult as u64;
+    let mut o = vec![
+        format!("coarse_grain.alpha={}", p.alpha),
+        format!(
+            "coarse_grain.law=\"{}\"",
+            p.law.unwrap_or(CoarseGrainLaw::Scg).name()
+        ),
+        format!("duration={:e}", base.duration),
+        format!("dt={:e}", base.dt * m as f64),
+        format!("record_every={}", (base.record_every / m).max(1)),
+        format!("integrator=\"{}\"", p.integrator.name()),
+    ];
+    if let Some(mat) = base.material {
+        o.push(format!(
+            "material.youngs_modulus={:e}",
+            mat.youngs_modulus * p.stiffness
+        ));
+    }
+    o
+}
+
+/// Run one classifier point with the analysis attached (its frames cost a little time,
+/// the same for every point).
+fn run_classifier_point(
+    base: &Scene,
+    p: &Point,
+) -> (Outcome, Option<classify::Result>, String, PlanSets) {
+    let fail = |e: String| Outcome {
+        point: *p,
+        dt: base.dt * p.dt_mult as f64,
+        wall_s: 0.0,
+        particle_steps: 0,
+        error: f64::NAN,
+        sets: [0.0; 6],
+        failure: Some(e),
+        classes: None,
+    };
+    let scene = match scg_scene::parse(
+        &base.source,
+        &base.file,
+        &base.name,
+        &classifier_overrides(base, p),
+    ) {
+        Ok(s) => s,
+        Err(e) => return (fail(e.to_string()), None, String::new(), Vec::new()),
+    };
+    let window = (0.5 * scene.duration, scene.duration);
+    let params = classify::Params::for_window(window.0, window.1, classify::vessel_radius(&scene));
+    let mut sim = scene.build(true);
+    let plan = sim.plan().render();
+    let plan_sets = plan_sets(&sim);
+    let meta = scene.run_meta(Vec::new());
+    let analysis = Arc::new(Mutex::new(classify::Analysis::new(
+        &meta,
+        &scene.flow,
+        params,
+    )));
+    sim.add_recorder(Box::new(AnalysisSink(analysis.clone())));
+    let t0 = Instant::now();
+    let r = sim
+        .record_now()
+        .and_then(|_| sim.run(scene.steps(), |_| true));
+    let wall = t0.elapsed().as_secs_f64();
+    let _ = sim.finish_recorders();
+    let mut sets = [0.0; 6];
+    for (i, (_, d)) in sim.timers().by_set().into_iter().enumerate() {
+        sets[i] = d.as_secs_f64();
+    }
+    let result = analysis.lock().ok().map(|a| a.result());
+    (
+        Outcome {
+            point: *p,
+            dt: scene.dt,
+            wall_s: wall,
+            particle_steps: sim.particle_steps(),
+            error: f64::NAN,
+            sets,
+            failure: r.err().map(|e| e.to_string()),
+            classes: None,
+        },
+        result,
+        plan,
+        plan_sets,
+    )
+}
+
+/// Per-class errors of `v` against `reference`.
+fn class_errors(reference: &classify::Result, v: &classify::Result) -> ClassErrors {
+    let d_ref = classify::d50(&crate::study::partition(reference));
+    let d50 = classify::d50(&crate::study::partition(v));
+    ClassErrors {
+        names: v.classes.iter().map(|c| c.name.clone()).collect(),
+        w1: crate::study::w1_to(reference, v),
+        d50,
+        d50_error: match (d50, d_ref) {
+            (Some(a), Some(b)) => ((a - b) / b).abs(),
+            _ => f64::NAN,
+        },
+    }
+}
+
+type PlanSets = Vec<(StepSet, Vec<&'static str>)>;
+
+fn plan_sets(sim: &scg_core::Simulation) -> PlanSets {
+    StepSet::ORDER
+        .iter()
+        .map(|s| (*s, sim.plan().in_set(*s).map(|x| x.system).collect()))
+        .collect()
 }
 
 fn gcd(a: u64, b: u64) -> u64 {
@@ -343,8 +485,8 @@ fn gcd(a: u64, b: u64) -> u64 {
 
 /// The note written when population-mode errors are not computed.
 pub fn population_error_note() -> &'static str {
-    "population scene: no error metric is computed yet (the classifier's per-class W1 and \
-     d50 errors need its analysis functions, not available in this build); times and \
+    "population scene without a classifier flow: no error metric is computed (the \
+     classifier's per-class W1 and d50 errors apply only to classifier scenes); times and \
      particle-steps are measured"
 }
 
@@ -355,6 +497,9 @@ pub fn sweep(
     reference: Point,
     mut progress: impl FnMut(&Outcome),
 ) -> Sweep {
+    if is_classifier(base) {
+        return sweep_classifier(base, pts, reference, progress);
+    }
     let single = single_particle(base);
     let steps_base = base.steps();
     // Sample interval: the scene's record interval, rounded up to a multiple of every dt
@@ -365,6 +510,9 @@ pub fn sweep(
         .map(|p| p.dt_mult as u64)
         .fold(1u64, |a, b| a / gcd(a, b) * b);
     let sample = base.record_every.max(1).div_ceil(lcm) * lcm;
+    // Warm-up (thread pool, caches, clock ramp): a tenth of the reference, untimed, so
+    // that the reference time every speed-up divides is not the slowest by accident.
+    let _ = run_point(base, &reference, steps_base / 10, sample);
     let (ref_out, ref_traj, plan, plan_sets) = run_point(base, &reference, steps_base, sample);
     progress(&ref_out);
     let length = ref_traj.iter().map(|d| d.length()).fold(0.0, f64::max);
@@ -408,6 +556,58 @@ pub fn sweep(
     }
 }
 
+/// The classifier sweep: error = largest per-class W1 (/ vessel radius) to the reference.
+fn sweep_classifier(
+    base: &Scene,
+    pts: &[Point],
+    reference: Point,
+    mut progress: impl FnMut(&Outcome),
+) -> Sweep {
+    let (mut ref_out, ref_res, plan, plan_sets) = run_classifier_point(base, &reference);
+    if let Some(r) = &ref_res {
+        let ce = class_errors(r, r);
+        ref_out.error = ce.w1.iter().copied().fold(0.0, f64::max);
+        ref_out.classes = Some(ce);
+    }
+    progress(&ref_out);
+    let mut outcomes = vec![ref_out];
+    for p in pts {
+        if *p == reference {
+            continue;
+        }
+        let (mut o, res, _, _) = run_classifier_point(base, p);
+        if let (Some(r), Some(v), None) = (&ref_res, &res, &o.failure) {
+            let ce = class_errors(r, v);
+            o.error = ce.w1.iter().copied().fold(
+                0.0,
+                |a: f64, b| if b.is_nan() { f64::NAN } else { a.max(b) },
+            );
+            o.classes = Some(ce);
+        }
+        progress(&o);
+        outcomes.push(o);
+    }
+    Sweep {
+        scene: base.name.clone(),
+        duration: base.duration,
+        single: false,
+        plan,
+        plan_sets,
+        reference,
+        length: classify::vessel_radius(base),
+        outcomes,
+        notes: vec![format!(
+            "classifier: every group coarse-grained through `[coarse_grain]` (feeders keep \
+             the solid volume rate); error = largest per-class 1-Wasserstein distance of the \
+             radial distributions over t ∈ [{}, {}] s to the reference's, divided by the \
+             vessel radius; d50 from the partition curve (drained fractions). The analysis \
+             reads every recorded frame, included in the wall times.",
+            0.5 * base.duration,
+            base.duration
+        )],
+    }
+}
+
 /// Originals represented per simulated particle.
 fn represented(p: &Point) -> f64 {
     match p.law {
@@ -419,7 +619,13 @@ fn represented(p: &Point) -> f64 {
 /// Estimated speed-up for a system of N originals against the reference.
 pub fn speedup(s: &Sweep, o: &Outcome) -> f64 {
     let r = &s.outcomes[0];
-    r.wall_s / o.wall_s.max(1e-12) * represented(&o.point) / represented(&r.point)
+    let t = r.wall_s / o.wall_s.max(1e-12);
+    if s.single {
+        t * represented(&o.point) / represented(&r.point)
+    } else {
+        // The population runs hold the particles themselves.
+        t
+    }
 }
 
 /// Pareto front (indices into `outcomes`): no other point is both faster and more accurate.
@@ -458,7 +664,7 @@ pub fn csv(s: &Sweep) -> String {
     for set in StepSet::ORDER {
         let _ = write!(out, ",t_{}_s", set.name());
     }
-    out.push_str(",failure\n");
+    out.push_str(",d50_m,d50_error,w1_per_class,failure\n");
     let front = pareto(&s.outcomes);
     for (i, o) in s.outcomes.iter().enumerate() {
         let _ = write!(
@@ -479,6 +685,19 @@ pub fn csv(s: &Sweep) -> String {
         for t in o.sets {
             let _ = write!(out, ",{t:.6}");
         }
+        match &o.classes {
+            Some(c) => {
+                let w: Vec<String> = c.w1.iter().map(|x| format!("{x:e}")).collect();
+                let _ = write!(
+                    out,
+                    ",{},{:e},{}",
+                    c.d50.map_or(String::new(), |d| format!("{d:e}")),
+                    c.d50_error,
+                    w.join(";")
+                );
+            }
+            None => out.push_str(",,,"),
+        }
         let _ = writeln!(
             out,
             ",{}",
@@ -496,7 +715,8 @@ pub fn markdown(s: &Sweep) -> String {
     let _ = writeln!(
         m,
         "Simulated duration {} s per point. Reference: α = 1, dt × {}, {} integrator, stiffness × {}. \
-         Points ran **sequentially** (one at a time) so that wall times are not distorted by each other.\n",
+         Points ran **sequentially** (one at a time, after an untimed warm-up) so that wall times are not distorted by each other; \
+         other load on the machine still adds noise of some 10 %.\n",
         s.duration,
         r.dt_mult,
         r.integrator.name(),
@@ -595,6 +815,43 @@ pub fn markdown(s: &Sweep) -> String {
             }
         }
     }
+    if let Some(first) = s.outcomes.iter().find_map(|o| o.classes.as_ref()) {
+        let _ = writeln!(
+            m,
+            "\n## Classifier: per-class W1 (/ vessel radius) and d50\n"
+        );
+        let _ = write!(m, "| law | α | dt [s] | integrator | stiffness |");
+        for n in &first.names {
+            let _ = write!(m, " W1 {n} |");
+        }
+        let _ = writeln!(m, " d50 [µm] | d50 error |");
+        let _ = write!(m, "|---|---|---|---|---|");
+        for _ in &first.names {
+            m.push_str("---|");
+        }
+        m.push_str("---|---|\n");
+        for o in &s.outcomes {
+            let Some(c) = &o.classes else { continue };
+            let _ = write!(
+                m,
+                "| {} | {} | {:.3e} | {} | {} |",
+                o.point.law_name(),
+                o.point.alpha,
+                o.dt,
+                o.point.integrator.name(),
+                o.point.stiffness
+            );
+            for w in &c.w1 {
+                let _ = write!(m, " {} |", fmt_err(*w));
+            }
+            let _ = writeln!(
+                m,
+                " {} | {} |",
+                c.d50.map_or("—".into(), |d| format!("{:.1}", d * 1e6)),
+                fmt_err(c.d50_error)
+            );
+        }
+    }
     let _ = writeln!(
         m,
         "\nPlot: `cost.svg` (log–log error vs wall time, ★ = Pareto front)."
@@ -614,14 +871,37 @@ pub fn plot(s: &Sweep, path: &Path) -> Result<(), String> {
     if pts.is_empty() {
         return Ok(());
     }
+    if path.extension().is_some_and(|x| x == "png") {
+        draw(
+            s,
+            &pts,
+            BitMapBackend::new(path, (900, 620)).into_drawing_area(),
+        )
+    } else {
+        draw(
+            s,
+            &pts,
+            SVGBackend::new(path, (900, 620)).into_drawing_area(),
+        )
+    }
+}
+
+fn draw<DB: plotters::prelude::DrawingBackend>(
+    s: &Sweep,
+    pts: &[(&Outcome, f64, f64)],
+    root: plotters::drawing::DrawingArea<DB, plotters::coord::Shift>,
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    use plotters::prelude::*;
     let (tmin, tmax) = pts.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
         (a.min(p.1), b.max(p.1))
     });
     let (emin, emax) = pts.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
         (a.min(p.2), b.max(p.2))
     });
-    let root = SVGBackend::new(path, (900, 620)).into_drawing_area();
-    let e = |x: plotters::drawing::DrawingAreaErrorKind<_>| x.to_string();
+    let e = |x: plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     root.fill(&WHITE).map_err(e)?;
     let mut chart = ChartBuilder::on(&root)
         .caption(
