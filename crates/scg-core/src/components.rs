@@ -69,15 +69,14 @@ pub struct FluidCoupling {
     pub drag_diameter: f64,
     /// Factor applied to the fluid force, dimensionless.
     pub force_scale: f64,
+    /// Stokes momentum response time τ = m / (3π·μ·d_drag·force_scale), s (∞ without drag).
+    pub tau: f64,
 }
 
-/// Stokes-drag factors precomputed once per particle for a fixed dt (exponential scheme).
-///
-/// `tau` is the Stokes response time, s; `gain` = 1 − e^(−dt/τ); `relax` = τ·(1 − e^(−dt/τ)), s.
+/// Stokes-drag factors precomputed once per particle for a fixed dt (exponential scheme),
+/// with τ from [`FluidCoupling::tau`]. Kept to the two numbers the drag-only kernel reads.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
 pub struct StokesFactors {
-    /// Momentum response time τ = m / (3π·μ·d_drag·force_scale), s.
-    pub tau: f64,
     /// 1 − e^(−dt/τ), dimensionless.
     pub gain: f64,
     /// τ·(1 − e^(−dt/τ)), s.

@@ -137,6 +137,14 @@ pub struct Affine {
 }
 
 impl Affine {
+    /// True when the field has no z component and does not depend on z.
+    pub fn is_planar_z(&self) -> bool {
+        self.b.z == 0.0
+            && self.m.z_axis == DVec3::ZERO
+            && self.m.x_axis.z == 0.0
+            && self.m.y_axis.z == 0.0
+    }
+
     /// Fluid velocity at `x`, m/s.
     #[inline(always)]
     pub fn velocity(&self, x: DVec3) -> DVec3 {

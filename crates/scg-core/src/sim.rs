@@ -160,9 +160,9 @@ fn base_bundle(spec: &ParticleSpec, id: u32) -> impl Bundle {
             FluidCoupling {
                 drag_diameter: spec.diameter,
                 force_scale: 1.0,
+                tau: f64::INFINITY,
             },
             StokesFactors {
-                tau: f64::INFINITY,
                 gain: 0.0,
                 relax: 0.0,
             },

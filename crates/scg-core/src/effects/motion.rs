@@ -176,19 +176,32 @@ pub fn integrate_stokes_exponential(
     motion: Res<Motion>,
     flow: Res<FlowField>,
     health: Res<Health>,
-    q: MoveQuery<&'static StokesFactors>,
+    q: MoveQuery<(&'static StokesFactors, &'static FluidCoupling)>,
 ) {
     let flow = *flow;
     match flow.affine() {
-        Some(aff) => stokes_kernel(q, motion.dt, &*health, move |x| aff.velocity(x)),
-        None => stokes_kernel(q, motion.dt, &*health, move |x| flow.velocity(x)),
+        // A flow in the x–y plane that does not depend on z (e.g. a vortex about z): 2×2.
+        Some(aff) if aff.is_planar_z() => {
+            let (m00, m01, m10, m11) = (
+                aff.m.x_axis.x,
+                aff.m.y_axis.x,
+                aff.m.x_axis.y,
+                aff.m.y_axis.y,
+            );
+            let (b0, b1) = (aff.b.x, aff.b.y);
+            stokes_kernel(q, motion.dt, &health, move |x: DVec3| {
+                DVec3::new(m00 * x.x + m01 * x.y + b0, m10 * x.x + m11 * x.y + b1, 0.0)
+            })
+        }
+        Some(aff) => stokes_kernel(q, motion.dt, &health, move |x| aff.velocity(x)),
+        None => stokes_kernel(q, motion.dt, &health, move |x| flow.velocity(x)),
     }
 }
 
 type ChunkItem<'a> = (
     bevy_ecs::change_detection::ContiguousMut<'a, Position>,
     bevy_ecs::change_detection::ContiguousMut<'a, Velocity>,
-    &'a [StokesFactors],
+    (&'a [StokesFactors], &'a [FluidCoupling]),
     &'a [Mass],
     Option<&'a [Force]>,
     Option<&'a [BodyAcceleration]>,
@@ -196,48 +209,79 @@ type ChunkItem<'a> = (
 
 /// The fast-path loop for a flow given as a function of position.
 fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
-    mut q: MoveQuery<&'static StokesFactors>,
+    mut q: MoveQuery<(&'static StokesFactors, &'static FluidCoupling)>,
     dt: f64,
     health: &Health,
     flow: U,
 ) {
-    let step = |x: &mut DVec3, v: &mut DVec3, sf: &StokesFactors, vk: DVec3, a: DVec3| {
-        let u = flow(*x + vk * (0.5 * dt));
-        let (x1, v1) = exponential_drift(*x, vk, u, a, sf.tau, sf.gain, sf.relax, dt);
-        // One test catches any NaN or infinity among the six numbers.
-        if !(x1 + v1).element_sum().is_finite() {
-            health.raise();
-        }
-        *x = x1;
-        *v = v1;
-    };
-    let chunk = |(mut xs, mut vs, sfs, ms, fs, gs): ChunkItem| {
+    let step =
+        move |x: &mut DVec3, v: &mut DVec3, sf: &StokesFactors, tau: f64, vk: DVec3, a: DVec3| {
+            let u = flow(*x + vk * (0.5 * dt));
+            let (x1, v1) = exponential_drift(*x, vk, u, a, tau, sf.gain, sf.relax, dt);
+            // One test catches any NaN or infinity among the six numbers.
+            if !(x1 + v1).element_sum().is_finite() {
+                health.raise();
+            }
+            *x = x1;
+            *v = v1;
+        };
+    let chunk = move |(mut xs, mut vs, (sfs, fcs), ms, fs, gs): ChunkItem| {
+        // Local copies: the loop then keeps the flow and dt in registers instead of
+        // reloading them through the closure on every particle.
+        let (step, dt, flow) = (step, dt, flow);
         // Nothing filters on changes of position or velocity: skip the tick writes.
         let (xs, vs) = (xs.bypass_change_detection(), vs.bypass_change_detection());
-        for i in 0..xs.len() {
+        let n = xs.len().min(vs.len()).min(sfs.len());
+        let (xs, vs, sfs) = (&mut xs[..n], &mut vs[..n], &sfs[..n]);
+        if fs.is_none() && gs.is_none() {
+            // Drag only: the common case, kept free of per-particle branches.
+            // Any NaN or infinity makes the running sum non-finite: one test per chunk.
+            let mut sum = DVec3::ZERO;
+            for ((x, v), sf) in xs.iter_mut().zip(vs.iter_mut()).zip(sfs) {
+                // exponential_drift with a = 0: w = u.
+                let (x0, v0) = (x.0, v.0);
+                let u = flow(x0 + v0 * (0.5 * dt));
+                let dv = v0 - u;
+                let (x1, v1) = (x0 + u * dt + dv * sf.relax, v0 - dv * sf.gain);
+                sum += x1 + v1;
+                x.0 = x1;
+                v.0 = v1;
+            }
+            if !sum.is_finite() {
+                health.raise();
+            }
+            return;
+        }
+        for i in 0..n {
             let v = vs[i].0;
             let vk = match fs {
                 Some(f) => v + f[i].0 * (dt / ms[i].0),
                 None => v,
             };
             let a = gs.map_or(DVec3::ZERO, |g| g[i].0);
-            step(&mut xs[i].0, &mut vs[i].0, &sfs[i], vk, a);
+            step(&mut xs[i].0, &mut vs[i].0, &sfs[i], fcs[i].tau, vk, a);
         }
     };
     let small = q.iter().len() < crate::par::PARALLEL_THRESHOLD;
     let contiguous = if small {
         q.contiguous_iter_mut().map(|it| it.for_each(chunk)).is_ok()
     } else {
+        // Several batches per thread balance the load when a core is briefly busy.
         q.contiguous_par_iter_mut()
-            .map(|it| it.for_each(chunk))
+            .map(|it| {
+                it.batching_strategy(
+                    bevy_ecs::batching::BatchingStrategy::new().batches_per_thread(4),
+                )
+                .for_each(chunk)
+            })
             .is_ok()
     };
     if !contiguous {
         // Sparse storage somewhere in the query: per-entity iteration.
-        crate::par::for_each_mut(&mut q, |(mut x, mut v, sf, m, f, g)| {
+        crate::par::for_each_mut(&mut q, |(mut x, mut v, (sf, fc), m, f, g)| {
             let vk = kick(v.0, f, m.0, dt);
             let a = g.map_or(DVec3::ZERO, |g| g.0);
-            step(&mut x.0, &mut v.0, sf, vk, a);
+            step(&mut x.0, &mut v.0, sf, fc.tau, vk, a);
         });
     }
 }
@@ -256,16 +300,16 @@ pub fn integrate_drag_exponential(
     flow: Res<FlowField>,
     fluid: Res<Fluid>,
     health: Res<Health>,
-    mut q: MoveQuery<(&'static StokesFactors, &'static FluidCoupling)>,
+    mut q: MoveQuery<&'static FluidCoupling>,
 ) {
     let (dt, law) = (motion.dt, motion.drag.unwrap_or_default());
     let (flow, fluid) = (*flow, *fluid);
     let health = &*health;
-    crate::par::for_each_mut(&mut q, |(mut x, mut v, (sf, fc), m, f, g)| {
+    crate::par::for_each_mut(&mut q, |(mut x, mut v, fc, m, f, g)| {
         let a = g.map_or(DVec3::ZERO, |g| g.0);
         let vk = kick(v.0, f, m.0, dt);
         let slip = (flow.velocity(x.0) - vk).length();
-        let tau = effective_tau(law, sf.tau, fc, &fluid, slip);
+        let tau = effective_tau(law, fc.tau, fc, &fluid, slip);
         let (gain, relax) = exponential_factors(tau, dt);
         let (x1, v1) = exponential_midpoint(&flow, x.0, vk, a, tau, gain, relax, dt);
         if !(x1.is_finite() && v1.is_finite()) {
@@ -282,23 +326,23 @@ pub fn integrate_drag_explicit(
     flow: Res<FlowField>,
     fluid: Res<Fluid>,
     health: Res<Health>,
-    mut q: MoveQuery<(&'static StokesFactors, &'static FluidCoupling)>,
+    mut q: MoveQuery<&'static FluidCoupling>,
 ) {
     let (dt, law) = (motion.dt, motion.drag.unwrap_or_default());
     let (flow, fluid) = (*flow, *fluid);
     let health = &*health;
-    crate::par::for_each_mut(&mut q, |(mut x, mut v, (sf, fc), m, f, g)| {
+    crate::par::for_each_mut(&mut q, |(mut x, mut v, fc, m, f, g)| {
         let mut a = g.map_or(DVec3::ZERO, |g| g.0);
         if let Some(f) = f {
             a += f.0 / m.0;
         }
         let (mut xi, mut vi) = (x.0, v.0);
         let slip0 = (flow.velocity(xi) - vi).length();
-        let n = explicit_substeps(effective_tau(law, sf.tau, fc, &fluid, slip0), dt);
+        let n = explicit_substeps(effective_tau(law, fc.tau, fc, &fluid, slip0), dt);
         let h = dt / n as f64;
         for _ in 0..n {
             let u = flow.velocity(xi);
-            let tau = effective_tau(law, sf.tau, fc, &fluid, (u - vi).length());
+            let tau = effective_tau(law, fc.tau, fc, &fluid, (u - vi).length());
             (xi, vi) = explicit_euler(xi, vi, u, a, tau, h);
         }
         if !(xi.is_finite() && vi.is_finite()) {

@@ -43,8 +43,9 @@ pub fn derive(
         FluidCoupling {
             drag_diameter: s.drag_diameter,
             force_scale: s.force_scale,
+            tau,
         },
-        StokesFactors { tau, gain, relax },
+        StokesFactors { gain, relax },
     )
 }
 
