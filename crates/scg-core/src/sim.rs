@@ -98,23 +98,32 @@ pub struct ParticleLayout {
     pub gravity: bool,
 }
 
-/// Insert an original particle into `world` with the id `id`; the scaling stage fills in
-/// the simulated quantities on the next step.
-pub fn spawn_particle(world: &mut World, spec: &ParticleSpec, id: u32) -> Entity {
-    let layout = *world.resource::<ParticleLayout>();
-    let mut e = world.spawn(base_bundle(spec, id));
-    if layout.forces {
-        e.insert((
+/// Spawn one particle with every component its layout needs in a single bundle (no
+/// archetype moves), through a `World` or `Commands` (both have `spawn`).
+macro_rules! spawn_with_layout {
+    ($spawner:expr, $layout:expr, $spec:expr, $id:expr) => {{
+        let base = base_bundle($spec, $id);
+        let forces = (
             Force::default(),
             Torque::default(),
             AngularVelocity::default(),
             WallHistory::default(),
-        ));
-    }
-    if layout.gravity {
-        e.insert(BodyAcceleration(DVec3::ZERO));
-    }
-    e.id()
+        );
+        let gravity = BodyAcceleration(DVec3::ZERO);
+        match ($layout.forces, $layout.gravity) {
+            (false, false) => $spawner.spawn(base).id(),
+            (true, false) => $spawner.spawn((base, forces)).id(),
+            (false, true) => $spawner.spawn((base, gravity)).id(),
+            (true, true) => $spawner.spawn((base, forces, gravity)).id(),
+        }
+    }};
+}
+
+/// Insert an original particle into `world` with the id `id`; the scaling stage fills in
+/// the simulated quantities on the next step.
+pub fn spawn_particle(world: &mut World, spec: &ParticleSpec, id: u32) -> Entity {
+    let layout = *world.resource::<ParticleLayout>();
+    spawn_with_layout!(world, layout, spec, id)
 }
 
 /// Same as [`spawn_particle`], through `Commands` (for systems such as feeders).
@@ -124,19 +133,7 @@ pub fn spawn_particle_deferred(
     spec: &ParticleSpec,
     id: u32,
 ) -> Entity {
-    let mut e = commands.spawn(base_bundle(spec, id));
-    if layout.forces {
-        e.insert((
-            Force::default(),
-            Torque::default(),
-            AngularVelocity::default(),
-            WallHistory::default(),
-        ));
-    }
-    if layout.gravity {
-        e.insert(BodyAcceleration(DVec3::ZERO));
-    }
-    e.id()
+    spawn_with_layout!(commands, layout, spec, id)
 }
 
 fn base_bundle(spec: &ParticleSpec, id: u32) -> impl Bundle {

@@ -50,6 +50,29 @@ fn in_extent(extent: Option<(f64, f64)>, h: f64) -> bool {
     extent.is_none_or(|(a, b)| h >= a && h <= b)
 }
 
+/// Distance of `x` from a cylinder's axis and the unit outward radial direction; `None`
+/// outside the axial extent. On the axis any direction perpendicular to it will do.
+fn radial(
+    center: DVec3,
+    axis: DVec3,
+    extent: Option<(f64, f64)>,
+    x: DVec3,
+) -> Option<(f64, DVec3)> {
+    let rel = x - center;
+    let h = rel.dot(axis);
+    if !in_extent(extent, h) {
+        return None;
+    }
+    let r = rel - h * axis;
+    let rho = r.length();
+    let outward = if rho > 0.0 {
+        r / rho
+    } else {
+        axis.any_orthonormal_vector()
+    };
+    Some((rho, outward))
+}
+
 impl WallShape {
     /// Signed distance from the wall surface to `x`, positive on the domain side, m, with
     /// the unit normal pointing into the domain; `None` outside a finite cylinder's extent.
@@ -61,42 +84,13 @@ impl WallShape {
                 axis,
                 radius,
                 extent,
-            } => {
-                let rel = x - center;
-                let h = rel.dot(axis);
-                if !in_extent(extent, h) {
-                    return None;
-                }
-                let r = rel - h * axis;
-                let rho = r.length();
-                // On the axis any direction is as good; pick one perpendicular to the axis.
-                let outward = if rho > 0.0 {
-                    r / rho
-                } else {
-                    axis.any_orthonormal_vector()
-                };
-                Some((radius - rho, -outward))
-            }
+            } => radial(center, axis, extent, x).map(|(rho, out)| (radius - rho, -out)),
             WallShape::CylinderOutside {
                 center,
                 axis,
                 radius,
                 extent,
-            } => {
-                let rel = x - center;
-                let h = rel.dot(axis);
-                if !in_extent(extent, h) {
-                    return None;
-                }
-                let r = rel - h * axis;
-                let rho = r.length();
-                let outward = if rho > 0.0 {
-                    r / rho
-                } else {
-                    axis.any_orthonormal_vector()
-                };
-                Some((rho - radius, outward))
-            }
+            } => radial(center, axis, extent, x).map(|(rho, out)| (rho - radius, out)),
         }
     }
 
