@@ -74,7 +74,10 @@ fn sweep_checks(case: &str) {
     }
     let md = std::fs::read_to_string(dir.path().join("cost.md")).unwrap();
     // Neither scene declares contacts: no neighbour search is paid for.
-    assert!(md.contains("| neighbour_search | (nothing — no cost) |"), "{md}");
+    assert!(
+        md.contains("| neighbour_search | (nothing — no cost) |"),
+        "{md}"
+    );
     if case == "uniform" {
         assert!(md.contains("| forces | (nothing — no cost) |"), "{md}");
     }
