@@ -74,7 +74,7 @@ fn vortex_recordings_equal_the_in_memory_frames() {
         }
     }
     assert!(
-        messages.rrd_manifests().unwrap().len() >= 1,
+        !messages.rrd_manifests().unwrap().is_empty(),
         "footer written"
     );
     let mut expected = BTreeMap::new();
