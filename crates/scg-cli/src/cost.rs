@@ -921,6 +921,7 @@ where
         .configure_mesh()
         .x_desc("wall time [s]")
         .y_desc("error")
+        .x_label_formatter(&|v| format!("{v:.3}"))
         .y_label_formatter(&|v| format!("{v:.0e}"))
         .draw()
         .map_err(e)?;
