@@ -61,16 +61,8 @@ pub fn run(args: RunArgs) -> i32 {
         Err(code) => return code,
     };
     let report = scg_scene::check::check(&scene);
-    for f in &report.findings {
-        eprintln!(
-            "{}: {}",
-            if f.level == scg_scene::check::Level::Error {
-                "error"
-            } else {
-                "warning"
-            },
-            f.message
-        );
+    for m in report.messages() {
+        eprintln!("{m}");
     }
     if report.has_errors() {
         return EXIT_BAD_INPUT;

@@ -49,6 +49,16 @@ pub enum Level {
     Error,
 }
 
+impl Level {
+    /// Lower-case name, as printed.
+    pub fn name(self) -> &'static str {
+        match self {
+            Level::Warning => "warning",
+            Level::Error => "error",
+        }
+    }
+}
+
 /// A warning or error about a scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Finding {
@@ -78,26 +88,13 @@ impl Report {
     pub fn messages(&self) -> Vec<String> {
         self.findings
             .iter()
-            .map(|f| format!("{:?}: {}", f.level, f.message).to_lowercase_first())
+            .map(|f| format!("{}: {}", f.level.name(), f.message))
             .collect()
     }
 
     /// True when a finding is an error.
     pub fn has_errors(&self) -> bool {
         self.findings.iter().any(|f| f.level == Level::Error)
-    }
-}
-
-trait LowerFirst {
-    fn to_lowercase_first(self) -> String;
-}
-impl LowerFirst for String {
-    fn to_lowercase_first(self) -> String {
-        let mut c = self.chars();
-        match c.next() {
-            Some(f) => f.to_lowercase().collect::<String>() + c.as_str(),
-            None => self,
-        }
     }
 }
 
@@ -595,16 +592,9 @@ pub fn render(scene: &Scene, r: &Report) -> String {
     if r.findings.is_empty() {
         s.push_str("no warnings\n");
     }
-    for f in &r.findings {
-        s.push_str(&format!(
-            "{}: {}\n",
-            if f.level == Level::Error {
-                "error"
-            } else {
-                "warning"
-            },
-            f.message
-        ));
+    for m in r.messages() {
+        s.push_str(&m);
+        s.push('\n');
     }
     s
 }
