@@ -202,6 +202,17 @@ pub fn bench(a: BenchArgs) -> i32 {
             println!("  {:<18} {:>9.3} s", set.name(), d.as_secs_f64());
         }
     }
+    if let Some(c) = sim
+        .world
+        .get_resource::<scg_core::effects::contacts::ContactState>()
+    {
+        println!(
+            "  neighbour list: {} builds, {} candidate pairs, {} in contact",
+            c.list.builds,
+            c.list.pairs.len(),
+            c.active
+        );
+    }
     println!("particle-steps/s: {:.4e}", ps / wall);
     0
 }

@@ -108,9 +108,9 @@ impl NeighbourList {
             return true;
         }
         let lim = 0.25 * self.skin * self.skin;
-        pos.iter()
-            .zip(&self.reference)
-            .any(|(x, r)| (*x - *r).length_squared() > lim)
+        crate::par::par_any_zip(pos, &self.reference, |x, r| {
+            (*x - *r).length_squared() > lim
+        })
     }
 
     /// Rebuild if needed; returns true when it rebuilt.

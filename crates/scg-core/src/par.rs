@@ -24,3 +24,50 @@ pub fn for_each_mut<'a, 's, D, F>(
         q.par_iter_mut().for_each(f);
     }
 }
+
+/// Elements per task of the slice helpers below.
+const SLICE_CHUNK: usize = 8192;
+
+/// `dst[k] = f(&src[k])` for every k, on all cores when the slices are long.
+pub fn par_map_into<S: Sync, T: Send>(dst: &mut [T], src: &[S], f: impl Fn(&S) -> T + Send + Sync) {
+    assert_eq!(dst.len(), src.len());
+    if dst.len() < 2 * SLICE_CHUNK {
+        for (d, s) in dst.iter_mut().zip(src) {
+            *d = f(s);
+        }
+        return;
+    }
+    let pool = bevy_tasks::ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
+    bevy_tasks::ParallelSliceMut::par_chunk_map_mut(
+        &mut &mut *dst,
+        pool,
+        SLICE_CHUNK,
+        |i, chunk| {
+            let base = i * SLICE_CHUNK;
+            for (d, s) in chunk.iter_mut().zip(&src[base..]) {
+                *d = f(s);
+            }
+        },
+    );
+}
+
+/// Whether `pred(&a[k], &b[k])` holds for some k, on all cores when the slices are long.
+pub fn par_any_zip<A: Sync, B: Sync>(
+    a: &[A],
+    b: &[B],
+    pred: impl Fn(&A, &B) -> bool + Send + Sync,
+) -> bool {
+    let n = a.len().min(b.len());
+    if n < 2 * SLICE_CHUNK {
+        return a.iter().zip(b).any(|(x, y)| pred(x, y));
+    }
+    let pool = bevy_tasks::ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
+    bevy_tasks::ParallelSlice::par_chunk_map(&&a[..n], pool, SLICE_CHUNK, |i, chunk| {
+        chunk
+            .iter()
+            .zip(&b[i * SLICE_CHUNK..])
+            .any(|(x, y)| pred(x, y))
+    })
+    .into_iter()
+    .any(|hit| hit)
+}

@@ -113,6 +113,10 @@ pub struct ContactState {
     force: Vec<DVec3>,
     /// Accumulated torque per particle (scratch), N·m.
     torque: Vec<DVec3>,
+    /// Particles with a contact this step (scratch).
+    touched: Vec<u32>,
+    /// `touched` membership (scratch).
+    marked: Vec<bool>,
     /// Particle–particle contacts in touch after the last step.
     pub active: usize,
 }
@@ -206,16 +210,10 @@ pub fn maintain_neighbour_list(mut state: ResMut<ContactState>, q: GatherQuery) 
                 let mut k = 0;
                 for (_, _, xs, vs, ws, _, _) in chunks {
                     let n = xs.len();
-                    for (dst, x) in st.pos[k..k + n].iter_mut().zip(xs) {
-                        *dst = x.0;
-                    }
-                    for (dst, v) in st.vel[k..k + n].iter_mut().zip(vs) {
-                        *dst = v.0;
-                    }
+                    crate::par::par_map_into(&mut st.pos[k..k + n], xs, |x| x.0);
+                    crate::par::par_map_into(&mut st.vel[k..k + n], vs, |v| v.0);
                     if let Some(ws) = ws {
-                        for (dst, w) in st.omega[k..k + n].iter_mut().zip(ws) {
-                            *dst = w.0;
-                        }
+                        crate::par::par_map_into(&mut st.omega[k..k + n], ws, |w| w.0);
                     }
                     k += n;
                 }
@@ -377,11 +375,18 @@ pub fn particle_contact_forces(
             }
         });
     }
+    // Per-particle sums for the particles in contact only: `force`/`torque` stay zero
+    // elsewhere, so a step with few contacts pays for those few, not for every particle.
     let n = st.pos.len();
-    st.force.clear();
-    st.force.resize(n, DVec3::ZERO);
-    st.torque.clear();
-    st.torque.resize(n, DVec3::ZERO);
+    if st.force.len() != n {
+        st.force.clear();
+        st.force.resize(n, DVec3::ZERO);
+        st.torque.clear();
+        st.torque.resize(n, DVec3::ZERO);
+        st.marked.clear();
+        st.marked.resize(n, false);
+    }
+    st.touched.clear();
     let mut active = 0;
     for p in &st.pairs {
         if !p.touching {
@@ -393,6 +398,12 @@ pub fn particle_contact_forces(
         st.force[j] -= p.force;
         st.torque[i] += p.torque_i;
         st.torque[j] += p.torque_j;
+        for k in [i, j] {
+            if !st.marked[k] {
+                st.marked[k] = true;
+                st.touched.push(k as u32);
+            }
+        }
         if p.started {
             for g in [st.group[i], st.group[j]] {
                 if let Some(c) = tally.collisions.get_mut(g as usize) {
@@ -402,60 +413,61 @@ pub fn particle_contact_forces(
         }
     }
     st.active = active;
-    // The force stage iterates the particles in the same table order as the gather; ids
-    // are checked, and any mismatch falls back to a lookup by id.
-    let mut k = 0;
-    let mut in_order = true;
-    if let Ok(chunks) = q.contiguous_iter_mut() {
-        for (ids, mut fs, ts) in chunks {
-            let n = ids.len();
-            if !ids
-                .iter()
-                .zip(&st.ids[k..(k + n).min(st.ids.len())])
-                .all(|(a, b)| a.0 == *b)
-                || k + n > st.ids.len()
-            {
+    if st.touched.is_empty() {
+        return;
+    }
+    // The force stage iterates the particles in the same table order as the gather (ids
+    // are checked); any mismatch falls back to a lookup by id.
+    let mut chunks = Vec::new();
+    let mut in_order = false;
+    if let Ok(it) = q.contiguous_iter_mut() {
+        let mut k = 0;
+        in_order = true;
+        for (ids, fs, ts) in it {
+            let m = ids.len();
+            if k + m > st.ids.len() || !ids.iter().zip(&st.ids[k..k + m]).all(|(a, b)| a.0 == *b) {
                 in_order = false;
                 break;
             }
-            for (f, add) in fs
-                .bypass_change_detection()
-                .iter_mut()
-                .zip(&st.force[k..k + n])
-            {
-                f.0 += *add;
+            chunks.push((k, fs, ts));
+            k += m;
+        }
+        in_order &= k == st.ids.len();
+    }
+    let st_touched = std::mem::take(&mut st.touched);
+    if in_order {
+        for &k in &st_touched {
+            let k = k as usize;
+            // Chunks are few (usually one table): find the one holding index k.
+            let c = chunks.partition_point(|(start, _, _)| *start <= k) - 1;
+            let (start, fs, ts) = &mut chunks[c];
+            fs.bypass_change_detection()[k - *start].0 += st.force[k];
+            if let Some(ts) = ts {
+                ts.bypass_change_detection()[k - *start].0 += st.torque[k];
             }
-            if let Some(mut ts) = ts {
-                for (t, add) in ts
-                    .bypass_change_detection()
-                    .iter_mut()
-                    .zip(&st.torque[k..k + n])
-                {
-                    t.0 += *add;
-                }
-            }
-            k += n;
         }
     } else {
-        in_order = false;
-    }
-    if !in_order {
-        // Undo nothing: chunks already added were matched by id. Finish by id lookup for
-        // the rest (rare: only when the table order changed within the step).
-        let by_id: std::collections::HashMap<u32, usize> =
-            st.ids.iter().enumerate().map(|(k, id)| (*id, k)).collect();
-        for (i, (id, mut f, t)) in q.iter_mut().enumerate() {
-            if i < k {
-                continue;
-            }
-            if let Some(&slot) = by_id.get(&id.0) {
-                f.0 += st.force[slot];
+        drop(chunks);
+        let slot: std::collections::HashMap<u32, usize> = st_touched
+            .iter()
+            .map(|&k| (st.ids[k as usize], k as usize))
+            .collect();
+        for (id, mut f, t) in q.iter_mut() {
+            if let Some(&k) = slot.get(&id.0) {
+                f.0 += st.force[k];
                 if let Some(mut t) = t {
-                    t.0 += st.torque[slot];
+                    t.0 += st.torque[k];
                 }
             }
         }
     }
+    for &k in &st_touched {
+        let k = k as usize;
+        st.force[k] = DVec3::ZERO;
+        st.torque[k] = DVec3::ZERO;
+        st.marked[k] = false;
+    }
+    st.touched = st_touched;
 }
 
 /// Total kinetic energy (translational + rotational, I = m·d²/10) and momentum of the
