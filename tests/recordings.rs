@@ -152,3 +152,20 @@ fn sigkill_leaves_a_recoverable_partial_file_beside_the_old_one() {
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("recovered from an incomplete file"));
 }
+
+/// `scg` with no arguments runs the embedded vortex case and records it under recordings/.
+#[test]
+fn no_arguments_runs_the_embedded_scene_into_recordings() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = scg().current_dir(dir.path()).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rec = read_mcap(&dir.path().join("recordings/vortex.mcap")).unwrap();
+    assert!(rec.complete);
+    assert_eq!(rec.meta.case, "vortex");
+    assert!((rec.frames.last().unwrap().time - 3.0).abs() < 1e-9);
+    assert!(dir.path().join("recordings/vortex.rrd").is_file());
+}

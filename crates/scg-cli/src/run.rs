@@ -14,7 +14,7 @@ use scg_scene::Scene;
 use crate::EXIT_BAD_INPUT;
 
 /// Arguments of `scg run`.
-#[derive(Args, Debug, Default)]
+#[derive(Args, Debug)]
 pub struct RunArgs {
     /// Scene file; the embedded vortex case when omitted.
     pub case: Option<PathBuf>,
@@ -30,6 +30,19 @@ pub struct RunArgs {
     /// Do not write recordings.
     #[arg(long)]
     pub no_record: bool,
+}
+
+impl Default for RunArgs {
+    /// What `scg` with no subcommand runs: the embedded scene, recorded to `recordings/`.
+    fn default() -> Self {
+        RunArgs {
+            case: None,
+            out: PathBuf::from("recordings"),
+            set: Vec::new(),
+            plan: false,
+            no_record: false,
+        }
+    }
 }
 
 fn load(args: &RunArgs) -> Result<Scene, i32> {
