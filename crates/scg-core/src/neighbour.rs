@@ -175,46 +175,69 @@ impl NeighbourList {
             }
         }
         let periodic = self.periodic;
-        let mut neighbour_cells: Vec<[i64; 3]> = Vec::with_capacity(27);
-        let mut cand: Vec<u32> = Vec::new();
-        for i in 0..n {
-            let c = cell_of(pos[i]);
-            neighbour_cells.clear();
-            for dx in -1..=1 {
-                for dy in -1..=1 {
-                    for dz in -1..=1 {
-                        let mut k = [c[0] + dx, c[1] + dy, c[2] + dz];
-                        if let Some(d) = dims {
-                            for a in 0..3 {
-                                k[a] = k[a].rem_euclid(d[a]);
+        // With fewer than three cells along an axis the 27 neighbours repeat: dedup then.
+        let repeats = dims.is_some_and(|d| d.iter().any(|&k| k < 3));
+        let (cells, order, skin) = (&self.cells, &self.order, self.skin);
+        // The pairs of particles i in [lo, hi), in (i, j) order.
+        let pairs_of = |lo: usize, hi: usize| -> Vec<[u32; 2]> {
+            let mut out = Vec::new();
+            let mut neighbour_cells: Vec<[i64; 3]> = Vec::with_capacity(27);
+            let mut cand: Vec<u32> = Vec::new();
+            for i in lo..hi {
+                let c = cell_of(pos[i]);
+                neighbour_cells.clear();
+                for dx in -1..=1 {
+                    for dy in -1..=1 {
+                        for dz in -1..=1 {
+                            let mut k = [c[0] + dx, c[1] + dy, c[2] + dz];
+                            if let Some(d) = dims {
+                                for a in 0..3 {
+                                    k[a] = k[a].rem_euclid(d[a]);
+                                }
+                            }
+                            neighbour_cells.push(k);
+                        }
+                    }
+                }
+                if repeats {
+                    neighbour_cells.sort_unstable();
+                    neighbour_cells.dedup();
+                }
+                cand.clear();
+                for k in &neighbour_cells {
+                    if let Some(&(a, b)) = cells.get(k) {
+                        for &(_, j) in &order[a as usize..b as usize] {
+                            if (j as usize) <= i {
+                                continue;
+                            }
+                            let d = separation(pos[i], pos[j as usize], periodic.as_ref());
+                            let cut = radius[i] + radius[j as usize] + skin;
+                            if d.length_squared() < cut * cut {
+                                cand.push(j);
                             }
                         }
-                        neighbour_cells.push(k);
                     }
                 }
+                cand.sort_unstable();
+                out.extend(cand.iter().map(|&j| [i as u32, j]));
             }
-            if dims.is_some() {
-                // Few cells per axis: the same cell may appear more than once.
-                neighbour_cells.sort_unstable();
-                neighbour_cells.dedup();
+            out
+        };
+        // Blocks of particles in parallel; concatenated in block order, so the list is
+        // the same whatever the thread count.
+        const BLOCK: usize = 4096;
+        if n <= 2 * BLOCK {
+            self.pairs = pairs_of(0, n);
+        } else {
+            let pool = bevy_tasks::ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
+            let starts: Vec<usize> = (0..n).step_by(BLOCK).collect();
+            let blocks = bevy_tasks::ParallelSlice::par_chunk_map(&&starts[..], pool, 1, |_, s| {
+                pairs_of(s[0], (s[0] + BLOCK).min(n))
+            });
+            self.pairs.clear();
+            for b in blocks {
+                self.pairs.extend_from_slice(&b);
             }
-            cand.clear();
-            for k in &neighbour_cells {
-                if let Some(&(a, b)) = self.cells.get(k) {
-                    for &(_, j) in &self.order[a as usize..b as usize] {
-                        if (j as usize) <= i {
-                            continue;
-                        }
-                        let d = separation(pos[i], pos[j as usize], periodic.as_ref());
-                        let cut = radius[i] + radius[j as usize] + self.skin;
-                        if d.length_squared() < cut * cut {
-                            cand.push(j);
-                        }
-                    }
-                }
-            }
-            cand.sort_unstable();
-            self.pairs.extend(cand.iter().map(|&j| [i as u32, j]));
         }
     }
 }
@@ -299,6 +322,37 @@ mod tests {
         pos[0].x += 0.002;
         assert!(l.update(&pos, &r));
         assert_eq!(l.builds, 2);
+    }
+
+    /// Above the block size the list is built in parallel blocks: still exactly the
+    /// brute-force pairs, in the same order, with and without periodicity.
+    #[test]
+    fn parallel_build_matches_brute_force() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let n = 12_000;
+        let pos: Vec<DVec3> = (0..n)
+            .map(|_| {
+                DVec3::new(
+                    rng.random::<f64>(),
+                    rng.random::<f64>(),
+                    rng.random::<f64>(),
+                )
+            })
+            .collect();
+        let radius: Vec<f64> = (0..n).map(|_| rng.random_range(0.002..0.016)).collect();
+        for periodic in [
+            None,
+            Some(PeriodicBox {
+                lengths: DVec3::ONE,
+            }),
+        ] {
+            let mut list = NeighbourList::new(0.004, periodic);
+            list.build(&pos, &radius);
+            let want = brute_force_pairs(&pos, &radius, 0.004, periodic.as_ref());
+            assert!(want.len() > 1000);
+            assert_eq!(list.pairs, want);
+        }
     }
 
     #[test]
