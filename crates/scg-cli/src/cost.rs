@@ -51,7 +51,6 @@ use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use scg_core::contact::NormalLaw;
-use scg_core::frame::{Frame, FrameSink};
 use scg_core::integrate::Integrator;
 use scg_core::scaling::CoarseGrainLaw;
 use scg_core::step::StepSet;
@@ -349,18 +348,7 @@ fn run_point(
     )
 }
 
-/// Frames straight into the classifier analysis.
-struct AnalysisSink(Arc<Mutex<classify::Analysis>>);
-
-impl FrameSink for AnalysisSink {
-    fn write_frame(&mut self, frame: &Frame) -> Result<(), String> {
-        self.0.lock().map_err(|e| e.to_string())?.observe(frame);
-        Ok(())
-    }
-    fn finish(&mut self) -> Result<(), String> {
-        Ok(())
-    }
-}
+use crate::study::AnalysisSink;
 
 /// True for classifier scenes (classifier flow): the error is per-class W1 and d50.
 pub fn is_classifier(scene: &Scene) -> bool {

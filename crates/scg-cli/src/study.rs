@@ -81,8 +81,8 @@ pub const VARIANTS: [(&str, [&str; 2]); 3] = [
     ("none", ["coarse_grain.alpha=2", "coarse_grain.law=none"]),
 ];
 
-/// Frames go straight into the analysis.
-struct AnalysisSink(Arc<Mutex<Analysis>>);
+/// Frames go straight into the analysis (also used by `scg cost`).
+pub(crate) struct AnalysisSink(pub(crate) Arc<Mutex<Analysis>>);
 
 impl FrameSink for AnalysisSink {
     fn write_frame(&mut self, frame: &Frame) -> Result<(), String> {
