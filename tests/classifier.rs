@@ -12,7 +12,7 @@ const WINDOW: (f64, f64) = (0.1, 0.15);
 fn overrides(variant: usize, extra: &[&str]) -> Vec<String> {
     let mut o: Vec<String> = VARIANTS[variant].1.iter().map(|s| s.to_string()).collect();
     o.extend(
-        ["duration=0.15", "feed_scale=0.03", "record_every=1000"]
+        ["duration=0.15", "feed_scale=0.015", "record_every=1000"]
             .iter()
             .map(|s| s.to_string()),
     );
@@ -121,6 +121,56 @@ fn feeders_are_deterministic_and_exact() {
     for (o, c) in scene.feeders.iter().zip(&cg.feeders) {
         assert!((o.rate / c.rate - 8.0).abs() < 1e-9);
     }
+}
+
+#[test]
+fn swirl_feeds_particles_co_rotating_with_the_vortex() {
+    // After one release, every fed particle moves at the feeding velocity plus ω·r
+    // tangentially about the flow axis (scene: ω from 5000 rpm, swirl = 1).
+    let scene = scg::scene::parse(
+        study::CLASSIFIER,
+        "<classifier>",
+        "classifier",
+        &overrides(
+            0,
+            &[
+                "duration=2e-6",
+                "feed_scale=100.0",
+                "feeders.0.interval=0.0",
+                "feeders.1.interval=0.0",
+                "feeders.2.interval=0.0",
+                "feeders.3.interval=0.0",
+            ],
+        ),
+    )
+    .unwrap();
+    let omega = 5000.0 * std::f64::consts::PI / 30.0;
+    let mut sim = scene.build(false);
+    sim.run(scene.steps(), |_| true).unwrap();
+    let ps = sim.particles();
+    assert!(ps.len() > 5, "{} fed", ps.len());
+    // Fed at the end of the step: no drag has acted on them yet.
+    for p in &ps {
+        let x = p.position;
+        let expect = glam::DVec3::new(-omega * x.y, omega * x.x, -7.0);
+        assert!(
+            (p.velocity - expect).length() <= 1e-12 * expect.length(),
+            "{:?} vs {expect:?}",
+            p.velocity
+        );
+    }
+    // A swirl needs a rotating flow.
+    let e = scg::scene::parse(
+        study::CLASSIFIER,
+        "c.toml",
+        "c",
+        &overrides(
+            0,
+            &["flow.kind=\"uniform\"", "flow.velocity=[0.0, 0.0, 0.0]"],
+        ),
+    )
+    .unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("feeders[0].swirl"), "{e}");
 }
 
 #[test]

@@ -62,7 +62,7 @@ pub fn spec(name: &str) -> Option<StudySpec> {
             name: "classifier",
             scene: CLASSIFIER,
             window: (0.2, 0.3),
-            quick_scale: 1.0 / 6.0,
+            quick_scale: 1.0 / 12.0,
         }),
         "classifier-psd" => Some(StudySpec {
             name: "classifier-psd",

@@ -64,6 +64,14 @@ pub enum FlowField {
 }
 
 impl FlowField {
+    /// The rotating part of a vortex or classifier flow, if the flow has one.
+    pub fn vortex(&self) -> Option<&Vortex> {
+        match self {
+            FlowField::Vortex(v) | FlowField::Classifier { vortex: v, .. } => Some(v),
+            FlowField::Still | FlowField::Uniform(_) => None,
+        }
+    }
+
     /// Fluid velocity at `x`, m/s. Finite for every finite `x`, including on an axis.
     #[inline(always)]
     pub fn velocity(&self, x: DVec3) -> DVec3 {

@@ -151,7 +151,10 @@ fn group_velocities(scene: &Scene, g: &crate::Group) -> Vec<(DVec3, DVec3)> {
                         + *radius_max * axis.any_orthonormal_vector()
                 }
             };
-            out.push((c, f.velocity));
+            let swirl = scene.flow.vortex().map_or(DVec3::ZERO, |v| {
+                (v.axis * (v.omega * f.swirl)).cross(c - v.center)
+            });
+            out.push((c, f.velocity + swirl));
         }
     }
     out

@@ -155,6 +155,9 @@ pub struct Feeder {
     pub region: Region,
     /// Their velocity, m/s.
     pub velocity: DVec3,
+    /// Added co-rotation with the flow's vortex, as a fraction of its local speed ω·r
+    /// (dimensionless; 0 = none, 1 = entering co-rotating with the vortex).
+    pub swirl: f64,
     /// Start and stop time, s.
     pub window: (f64, f64),
     /// Time between releases, s (0 = every step).
@@ -470,6 +473,12 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
     let mut feeders = Vec::new();
     for (i, f) in raw.feeders.iter().enumerate() {
         let mut fd = feeder(f, i, &groups, duration, cx)?;
+        if fd.swirl != 0.0 && flow.vortex().is_none() {
+            return Err(cx.err(
+                &format!("feeders[{i}].swirl"),
+                "needs a rotating flow (flow.kind = \"vortex\" or \"classifier\")",
+            ));
+        }
         fd.rate *= feed_scale;
         feeders.push(fd);
     }
@@ -731,6 +740,7 @@ fn feeder(
         rate,
         region: region(&f.region, &k("region"), cx)?,
         velocity: cx.vec3(&k("velocity"), f.velocity.unwrap_or([0.0; 3]))?,
+        swirl: cx.finite(&k("swirl"), f.swirl.unwrap_or(0.0))?,
         window: (start, stop),
         interval: cx.non_negative(&k("interval"), f.interval.unwrap_or(0.0))?,
     })
@@ -975,6 +985,12 @@ impl Scene {
                         rate: f.rate,
                         region: f.region.clone(),
                         velocity: f.velocity,
+                        spin: self.flow.vortex().filter(|_| f.swirl != 0.0).map(|v| {
+                            scg_core::effects::feeder::Spin {
+                                center: v.center,
+                                omega: v.axis * (v.omega * f.swirl),
+                            }
+                        }),
                         start: f.window.0,
                         stop: f.window.1,
                         every: interval_steps(f.interval, self.dt),

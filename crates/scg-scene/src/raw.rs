@@ -45,6 +45,7 @@ pub struct RawFeeder {
     pub volume_rate: Option<f64>,
     pub region: RawRegion,
     pub velocity: Option<[f64; 3]>,
+    pub swirl: Option<f64>,
     pub start: Option<f64>,
     pub stop: Option<f64>,
     pub interval: Option<f64>,

@@ -39,6 +39,9 @@ pub struct FeederSpec {
     pub region: Region,
     /// Their velocity, m/s.
     pub velocity: DVec3,
+    /// A rigid rotation added to `velocity` at each particle's position (e.g. entering
+    /// co-rotating with a vortex), or none.
+    pub spin: Option<Spin>,
     /// Feeding starts at this time, s.
     pub start: f64,
     /// Feeding stops at this time, s.
@@ -46,6 +49,23 @@ pub struct FeederSpec {
     /// Steps between releases (≥ 1): particles due are released together every `every`
     /// steps, so the particle set (and the neighbour list) changes less often.
     pub every: u64,
+}
+
+/// A rigid-body rotation about an axis through `center`: velocity ω × (x − center).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spin {
+    /// A point on the axis, m.
+    pub center: DVec3,
+    /// Angular velocity vector, rad/s.
+    pub omega: DVec3,
+}
+
+impl Spin {
+    /// Velocity of the rotation at `x`, m/s.
+    #[inline]
+    pub fn velocity_at(&self, x: DVec3) -> DVec3 {
+        self.omega.cross(x - self.center)
+    }
 }
 
 /// Number of particles a feeder of `rate` particles/s active over [start, stop) has fed
@@ -132,14 +152,16 @@ pub fn feed_particles(
         }
         let due = fed_by(f.spec.rate, f.spec.start, f.spec.stop, t);
         while f.fed < due {
+            let position = f.spec.region.sample(&mut f.rng);
+            let velocity = f.spec.velocity + f.spec.spin.map_or(DVec3::ZERO, |s| s.velocity_at(position));
             let spec = ParticleSpec {
                 group: f.spec.group,
                 diameter: f.spec.diameter,
                 density: f.spec.density,
                 alpha: f.spec.alpha,
                 law: f.spec.law,
-                position: f.spec.region.sample(&mut f.rng),
-                velocity: f.spec.velocity,
+                position,
+                velocity,
             };
             let id = next.0;
             next.0 += 1;
@@ -178,6 +200,17 @@ mod tests {
         assert!((99..=100).contains(&total));
         assert_eq!(fed_by(100.0, 0.1, 0.2, 0.05), 0);
         assert_eq!(fed_by(100.0, 0.1, 0.2, 1.0), 10);
+    }
+
+    #[test]
+    fn spin_is_tangential_and_proportional_to_radius() {
+        let s = Spin {
+            center: DVec3::new(1.0, 0.0, 0.0),
+            omega: DVec3::new(0.0, 0.0, 2.0),
+        };
+        // 0.5 m from the axis along +x, 3 m up: 1 m/s along +y, nothing axial or radial.
+        assert_eq!(s.velocity_at(DVec3::new(1.5, 0.0, 3.0)), DVec3::new(0.0, 1.0, 0.0));
+        assert_eq!(s.velocity_at(DVec3::new(1.0, 0.0, -4.0)), DVec3::ZERO);
     }
 
     #[test]
