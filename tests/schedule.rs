@@ -33,8 +33,11 @@ fn walls_add_force_systems_in_order() {
             .position(|s| *s == n)
             .unwrap_or_else(|| panic!("{n} in {names:?}"))
     };
-    assert!(pos("coarse_grain_new_particles") < pos("clear_forces"));
-    assert!(pos("clear_forces") < pos("wall_normal_forces"));
+    assert!(pos("coarse_grain_new_particles") < pos("wall_normal_forces"));
+    assert!(
+        !plan.contains("clear_forces"),
+        "walls set the force, nothing clears it"
+    );
     assert!(pos("wall_normal_forces") < pos("integrate_stokes_exponential"));
     assert!(pos("integrate_stokes_exponential") < pos("advance_clock"));
     assert!(!plan.contains("record_frame"), "recording off");

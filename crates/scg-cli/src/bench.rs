@@ -207,8 +207,10 @@ pub fn bench(a: BenchArgs) -> i32 {
         .get_resource::<scg_core::effects::contacts::ContactState>()
     {
         println!(
-            "  neighbour list: {} builds, {} candidate pairs, {} in contact",
+            "  neighbour list: {} builds ({:.3} s), {} exact displacement checks, {} candidate pairs, {} in contact",
             c.list.builds,
+            c.list.build_time.as_secs_f64(),
+            c.list.checks,
             c.list.pairs.len(),
             c.active
         );

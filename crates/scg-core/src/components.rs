@@ -1,24 +1,29 @@
 //! Per-particle components. SI units throughout; each doc says the unit.
 
 use bevy_ecs::prelude::Component;
+use bytemuck::TransparentWrapper;
 use glam::DVec3;
 
 use crate::scaling::CoarseGrainLaw;
 
 /// Centre position, m.
-#[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq, TransparentWrapper)]
+#[repr(transparent)]
 pub struct Position(pub DVec3);
 
 /// Translational velocity, m/s.
-#[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq, TransparentWrapper)]
+#[repr(transparent)]
 pub struct Velocity(pub DVec3);
 
 /// Angular velocity, rad/s.
-#[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq, TransparentWrapper)]
+#[repr(transparent)]
 pub struct AngularVelocity(pub DVec3);
 
 /// Diameter as simulated (after coarse graining), m.
-#[derive(Component, Clone, Copy, Debug, PartialEq)]
+#[derive(Component, Clone, Copy, Debug, PartialEq, TransparentWrapper)]
+#[repr(transparent)]
 pub struct Diameter(pub f64);
 
 /// Density as simulated (after coarse graining), kg/m³.
@@ -26,16 +31,20 @@ pub struct Diameter(pub f64);
 pub struct Density(pub f64);
 
 /// Mass, kg (= ρ·π·d³/6, kept so the hot loops need not recompute it).
-#[derive(Component, Clone, Copy, Debug, PartialEq)]
+#[derive(Component, Clone, Copy, Debug, PartialEq, TransparentWrapper)]
+#[repr(transparent)]
 pub struct Mass(pub f64);
 
-/// Non-drag force accumulated during the force stage (contacts, walls), N.
-/// Cleared at the start of every step.
-#[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+/// Wall force of this step, N (set by the wall stage every step).
+/// Present only in scenes with walls (particle contacts kick the velocity directly).
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq, TransparentWrapper)]
+#[repr(transparent)]
 pub struct Force(pub DVec3);
 
-/// Torque accumulated during the force stage, N·m. Cleared every step.
-#[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+/// Wall torque of this step, N·m (set by the wall stage every step). Present only
+/// in scenes with walls.
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq, TransparentWrapper)]
+#[repr(transparent)]
 pub struct Torque(pub DVec3);
 
 /// Stable particle id, unique over a run and never reused.

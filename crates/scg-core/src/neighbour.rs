@@ -28,7 +28,8 @@ impl PeriodicBox {
     /// The minimum-image form of the separation `d`.
     #[inline]
     pub fn min_image(&self, d: DVec3) -> DVec3 {
-        d - self.lengths * (d / self.lengths).round()
+        let q = d / self.lengths;
+        d - self.lengths * DVec3::new(round_nearest(q.x), round_nearest(q.y), round_nearest(q.z))
     }
 
     /// `x` wrapped into [0, L).
@@ -37,6 +38,19 @@ impl PeriodicBox {
         let w = x - self.lengths * (x / self.lengths).floor();
         // Rounding can give exactly L; fold it back to 0.
         DVec3::select(w.cmpge(self.lengths), DVec3::ZERO, w)
+    }
+}
+
+/// `x` rounded to the nearest integer (ties to even) with two additions: `f64::round` is a
+/// library call on baseline x86-64 (no SSE4.1), and the pair kernel rounds every periodic
+/// separation.
+#[inline(always)]
+fn round_nearest(x: f64) -> f64 {
+    const MAGIC: f64 = 6_755_399_441_055_744.0; // 1.5·2^52
+    if x.abs() < 4.0e15 {
+        (x + MAGIC) - MAGIC
+    } else {
+        x.round()
     }
 }
 
@@ -69,6 +83,10 @@ impl Hasher for CellHasher {
     fn write_i64(&mut self, x: i64) {
         self.write_u64(x as u64);
     }
+    fn write_usize(&mut self, x: usize) {
+        // Array length prefixes: one round, not one per byte.
+        self.write_u64(x as u64);
+    }
 }
 
 type CellMap = HashMap<[i64; 3], (u32, u32), BuildHasherDefault<CellHasher>>;
@@ -86,6 +104,12 @@ pub struct NeighbourList {
     reference: Vec<DVec3>,
     /// Builds so far.
     pub builds: u64,
+    /// Wall time spent in builds (diagnostics).
+    pub build_time: std::time::Duration,
+    /// Exact displacement checks so far (diagnostics).
+    pub checks: u64,
+    /// Upper bound on any particle's displacement since the last build, m.
+    drift_bound: f64,
     // Scratch buffers kept between builds.
     order: Vec<([i64; 3], u32)>,
     cells: CellMap,
@@ -103,19 +127,35 @@ impl NeighbourList {
 
     /// True when the particle count changed or some particle moved more than skin/2
     /// since the last build.
-    pub fn needs_rebuild(&self, pos: &[DVec3]) -> bool {
+    ///
+    /// `drift` is an upper bound on how far any particle moved since the previous call
+    /// (m), when the caller knows one (e.g. the integrator's largest step displacement);
+    /// `None` means unknown. The exact check, a pass over every particle, runs only when
+    /// the accumulated bound exceeds skin/2; it then replaces the bound with the exact
+    /// largest displacement.
+    pub fn needs_rebuild(&mut self, pos: &[DVec3], drift: Option<f64>) -> bool {
         if pos.len() != self.reference.len() || self.builds == 0 {
             return true;
         }
-        let lim = 0.25 * self.skin * self.skin;
-        crate::par::par_any_zip(pos, &self.reference, |x, r| {
-            (*x - *r).length_squared() > lim
-        })
+        self.drift_bound += drift.unwrap_or(f64::INFINITY);
+        let half = 0.5 * self.skin;
+        if self.drift_bound <= half {
+            return false;
+        }
+        self.checks += 1;
+        let d2 = crate::par::par_max_zip(pos, &self.reference, |x, r| (*x - *r).length_squared());
+        // A NaN displacement (non-finite state) also rebuilds.
+        if d2.is_nan() || d2 > half * half {
+            return true;
+        }
+        self.drift_bound = d2.sqrt();
+        false
     }
 
-    /// Rebuild if needed; returns true when it rebuilt.
-    pub fn update(&mut self, pos: &[DVec3], radius: &[f64]) -> bool {
-        if self.needs_rebuild(pos) {
+    /// Rebuild if needed (see [`NeighbourList::needs_rebuild`]); returns true when it
+    /// rebuilt.
+    pub fn update(&mut self, pos: &[DVec3], radius: &[f64], drift: Option<f64>) -> bool {
+        if self.needs_rebuild(pos, drift) {
             self.build(pos, radius);
             true
         } else {
@@ -125,8 +165,15 @@ impl NeighbourList {
 
     /// Rebuild the list now from positions and radii (m).
     pub fn build(&mut self, pos: &[DVec3], radius: &[f64]) {
+        let t0 = std::time::Instant::now();
+        self.build_pairs(pos, radius);
+        self.build_time += t0.elapsed();
+    }
+
+    fn build_pairs(&mut self, pos: &[DVec3], radius: &[f64]) {
         assert_eq!(pos.len(), radius.len());
         self.builds += 1;
+        self.drift_bound = 0.0;
         self.reference.clear();
         self.reference.extend_from_slice(pos);
         self.pairs.clear();
@@ -136,6 +183,10 @@ impl NeighbourList {
         }
         let rmax = radius.iter().copied().fold(0.0_f64, f64::max);
         let min_cell = (2.0 * rmax + self.skin).max(f64::MIN_POSITIVE);
+        if let Some(pairs) = self.dense_grid_pairs(pos, radius, min_cell) {
+            self.pairs = pairs;
+            return;
+        }
         // Cells: edge per axis, count per axis (periodic only).
         let (edge, dims) = match self.periodic {
             Some(b) => {
@@ -223,23 +274,183 @@ impl NeighbourList {
             }
             out
         };
-        // Blocks of particles in parallel; concatenated in block order, so the list is
-        // the same whatever the thread count.
-        const BLOCK: usize = 4096;
-        if n <= 2 * BLOCK {
-            self.pairs = pairs_of(0, n);
-        } else {
-            let pool = bevy_tasks::ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
-            let starts: Vec<usize> = (0..n).step_by(BLOCK).collect();
-            let blocks = bevy_tasks::ParallelSlice::par_chunk_map(&&starts[..], pool, 1, |_, s| {
-                pairs_of(s[0], (s[0] + BLOCK).min(n))
-            });
-            self.pairs.clear();
-            for b in blocks {
-                self.pairs.extend_from_slice(&b);
-            }
-        }
+        self.pairs = in_blocks(n, pairs_of);
     }
+
+    /// The pairs found through a dense grid of cells over the particles' bounding box
+    /// (or the periodic box), or `None` when such a grid would be too large or too coarse
+    /// (particles spread far apart): then the hashed cells are used.
+    ///
+    /// Cells have an edge of at least `min_cell` and about one particle each on average,
+    /// so a dilute cloud gets fewer, larger cells. Particles are counting-sorted by cell
+    /// (stable, so each cell lists its particles in index order), and every particle scans
+    /// the cells around its own by direct indexing.
+    fn dense_grid_pairs(
+        &mut self,
+        pos: &[DVec3],
+        radius: &[f64],
+        min_cell: f64,
+    ) -> Option<Vec<[u32; 2]>> {
+        let n = pos.len();
+        // A hair wider than the cut-off, so rounding in the cell coordinates can never put
+        // two particles closer than the cut-off two cells apart.
+        let min_cell = min_cell * (1.0 + 1e-9);
+        let (lo, extent) = match self.periodic {
+            Some(b) => (DVec3::ZERO, b.lengths),
+            None => {
+                let (mut lo, mut hi) = (pos[0], pos[0]);
+                for x in pos {
+                    lo = lo.min(*x);
+                    hi = hi.max(*x);
+                }
+                (lo, hi - lo)
+            }
+        };
+        if !extent.is_finite() {
+            return None;
+        }
+        // About one particle per cell: edge ≥ (volume / N)^(1/3), never below min_cell.
+        let volume = extent.x.max(min_cell) * extent.y.max(min_cell) * extent.z.max(min_cell);
+        let edge_target = min_cell.max((volume / n as f64).cbrt());
+        if edge_target > 8.0 * min_cell {
+            // Mostly empty bounding box (far-apart clusters): cells this coarse could hold
+            // many particles each.
+            return None;
+        }
+        let (edge, dims) = match self.periodic {
+            Some(_) => {
+                let d = (extent / edge_target).floor().max(DVec3::ONE);
+                (extent / d, d)
+            }
+            None => (
+                DVec3::splat(edge_target),
+                (extent / edge_target).floor() + DVec3::ONE,
+            ),
+        };
+        let cells = dims.x * dims.y * dims.z;
+        if cells > (4 * n + 4096) as f64 {
+            return None;
+        }
+        let dims = [dims.x as i64, dims.y as i64, dims.z as i64];
+        let periodic = self.periodic;
+        let inv_edge = edge.recip();
+        let coord = |x: DVec3| -> [i64; 3] {
+            let x = match periodic {
+                Some(b) => b.wrap(x),
+                None => x - lo,
+            };
+            let c = (x * inv_edge).floor();
+            [
+                (c.x as i64).clamp(0, dims[0] - 1),
+                (c.y as i64).clamp(0, dims[1] - 1),
+                (c.z as i64).clamp(0, dims[2] - 1),
+            ]
+        };
+        let linear = |c: [i64; 3]| ((c[2] * dims[1] + c[1]) * dims[0] + c[0]) as usize;
+        // Counting sort by cell: start[c]..start[c + 1] are the slots of cell c in `sorted`.
+        let cell: Vec<u32> = pos.iter().map(|x| linear(coord(*x)) as u32).collect();
+        let mut start = vec![0u32; cells as usize + 1];
+        for &c in &cell {
+            start[c as usize + 1] += 1;
+        }
+        for k in 1..start.len() {
+            start[k] += start[k - 1];
+        }
+        let mut fill = start.clone();
+        let mut sorted = vec![0u32; n];
+        for (i, &c) in cell.iter().enumerate() {
+            sorted[fill[c as usize] as usize] = i as u32;
+            fill[c as usize] += 1;
+        }
+        drop(fill);
+        // Centres, radii and indices in cell order: a cell's particles are contiguous, and
+        // so are the cells of a row, so the scan below reads memory mostly in sequence.
+        let body: Vec<(DVec3, f64, u32)> = sorted
+            .iter()
+            .map(|&j| (pos[j as usize], radius[j as usize], j))
+            .collect();
+        let skin = self.skin;
+        // Neighbour coordinates along one axis: i−1, i, i+1, wrapped (periodic) or cut at
+        // the grid's faces, without repeats when the axis has fewer than three cells.
+        let around = |i: i64, d: i64, out: &mut [i64; 3]| -> usize {
+            let mut m = 0;
+            for k in [i - 1, i, i + 1] {
+                // i is in [0, d): one wrap at most (no integer division).
+                let k = if periodic.is_some() {
+                    if k < 0 {
+                        k + d
+                    } else if k >= d {
+                        k - d
+                    } else {
+                        k
+                    }
+                } else if k < 0 || k >= d {
+                    continue;
+                } else {
+                    k
+                };
+                if !out[..m].contains(&k) {
+                    out[m] = k;
+                    m += 1;
+                }
+            }
+            m
+        };
+        let pairs_of = |lo_i: usize, hi_i: usize| -> Vec<[u32; 2]> {
+            let mut out = Vec::new();
+            let mut cand: Vec<u32> = Vec::new();
+            let (mut xs, mut ys, mut zs) = ([0i64; 3], [0i64; 3], [0i64; 3]);
+            for i in lo_i..hi_i {
+                let (xi, ri) = (pos[i], radius[i]);
+                let c = coord(xi);
+                let nx = around(c[0], dims[0], &mut xs);
+                let ny = around(c[1], dims[1], &mut ys);
+                let nz = around(c[2], dims[2], &mut zs);
+                cand.clear();
+                for &z in &zs[..nz] {
+                    for &y in &ys[..ny] {
+                        for &x in &xs[..nx] {
+                            let k = linear([x, y, z]);
+                            let (a, b) = (start[k] as usize, start[k + 1] as usize);
+                            for &(xj, rj, j) in &body[a..b] {
+                                if (j as usize) <= i {
+                                    continue;
+                                }
+                                let d = separation(xi, xj, periodic.as_ref());
+                                let cut = ri + rj + skin;
+                                if d.length_squared() < cut * cut {
+                                    cand.push(j);
+                                }
+                            }
+                        }
+                    }
+                }
+                cand.sort_unstable();
+                out.extend(cand.iter().map(|&j| [i as u32, j]));
+            }
+            out
+        };
+        Some(in_blocks(n, pairs_of))
+    }
+}
+
+/// `pairs_of(lo, hi)` over blocks of particle indices, in parallel, concatenated in block
+/// order: the list is the same whatever the thread count.
+fn in_blocks(n: usize, pairs_of: impl Fn(usize, usize) -> Vec<[u32; 2]> + Sync) -> Vec<[u32; 2]> {
+    const BLOCK: usize = 4096;
+    if n <= 2 * BLOCK {
+        return pairs_of(0, n);
+    }
+    let pool = bevy_tasks::ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
+    let starts: Vec<usize> = (0..n).step_by(BLOCK).collect();
+    let blocks = bevy_tasks::ParallelSlice::par_chunk_map(&&starts[..], pool, 1, |_, s| {
+        pairs_of(s[0], (s[0] + BLOCK).min(n))
+    });
+    let mut out = Vec::with_capacity(blocks.iter().map(Vec::len).sum());
+    for b in blocks {
+        out.extend_from_slice(&b);
+    }
+    out
 }
 
 /// All pairs (i < j, sorted) with centre distance below r_i + r_j + skin, by the O(N²)
@@ -316,12 +527,34 @@ mod tests {
         let mut pos = vec![DVec3::ZERO, DVec3::new(0.1, 0.0, 0.0)];
         let r = vec![0.05, 0.05];
         let mut l = NeighbourList::new(0.02, None);
-        assert!(l.update(&pos, &r));
+        assert!(l.update(&pos, &r, None));
         pos[0].x += 0.009;
-        assert!(!l.update(&pos, &r));
+        assert!(!l.update(&pos, &r, None));
         pos[0].x += 0.002;
-        assert!(l.update(&pos, &r));
+        assert!(l.update(&pos, &r, None));
         assert_eq!(l.builds, 2);
+    }
+
+    #[test]
+    fn drift_bound_skips_exact_checks_until_it_may_matter() {
+        let mut pos = vec![DVec3::ZERO, DVec3::new(0.1, 0.0, 0.0)];
+        let r = vec![0.05, 0.05];
+        let mut l = NeighbourList::new(0.02, None);
+        assert!(l.update(&pos, &r, Some(0.0)));
+        // Bound 0.004 + 0.004 ≤ 0.01: no exact check.
+        for _ in 0..2 {
+            pos[0].x += 0.004;
+            assert!(!l.update(&pos, &r, Some(0.004)));
+        }
+        assert_eq!(l.checks, 0);
+        // A conservative report (the particle stood still): bound 0.012 > 0.01, so an
+        // exact check finds 0.008, no rebuild, and the bound becomes 0.008.
+        assert!(!l.update(&pos, &r, Some(0.004)));
+        assert_eq!((l.checks, l.builds), (1, 1));
+        // 0.008 + 0.003 > 0.01 → exact check → 0.011 > 0.01 → rebuild.
+        pos[0].x += 0.003;
+        assert!(l.update(&pos, &r, Some(0.003)));
+        assert_eq!((l.checks, l.builds), (2, 2));
     }
 
     /// Above the block size the list is built in parallel blocks: still exactly the
@@ -363,6 +596,27 @@ mod tests {
         let mut l = NeighbourList::new(0.0001, None);
         l.build(&pos, &r);
         assert_eq!(l.pairs, vec![[0, 1]]);
+    }
+
+    #[test]
+    fn round_nearest_matches_round_away_from_ties() {
+        for x in [
+            0.0,
+            0.4,
+            0.6,
+            -0.4,
+            -0.6,
+            1.49,
+            -2.51,
+            123456.7,
+            -9.0e14 - 0.3,
+            1.0e17,
+            -3.0e300,
+        ] {
+            assert_eq!(round_nearest(x), x.round(), "{x}");
+        }
+        assert_eq!(round_nearest(2.5), 2.0);
+        assert_eq!(round_nearest(-0.5).abs(), 0.0);
     }
 
     #[test]

@@ -71,3 +71,66 @@ pub fn par_any_zip<A: Sync, B: Sync>(
     .into_iter()
     .any(|hit| hit)
 }
+
+/// The largest `f(&a[k], &b[k])` over k (0 for empty slices), on all cores when the
+/// slices are long. The maximum does not depend on the chunking.
+pub fn par_max_zip<A: Sync, B: Sync>(
+    a: &[A],
+    b: &[B],
+    f: impl Fn(&A, &B) -> f64 + Send + Sync,
+) -> f64 {
+    let n = a.len().min(b.len());
+    let max = |x: &[A], y: &[B]| {
+        x.iter()
+            .zip(y)
+            .map(|(x, y)| f(x, y))
+            .fold(0.0_f64, f64::max)
+    };
+    if n < 2 * SLICE_CHUNK {
+        return max(&a[..n], &b[..n]);
+    }
+    let pool = bevy_tasks::ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
+    bevy_tasks::ParallelSlice::par_chunk_map(&&a[..n], pool, SLICE_CHUNK, |i, chunk| {
+        max(chunk, &b[i * SLICE_CHUNK..])
+    })
+    .into_iter()
+    .fold(0.0_f64, f64::max)
+}
+
+/// `f(k, chunk_k, &mut out[k])` for the chunks of `chunk` elements of `items`, with one
+/// output slot per chunk (`out.len()` = number of chunks), on all cores when there are
+/// several chunks. Consecutive chunks are grouped into a few tasks per thread, so the
+/// task count stays small whatever the length; each chunk's result does not depend on the
+/// grouping.
+pub fn par_chunks_with<A: Send, B: Send>(
+    items: &mut [A],
+    chunk: usize,
+    out: &mut [B],
+    f: impl Fn(usize, &mut [A], &mut B) + Send + Sync,
+) {
+    let chunk = chunk.max(1);
+    assert_eq!(out.len(), items.len().div_ceil(chunk));
+    let pool = bevy_tasks::ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
+    let tasks = (pool.thread_num() * 4).max(1);
+    if out.len() < 2 || pool.thread_num() < 2 {
+        for (k, (c, o)) in items.chunks_mut(chunk).zip(out.iter_mut()).enumerate() {
+            f(k, c, o);
+        }
+        return;
+    }
+    let per_task = out.len().div_ceil(tasks);
+    let f = &f;
+    pool.scope(|s| {
+        for (t, (cs, os)) in items
+            .chunks_mut(chunk * per_task)
+            .zip(out.chunks_mut(per_task))
+            .enumerate()
+        {
+            s.spawn(async move {
+                for (k, (c, o)) in cs.chunks_mut(chunk).zip(os.iter_mut()).enumerate() {
+                    f(t * per_task + k, c, o);
+                }
+            });
+        }
+    });
+}

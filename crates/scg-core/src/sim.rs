@@ -19,7 +19,7 @@ use crate::flow::{FlowField, Fluid};
 use crate::frame::{FrameSink, Recorders};
 use crate::integrate::Integrator;
 use crate::scaling::CoarseGrainLaw;
-use crate::step::{Plan, StageTimers, StepBuilder, StepSet};
+use crate::step::{Plan, StageTimers, StepBuilder};
 
 /// Everything the core needs to build a simulation (the scene crate produces it).
 #[derive(Clone, Debug)]
@@ -92,8 +92,10 @@ pub enum SimError {
 /// Which optional per-particle components the scene's effects need.
 #[derive(Resource, Clone, Copy, Debug, PartialEq)]
 pub struct ParticleLayout {
-    /// Force/Torque accumulators (contacts or walls present).
+    /// Wall force/torque accumulators and wall history (walls present).
     pub forces: bool,
+    /// Angular velocity (walls or particle contacts present).
+    pub spin: bool,
     /// Body acceleration (gravity present).
     pub gravity: bool,
 }
@@ -103,18 +105,21 @@ pub struct ParticleLayout {
 macro_rules! spawn_with_layout {
     ($spawner:expr, $layout:expr, $spec:expr, $id:expr) => {{
         let base = base_bundle($spec, $id);
-        let forces = (
+        let walls = (
             Force::default(),
             Torque::default(),
             AngularVelocity::default(),
             WallHistory::default(),
         );
+        let spin = AngularVelocity::default();
         let gravity = BodyAcceleration(DVec3::ZERO);
-        match ($layout.forces, $layout.gravity) {
-            (false, false) => $spawner.spawn(base).id(),
-            (true, false) => $spawner.spawn((base, forces)).id(),
-            (false, true) => $spawner.spawn((base, gravity)).id(),
-            (true, true) => $spawner.spawn((base, forces, gravity)).id(),
+        match ($layout.forces, $layout.spin, $layout.gravity) {
+            (true, _, false) => $spawner.spawn((base, walls)).id(),
+            (true, _, true) => $spawner.spawn((base, walls, gravity)).id(),
+            (false, true, false) => $spawner.spawn((base, spin)).id(),
+            (false, true, true) => $spawner.spawn((base, spin, gravity)).id(),
+            (false, false, false) => $spawner.spawn(base).id(),
+            (false, false, true) => $spawner.spawn((base, gravity)).id(),
         }
     }};
 }
@@ -255,26 +260,21 @@ impl Simulation {
             every: cfg.record_every.unwrap_or(u64::MAX).max(1),
             groups: cfg.groups.clone(),
         });
-        let has_forces = cfg.walls.is_some() || cfg.contacts.is_some();
+        // Walls accumulate into Force/Torque; particle contacts kick velocities directly.
+        let has_forces = cfg.walls.is_some();
         world.insert_resource(ParticleLayout {
             forces: has_forces,
+            spin: has_forces || cfg.contacts.is_some(),
             gravity: cfg.gravity.is_some(),
         });
 
         let mut b = StepBuilder::new();
         scaling::plugin(&mut b);
-        if has_forces {
-            b.add(
-                StepSet::Forces,
-                "forces",
-                "clear_forces",
-                walls::clear_forces,
-            );
-        }
         let mut rotation = false;
         if let Some(c) = &cfg.contacts {
+            // Contacts kick the angular velocity themselves; integrate_rotation is for
+            // the wall torques.
             contacts::plugin(&mut world, &mut b, c);
-            rotation |= c.tangential().active();
         }
         if let Some(w) = cfg.walls {
             // Wall contacts use the wall material's friction, and the rolling friction and

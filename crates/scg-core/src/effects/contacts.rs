@@ -13,14 +13,15 @@
 //! rolling resistance of [`crate::contact::tangential`], torque r_i·n × F_t (paper eq. 3).
 
 use bevy_ecs::prelude::*;
-use bevy_tasks::{ComputeTaskPool, ParallelSliceMut};
+use bevy_tasks::ComputeTaskPool;
+use bytemuck::TransparentWrapper;
 use glam::DVec3;
 
 use crate::components::*;
 use crate::contact::normal::effective;
 use crate::contact::tangential::{TangentialStiffness, rolling_torque, tangential_force};
 use crate::contact::{Material, NormalLaw, TangentialLaw};
-use crate::effects::motion::Motion;
+use crate::effects::motion::{Motion, StepDisplacement};
 use crate::effects::recording::Tally;
 use crate::neighbour::{NeighbourList, PeriodicBox, separation};
 use crate::step::{StepBuilder, StepSet};
@@ -67,10 +68,10 @@ pub struct ContactParams {
     pub periodic: Option<PeriodicBox>,
 }
 
-/// One candidate pair with its contact history and this step's result.
+/// One candidate pair with its contact history.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PairState {
-    /// Particle indices (into the id-sorted arrays), i < j.
+    /// Particle indices (into the gathered arrays), i < j.
     pub i: u32,
     /// Second index.
     pub j: u32,
@@ -78,6 +79,15 @@ pub struct PairState {
     pub history: DVec3,
     /// In contact after this step's force evaluation.
     pub touching: bool,
+}
+
+/// A pair in contact this step and what it does to its two particles.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PairContact {
+    /// First particle index.
+    pub i: u32,
+    /// Second particle index.
+    pub j: u32,
     /// Contact started this step.
     pub started: bool,
     /// Force on i, N (the force on j is exactly −force).
@@ -109,6 +119,8 @@ pub struct ContactState {
     pub list: NeighbourList,
     /// Pair states aligned with `list.pairs`.
     pub pairs: Vec<PairState>,
+    /// The pairs in contact this step, in pair order, in chunks of the pair list.
+    pub contacts: Vec<Vec<PairContact>>,
     /// Accumulated force per particle (scratch), N.
     force: Vec<DVec3>,
     /// Accumulated torque per particle (scratch), N·m.
@@ -132,6 +144,7 @@ pub fn plugin(world: &mut World, b: &mut StepBuilder, cfg: &ContactConfig) {
         g_eff: cfg.material.effective_shear_modulus(),
         periodic,
     });
+    world.insert_resource(StepDisplacement::default());
     world.insert_resource(ContactState {
         list: NeighbourList::new(cfg.skin, periodic),
         ..Default::default()
@@ -147,6 +160,12 @@ pub fn plugin(world: &mut World, b: &mut StepBuilder, cfg: &ContactConfig) {
         "contacts",
         "particle_contact_forces",
         particle_contact_forces,
+    );
+    b.add(
+        StepSet::Integration,
+        "contacts",
+        "apply_contact_kicks",
+        apply_contact_kicks,
     );
 }
 
@@ -164,28 +183,46 @@ type GatherQuery<'w, 's> = Query<
     ),
 >;
 
-/// Gather the particles' state into contiguous arrays and rebuild the neighbour list when
-/// needed.
+/// Check that the particles are still those of the arrays, in the same table order, and
+/// keep the neighbour list up to date.
 ///
 /// Particles are indexed in the query's iteration order (table order), which depends only
 /// on the history of spawns and despawns, never on the thread count. While the set of
-/// particles is unchanged only positions, velocities and spins are copied; when it changes
-/// the list is rebuilt and each pair's history is carried over by (id_i, id_j).
-pub fn maintain_neighbour_list(mut state: ResMut<ContactState>, q: GatherQuery) {
+/// particles is unchanged nothing is copied: the displacement check reads the position
+/// column in place (when all particles share one table, the usual case). When the set
+/// changes, ids, groups, radii and masses are gathered again, the list is rebuilt and each
+/// pair's history is carried over by (id_i, id_j).
+pub fn maintain_neighbour_list(
+    mut state: ResMut<ContactState>,
+    disp: Res<StepDisplacement>,
+    q: GatherQuery,
+) {
     let st = &mut *state;
+    // How far the last integration step moved any particle (None before the first).
+    let drift = disp.take();
     let n = q.iter().len();
     let mut same_set = n == st.ids.len();
+    // The position column when every particle is in one table, else `None`.
+    let mut column: Option<&[DVec3]> = None;
     if same_set {
         let mut k = 0;
         match q.contiguous_iter() {
             Ok(chunks) => {
-                for (ids, ..) in chunks {
+                let mut count = 0;
+                for (ids, _, xs, ..) in chunks {
                     let n = ids.len();
                     if !ids.iter().zip(&st.ids[k..k + n]).all(|(a, b)| a.0 == *b) {
                         same_set = false;
                         break;
                     }
+                    if count == 0 {
+                        column = Some(Position::peel_slice(xs));
+                    }
+                    count += 1;
                     k += n;
+                }
+                if count != 1 {
+                    column = None;
                 }
             }
             Err(_) => {
@@ -199,62 +236,49 @@ pub fn maintain_neighbour_list(mut state: ResMut<ContactState>, q: GatherQuery) 
             }
         }
     }
-    let old_ids = if same_set {
-        Vec::new()
-    } else {
-        std::mem::take(&mut st.ids)
-    };
     if same_set {
-        match q.contiguous_iter() {
-            Ok(chunks) => {
-                let mut k = 0;
-                for (_, _, xs, vs, ws, _, _) in chunks {
-                    let n = xs.len();
-                    crate::par::par_map_into(&mut st.pos[k..k + n], xs, |x| x.0);
-                    crate::par::par_map_into(&mut st.vel[k..k + n], vs, |v| v.0);
-                    if let Some(ws) = ws {
-                        crate::par::par_map_into(&mut st.omega[k..k + n], ws, |w| w.0);
-                    }
-                    k += n;
-                }
+        let need = match column {
+            Some(c) => st.list.needs_rebuild(c, drift),
+            None => {
+                st.pos.clear();
+                st.pos.extend(q.iter().map(|(_, _, x, ..)| x.0));
+                st.list.needs_rebuild(&st.pos, drift)
             }
-            Err(_) => {
-                for (k, (_, _, x, v, w, _, _)) in q.iter().enumerate() {
-                    st.pos[k] = x.0;
-                    st.vel[k] = v.0;
-                    st.omega[k] = w.map_or(DVec3::ZERO, |w| w.0);
-                }
-            }
+        };
+        if !need {
+            return;
         }
-    } else {
-        st.ids.clear();
-        st.group.clear();
-        st.pos.clear();
-        st.vel.clear();
-        st.omega.clear();
-        st.radius.clear();
-        st.mass.clear();
-        for (id, g, x, v, w, d, m) in q.iter() {
-            st.ids.push(id.0);
-            st.group.push(g.0);
-            st.pos.push(x.0);
-            st.vel.push(v.0);
-            st.omega.push(w.map_or(DVec3::ZERO, |w| w.0));
-            st.radius.push(0.5 * d.0);
-            st.mass.push(m.0);
+        if let Some(c) = column {
+            st.pos.clear();
+            st.pos.extend_from_slice(c);
         }
-    }
-    let rebuilt = if same_set {
-        st.list.update(&st.pos, &st.radius)
-    } else {
-        st.list.build(&st.pos, &st.radius);
-        true
-    };
-    if !rebuilt {
+        let pos = std::mem::take(&mut st.pos);
+        st.list.build(&pos, &st.radius);
+        st.pos = pos;
+        carry_history(st, None);
         return;
     }
+    let old_ids = std::mem::take(&mut st.ids);
+    st.group.clear();
+    st.pos.clear();
+    st.radius.clear();
+    st.mass.clear();
+    for (id, g, x, _, _, d, m) in q.iter() {
+        st.ids.push(id.0);
+        st.group.push(g.0);
+        st.pos.push(x.0);
+        st.radius.push(0.5 * d.0);
+        st.mass.push(m.0);
+    }
+    st.list.build(&st.pos, &st.radius);
+    carry_history(st, Some(&old_ids));
+}
+
+/// New pair states for the rebuilt list, each touching pair keeping its history
+/// (`ids_before`: the ids the old pair indices refer to, when the set changed).
+fn carry_history(st: &mut ContactState, ids_before: Option<&[u32]>) {
     let old = std::mem::take(&mut st.pairs);
-    let ids_before: &[u32] = if same_set { &st.ids } else { &old_ids };
+    let ids_before: &[u32] = ids_before.unwrap_or(&st.ids);
     // Key (lower id, higher id) → (history, touching, id at the pair's first index).
     let carried: std::collections::HashMap<(u32, u32), (DVec3, bool, u32)> = old
         .iter()
@@ -292,23 +316,19 @@ struct Bodies<'a> {
     mass: &'a [f64],
 }
 
-/// The force, torques and new history of one pair (pure).
+/// The force, torques and new history of one pair (pure); `None` when it does not touch.
 #[inline]
-fn pair_kernel(p: &mut PairState, b: &Bodies, par: &ContactParams, dt: f64) {
+fn pair_kernel(p: &mut PairState, b: &Bodies, par: &ContactParams, dt: f64) -> Option<PairContact> {
     let (i, j) = (p.i as usize, p.j as usize);
     let d = separation(b.pos[i], b.pos[j], par.periodic.as_ref());
     let (ri, rj) = (b.radius[i], b.radius[j]);
     let dist2 = d.length_squared();
     let reach = ri + rj;
     let was = p.touching;
-    p.force = DVec3::ZERO;
-    p.torque_i = DVec3::ZERO;
-    p.torque_j = DVec3::ZERO;
-    p.started = false;
     if dist2 >= reach * reach || dist2 == 0.0 {
         p.touching = false;
         p.history = DVec3::ZERO;
-        return;
+        return None;
     }
     let dist = dist2.sqrt();
     let n = d / dist; // from i to j
@@ -319,7 +339,13 @@ fn pair_kernel(p: &mut PairState, b: &Bodies, par: &ContactParams, dt: f64) {
     let v_rel = b.vel[i] - b.vel[j] + (ri * b.omega[i] + rj * b.omega[j]).cross(n);
     let vn_approach = v_rel.dot(n);
     let (fn_, kn) = par.law.force(delta, -vn_approach, par.e_eff, r_eff, m_eff);
-    let mut f = -fn_ * n;
+    let mut c = PairContact {
+        i: p.i,
+        j: p.j,
+        started: !was,
+        force: -fn_ * n,
+        ..Default::default()
+    };
     let tl = &par.tangential;
     if tl.friction > 0.0 {
         let vt = v_rel - vn_approach * n;
@@ -327,57 +353,97 @@ fn pair_kernel(p: &mut PairState, b: &Bodies, par: &ContactParams, dt: f64) {
         let eta = tl.damping * (m_eff * kt).sqrt();
         let u = tangential_force(p.history, n, vt, kt, eta, tl.friction * fn_.abs(), dt);
         p.history = u.history;
-        f += u.force;
+        c.force += u.force;
         // Torque about each centre from the force at its contact point.
-        p.torque_i = (ri * n).cross(u.force);
-        p.torque_j = (rj * n).cross(u.force);
+        c.torque_i = (ri * n).cross(u.force);
+        c.torque_j = (rj * n).cross(u.force);
     }
     if tl.rolling > 0.0 {
         let t = rolling_torque(tl.rolling, fn_.abs(), r_eff, b.omega[i] - b.omega[j]);
-        p.torque_i += t;
-        p.torque_j -= t;
+        c.torque_i += t;
+        c.torque_j -= t;
     }
-    p.force = f;
     p.touching = true;
-    p.started = !was;
+    Some(c)
 }
 
 /// Pairs per parallel task.
 const CHUNK: usize = 1024;
 
-/// Compute every pair's force (parallel), then add them to the particles (fixed order).
+/// The velocity and angular velocity columns when every particle is in one table and
+/// the table still holds the gathered particles.
+fn motion_columns<'a>(
+    q: &'a Query<(&Velocity, Option<&AngularVelocity>)>,
+    n: usize,
+) -> Option<(&'a [DVec3], Option<&'a [DVec3]>)> {
+    let mut it = q.contiguous_iter().ok()?;
+    let (vs, ws) = it.next()?;
+    if it.next().is_some() || vs.len() != n {
+        return None;
+    }
+    Some((
+        Velocity::peel_slice(vs),
+        ws.map(AngularVelocity::peel_slice),
+    ))
+}
+
+/// Compute every pair's force (parallel), then sum them per particle (fixed order) for
+/// the particles in contact. The sums are applied by [`apply_contact_kicks`].
 pub fn particle_contact_forces(
     mut state: ResMut<ContactState>,
     params: Res<ContactParams>,
     motion: Res<Motion>,
     mut tally: ResMut<Tally>,
-    mut q: Query<(&ParticleId, &mut Force, Option<&mut Torque>)>,
+    xq: Query<&Position>,
+    q: Query<(&Velocity, Option<&AngularVelocity>)>,
 ) {
     let st = &mut *state;
     let par = *params;
     let dt = motion.dt;
+    let n = st.ids.len();
+    // Read the columns in place when possible; otherwise copy them in table order (the
+    // same order the neighbour stage checked).
+    let direct = motion_columns(&q, n);
+    let pos_col = xq.contiguous_iter().ok().and_then(|mut it| {
+        let xs = it.next()?;
+        (it.next().is_none() && xs.len() == n).then(|| Position::peel_slice(xs))
+    });
+    if direct.is_none() || pos_col.is_none() {
+        st.pos.clear();
+        st.pos.extend(xq.iter().map(|x| x.0));
+        st.vel.clear();
+        st.vel.extend(q.iter().map(|(v, _)| v.0));
+    }
+    let omega_col = direct.and_then(|(_, w)| w);
+    if omega_col.is_none() {
+        st.omega.clear();
+        st.omega
+            .extend(q.iter().map(|(_, w)| w.map_or(DVec3::ZERO, |w| w.0)));
+    }
+    let (pos, vel): (&[DVec3], &[DVec3]) = match (pos_col, direct) {
+        (Some(x), Some((v, _))) => (x, v),
+        _ => (&st.pos, &st.vel),
+    };
     let bodies = Bodies {
-        pos: &st.pos,
-        vel: &st.vel,
-        omega: &st.omega,
+        pos,
+        vel,
+        omega: omega_col.unwrap_or(&st.omega),
         radius: &st.radius,
         mass: &st.mass,
     };
-    if st.pairs.len() <= CHUNK {
-        for p in st.pairs.iter_mut() {
-            pair_kernel(p, &bodies, &par, dt);
-        }
-    } else {
-        let pool = ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
-        st.pairs.par_chunk_map_mut(pool, CHUNK, |_, chunk| {
-            for p in chunk {
-                pair_kernel(p, &bodies, &par, dt);
-            }
-        });
-    }
+    // One reusable output buffer per chunk of pairs.
+    let chunks = st.pairs.len().div_ceil(CHUNK);
+    st.contacts.resize_with(chunks, Vec::new);
+    crate::par::par_chunks_with(&mut st.pairs, CHUNK, &mut st.contacts, |_, chunk, out| {
+        out.clear();
+        out.extend(
+            chunk
+                .iter_mut()
+                .filter_map(|p| pair_kernel(p, &bodies, &par, dt)),
+        );
+    });
     // Per-particle sums for the particles in contact only: `force`/`torque` stay zero
     // elsewhere, so a step with few contacts pays for those few, not for every particle.
-    let n = st.pos.len();
     if st.force.len() != n {
         st.force.clear();
         st.force.resize(n, DVec3::ZERO);
@@ -386,88 +452,157 @@ pub fn particle_contact_forces(
         st.marked.clear();
         st.marked.resize(n, false);
     }
-    st.touched.clear();
     let mut active = 0;
-    for p in &st.pairs {
-        if !p.touching {
-            continue;
-        }
+    for c in st.contacts.iter().flatten() {
         active += 1;
-        let (i, j) = (p.i as usize, p.j as usize);
-        st.force[i] += p.force;
-        st.force[j] -= p.force;
-        st.torque[i] += p.torque_i;
-        st.torque[j] += p.torque_j;
+        let (i, j) = (c.i as usize, c.j as usize);
+        st.force[i] += c.force;
+        st.force[j] -= c.force;
+        st.torque[i] += c.torque_i;
+        st.torque[j] += c.torque_j;
         for k in [i, j] {
             if !st.marked[k] {
                 st.marked[k] = true;
                 st.touched.push(k as u32);
             }
         }
-        if p.started {
+        if c.started {
             for g in [st.group[i], st.group[j]] {
-                if let Some(c) = tally.collisions.get_mut(g as usize) {
-                    *c += 1;
+                if let Some(n) = tally.collisions.get_mut(g as usize) {
+                    *n += 1;
                 }
             }
         }
     }
     st.active = active;
+}
+
+/// Apply the contact forces and torques of this step as kicks (first system of the
+/// integration stage): v += F·dt/m, ω += T·dt/I with I = 0.4·m·r², for the particles in
+/// contact only. Equivalent to adding them to the force the integrator kicks with, since
+/// every force of the step was computed from the state before any kick.
+pub fn apply_contact_kicks(
+    mut state: ResMut<ContactState>,
+    motion: Res<Motion>,
+    mut q: Query<(&ParticleId, &mut Velocity, Option<&mut AngularVelocity>)>,
+) {
+    let st = &mut *state;
     if st.touched.is_empty() {
         return;
     }
-    // The force stage iterates the particles in the same table order as the gather (ids
-    // are checked); any mismatch falls back to a lookup by id.
-    let mut chunks = Vec::new();
-    let mut in_order = false;
-    if let Ok(it) = q.contiguous_iter_mut() {
-        let mut k = 0;
-        in_order = true;
-        for (ids, fs, ts) in it {
-            let m = ids.len();
-            if k + m > st.ids.len() || !ids.iter().zip(&st.ids[k..k + m]).all(|(a, b)| a.0 == *b) {
-                in_order = false;
-                break;
-            }
-            chunks.push((k, fs, ts));
-            k += m;
+    let dt = motion.dt;
+    let touched = std::mem::take(&mut st.touched);
+    let n = st.ids.len();
+    let kick = |k: usize, v: &mut DVec3, w: Option<&mut DVec3>| {
+        let m = st.mass[k];
+        *v += st.force[k] * (dt / m);
+        if let Some(w) = w {
+            let r = st.radius[k];
+            *w += st.torque[k] * (dt / (0.4 * m * r * r));
         }
-        in_order &= k == st.ids.len();
-    }
-    let st_touched = std::mem::take(&mut st.touched);
-    if in_order {
-        for &k in &st_touched {
+    };
+    // One table holding exactly the gathered particles (checked by the neighbour stage
+    // this step; nothing spawns or despawns in between): index the columns directly.
+    let mut done = false;
+    if let Ok(mut it) = q.contiguous_iter_mut()
+        && let Some((ids, mut vs, ws)) = it.next()
+        && it.next().is_none()
+        && ids.len() == n
+        && ids.first().map(|i| i.0) == st.ids.first().copied()
+        && ids.last().map(|i| i.0) == st.ids.last().copied()
+    {
+        let vs = vs.bypass_change_detection();
+        let mut ws = ws;
+        let mut ws = ws.as_mut().map(|w| w.bypass_change_detection());
+        if touched.len() * 4 > n && n >= crate::par::PARALLEL_THRESHOLD {
+            // Most particles touch something (dense packing): one parallel pass over all
+            // of them, kicking and clearing; untouched ones have zero sums.
+            kick_all(
+                Velocity::peel_slice_mut(vs),
+                ws.as_deref_mut().map(AngularVelocity::peel_slice_mut),
+                &mut st.force,
+                &mut st.torque,
+                &st.mass,
+                &st.radius,
+                dt,
+            );
+            st.marked.iter_mut().for_each(|m| *m = false);
+            st.touched = touched;
+            st.touched.clear();
+            return;
+        }
+        for &k in &touched {
             let k = k as usize;
-            // Chunks are few (usually one table): find the one holding index k.
-            let c = chunks.partition_point(|(start, _, _)| *start <= k) - 1;
-            let (start, fs, ts) = &mut chunks[c];
-            fs.bypass_change_detection()[k - *start].0 += st.force[k];
-            if let Some(ts) = ts {
-                ts.bypass_change_detection()[k - *start].0 += st.torque[k];
-            }
+            let w = ws.as_deref_mut().map(|w| &mut w[k].0);
+            kick(k, &mut vs[k].0, w);
         }
-    } else {
-        drop(chunks);
-        let slot: std::collections::HashMap<u32, usize> = st_touched
+        done = true;
+    }
+    if !done {
+        let slot: std::collections::HashMap<u32, usize> = touched
             .iter()
             .map(|&k| (st.ids[k as usize], k as usize))
             .collect();
-        for (id, mut f, t) in q.iter_mut() {
+        for (id, mut v, w) in q.iter_mut() {
             if let Some(&k) = slot.get(&id.0) {
-                f.0 += st.force[k];
-                if let Some(mut t) = t {
-                    t.0 += st.torque[k];
-                }
+                let mut w = w;
+                kick(k, &mut v.0, w.as_deref_mut().map(|w| &mut w.0));
             }
         }
     }
-    for &k in &st_touched {
+    for &k in &touched {
         let k = k as usize;
         st.force[k] = DVec3::ZERO;
         st.torque[k] = DVec3::ZERO;
         st.marked[k] = false;
     }
-    st.touched = st_touched;
+    st.touched = touched;
+    st.touched.clear();
+}
+
+/// v += F·dt/m and ω += T·dt/(0.4·m·r²) for every particle, clearing F and T, in
+/// parallel chunks (each particle's update is independent).
+fn kick_all(
+    v: &mut [DVec3],
+    w: Option<&mut [DVec3]>,
+    force: &mut [DVec3],
+    torque: &mut [DVec3],
+    mass: &[f64],
+    radius: &[f64],
+    dt: f64,
+) {
+    const C: usize = 8192;
+    let n = v.len();
+    let pool = ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
+    pool.scope(|s| {
+        let mut w_chunks = w.map(|w| w.chunks_mut(C));
+        for (k, ((vc, fc), tc)) in v
+            .chunks_mut(C)
+            .zip(force.chunks_mut(C))
+            .zip(torque.chunks_mut(C))
+            .enumerate()
+        {
+            let wc = w_chunks.as_mut().and_then(|it| it.next());
+            let base = k * C;
+            let (mc, rc) = (
+                &mass[base..(base + C).min(n)],
+                &radius[base..(base + C).min(n)],
+            );
+            s.spawn(async move {
+                for i in 0..vc.len() {
+                    vc[i] += fc[i] * (dt / mc[i]);
+                    fc[i] = DVec3::ZERO;
+                }
+                if let Some(wc) = wc {
+                    for i in 0..wc.len() {
+                        let r = rc[i];
+                        wc[i] += tc[i] * (dt / (0.4 * mc[i] * r * r));
+                    }
+                }
+                tc.iter_mut().for_each(|t| *t = DVec3::ZERO);
+            });
+        }
+    });
 }
 
 /// Total kinetic energy (translational + rotational, I = m·d²/10) and momentum of the

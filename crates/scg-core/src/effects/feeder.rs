@@ -153,7 +153,8 @@ pub fn feed_particles(
         let due = fed_by(f.spec.rate, f.spec.start, f.spec.stop, t);
         while f.fed < due {
             let position = f.spec.region.sample(&mut f.rng);
-            let velocity = f.spec.velocity + f.spec.spin.map_or(DVec3::ZERO, |s| s.velocity_at(position));
+            let velocity =
+                f.spec.velocity + f.spec.spin.map_or(DVec3::ZERO, |s| s.velocity_at(position));
             let spec = ParticleSpec {
                 group: f.spec.group,
                 diameter: f.spec.diameter,
@@ -209,7 +210,10 @@ mod tests {
             omega: DVec3::new(0.0, 0.0, 2.0),
         };
         // 0.5 m from the axis along +x, 3 m up: 1 m/s along +y, nothing axial or radial.
-        assert_eq!(s.velocity_at(DVec3::new(1.5, 0.0, 3.0)), DVec3::new(0.0, 1.0, 0.0));
+        assert_eq!(
+            s.velocity_at(DVec3::new(1.5, 0.0, 3.0)),
+            DVec3::new(0.0, 1.0, 0.0)
+        );
         assert_eq!(s.velocity_at(DVec3::new(1.0, 0.0, -4.0)), DVec3::ZERO);
     }
 

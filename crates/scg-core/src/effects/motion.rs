@@ -6,6 +6,8 @@
 //! scene has no fluid. Contact forces (when a scene has contacts or walls) enter as a kick
 //! before the drift; gravity and buoyancy as a constant acceleration inside it.
 
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 
@@ -49,6 +51,41 @@ pub struct Motion {
     pub gravity: DVec3,
     /// Reduce gravity by buoyancy: a = g·(1 − ρ_f/ρ_p).
     pub buoyancy: bool,
+}
+
+/// The largest distance any particle moved in the last integration step (resource,
+/// present when the scene has contacts). Every integrator records into it; the neighbour
+/// stage takes it to bound displacements without a pass over all particles.
+#[derive(Resource, Debug, Default)]
+pub struct StepDisplacement {
+    /// Bits of the largest squared step displacement, m² (non-negative floats order
+    /// like their bits).
+    max2_bits: AtomicU64,
+    /// Set by an integrator that recorded every particle this step.
+    reported: AtomicBool,
+}
+
+impl StepDisplacement {
+    /// Record a squared displacement, m².
+    #[inline]
+    pub fn record(&self, d2: f64) {
+        let b = d2.to_bits();
+        if b > self.max2_bits.load(Ordering::Relaxed) {
+            self.max2_bits.fetch_max(b, Ordering::Relaxed);
+        }
+    }
+
+    /// Mark the step as fully recorded.
+    pub fn mark_reported(&self) {
+        self.reported.store(true, Ordering::Relaxed);
+    }
+
+    /// The largest displacement of the step, m, if an integrator reported one; resets.
+    pub fn take(&self) -> Option<f64> {
+        let reported = self.reported.swap(false, Ordering::Relaxed);
+        let bits = self.max2_bits.swap(0, Ordering::Relaxed);
+        reported.then(|| f64::from_bits(bits).sqrt())
+    }
 }
 
 /// Constant body acceleration of a particle (gravity, reduced by buoyancy), m/s².
@@ -176,9 +213,11 @@ pub fn integrate_stokes_exponential(
     motion: Res<Motion>,
     flow: Res<FlowField>,
     health: Res<Health>,
+    disp: Option<Res<StepDisplacement>>,
     q: MoveQuery<(&'static StokesFactors, &'static FluidCoupling)>,
 ) {
     let flow = *flow;
+    let disp = disp.as_deref();
     match flow.affine() {
         // A flow in the x–y plane that does not depend on z (e.g. a vortex about z): 2×2.
         Some(aff) if aff.is_planar_z() => {
@@ -189,12 +228,12 @@ pub fn integrate_stokes_exponential(
                 aff.m.y_axis.y,
             );
             let (b0, b1) = (aff.b.x, aff.b.y);
-            stokes_kernel(q, motion.dt, &health, move |x: DVec3| {
+            stokes_kernel(q, motion.dt, &health, disp, move |x: DVec3| {
                 DVec3::new(m00 * x.x + m01 * x.y + b0, m10 * x.x + m11 * x.y + b1, 0.0)
             })
         }
-        Some(aff) => stokes_kernel(q, motion.dt, &health, move |x| aff.velocity(x)),
-        None => stokes_kernel(q, motion.dt, &health, move |x| flow.velocity(x)),
+        Some(aff) => stokes_kernel(q, motion.dt, &health, disp, move |x| aff.velocity(x)),
+        None => stokes_kernel(q, motion.dt, &health, disp, move |x| flow.velocity(x)),
     }
 }
 
@@ -212,8 +251,10 @@ fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
     mut q: MoveQuery<(&'static StokesFactors, &'static FluidCoupling)>,
     dt: f64,
     health: &Health,
+    disp: Option<&StepDisplacement>,
     flow: U,
 ) {
+    // Returns the squared displacement.
     let step =
         move |x: &mut DVec3, v: &mut DVec3, sf: &StokesFactors, tau: f64, vk: DVec3, a: DVec3| {
             let u = flow(*x + vk * (0.5 * dt));
@@ -222,8 +263,10 @@ fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
             if !(x1 + v1).element_sum().is_finite() {
                 health.raise();
             }
+            let d2 = (x1 - *x).length_squared();
             *x = x1;
             *v = v1;
+            d2
         };
     let chunk = move |(mut xs, mut vs, (sfs, fcs), ms, fs, gs): ChunkItem| {
         // Local copies: the loop then keeps the flow and dt in registers instead of
@@ -236,22 +279,19 @@ fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
         if fs.is_none() && gs.is_none() {
             // Drag only: the common case, kept free of per-particle branches.
             // Any NaN or infinity makes the running sum non-finite: one test per chunk.
-            let mut sum = DVec3::ZERO;
-            for ((x, v), sf) in xs.iter_mut().zip(vs.iter_mut()).zip(sfs) {
-                // exponential_drift with a = 0: w = u.
-                let (x0, v0) = (x.0, v.0);
-                let u = flow(x0 + v0 * (0.5 * dt));
-                let dv = v0 - u;
-                let (x1, v1) = (x0 + u * dt + dv * sf.relax, v0 - dv * sf.gain);
-                sum += x1 + v1;
-                x.0 = x1;
-                v.0 = v1;
-            }
+            let (sum, d2max) = match disp {
+                Some(_) => drag_only_loop::<true, U>(xs, vs, sfs, dt, flow),
+                None => drag_only_loop::<false, U>(xs, vs, sfs, dt, flow),
+            };
             if !sum.is_finite() {
                 health.raise();
             }
+            if let Some(d) = disp {
+                d.record(d2max);
+            }
             return;
         }
+        let mut d2max = 0.0_f64;
         for i in 0..n {
             let v = vs[i].0;
             let vk = match fs {
@@ -259,7 +299,10 @@ fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
                 None => v,
             };
             let a = gs.map_or(DVec3::ZERO, |g| g[i].0);
-            step(&mut xs[i].0, &mut vs[i].0, &sfs[i], fcs[i].tau, vk, a);
+            d2max = d2max.max(step(&mut xs[i].0, &mut vs[i].0, &sfs[i], fcs[i].tau, vk, a));
+        }
+        if let Some(d) = disp {
+            d.record(d2max);
         }
     };
     let small = q.iter().len() < crate::par::PARALLEL_THRESHOLD;
@@ -281,9 +324,48 @@ fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
         crate::par::for_each_mut(&mut q, |(mut x, mut v, (sf, fc), m, f, g)| {
             let vk = kick(v.0, f, m.0, dt);
             let a = g.map_or(DVec3::ZERO, |g| g.0);
-            step(&mut x.0, &mut v.0, sf, fc.tau, vk, a);
+            let d2 = step(&mut x.0, &mut v.0, sf, fc.tau, vk, a);
+            if let Some(d) = disp {
+                d.record(d2);
+            }
         });
     }
+    if let Some(d) = disp {
+        d.mark_reported();
+    }
+}
+
+/// The drag-only loop of the fast path (no forces, no body acceleration): returns the sum
+/// of all new positions and velocities (non-finite iff one of them is) and, with `TRACK`,
+/// the largest squared step displacement, m².
+#[inline(always)]
+fn drag_only_loop<const TRACK: bool, U: Fn(DVec3) -> DVec3>(
+    xs: &mut [Position],
+    vs: &mut [Velocity],
+    sfs: &[StokesFactors],
+    dt: f64,
+    flow: U,
+) -> (DVec3, f64) {
+    let mut sum = DVec3::ZERO;
+    let mut d2max = 0.0_f64;
+    for ((x, v), sf) in xs.iter_mut().zip(vs.iter_mut()).zip(sfs) {
+        // exponential_drift with a = 0: w = u.
+        let (x0, v0) = (x.0, v.0);
+        let u = flow(x0 + v0 * (0.5 * dt));
+        let dv = v0 - u;
+        let dx = u * dt + dv * sf.relax;
+        let (x1, v1) = (x0 + dx, v0 - dv * sf.gain);
+        sum += x1 + v1;
+        if TRACK {
+            let d2 = dx.length_squared();
+            if d2 > d2max {
+                d2max = d2;
+            }
+        }
+        x.0 = x1;
+        v.0 = v1;
+    }
+    (sum, d2max)
 }
 
 /// Response time under `law` for the current slip, s.
@@ -300,8 +382,10 @@ pub fn integrate_drag_exponential(
     flow: Res<FlowField>,
     fluid: Res<Fluid>,
     health: Res<Health>,
+    disp: Option<Res<StepDisplacement>>,
     mut q: MoveQuery<&'static FluidCoupling>,
 ) {
+    let disp = disp.as_deref();
     let (dt, law) = (motion.dt, motion.drag.unwrap_or_default());
     let (flow, fluid) = (*flow, *fluid);
     let health = &*health;
@@ -315,9 +399,15 @@ pub fn integrate_drag_exponential(
         if !(x1.is_finite() && v1.is_finite()) {
             health.raise();
         }
+        if let Some(d) = disp {
+            d.record((x1 - x.0).length_squared());
+        }
         x.0 = x1;
         v.0 = v1;
     });
+    if let Some(d) = disp {
+        d.mark_reported();
+    }
 }
 
 /// Any drag law, semi-implicit Euler; sub-stepped so that every sub-step has dt ≤ τ/2.
@@ -326,8 +416,10 @@ pub fn integrate_drag_explicit(
     flow: Res<FlowField>,
     fluid: Res<Fluid>,
     health: Res<Health>,
+    disp: Option<Res<StepDisplacement>>,
     mut q: MoveQuery<&'static FluidCoupling>,
 ) {
+    let disp = disp.as_deref();
     let (dt, law) = (motion.dt, motion.drag.unwrap_or_default());
     let (flow, fluid) = (*flow, *fluid);
     let health = &*health;
@@ -348,16 +440,28 @@ pub fn integrate_drag_explicit(
         if !(xi.is_finite() && vi.is_finite()) {
             health.raise();
         }
+        if let Some(d) = disp {
+            d.record((xi - x.0).length_squared());
+        }
         x.0 = xi;
         v.0 = vi;
     });
+    if let Some(d) = disp {
+        d.mark_reported();
+    }
 }
 
 /// No fluid: contact kick, then the exact drift under gravity (free fall is exact;
 /// with contacts alone this is symplectic Euler).
-pub fn integrate_ballistic(motion: Res<Motion>, health: Res<Health>, mut q: MoveQuery<()>) {
+pub fn integrate_ballistic(
+    motion: Res<Motion>,
+    health: Res<Health>,
+    disp: Option<Res<StepDisplacement>>,
+    mut q: MoveQuery<()>,
+) {
     let dt = motion.dt;
     let health = &*health;
+    let disp = disp.as_deref();
     crate::par::for_each_mut(&mut q, |(mut x, mut v, (), m, f, g)| {
         let a = g.map_or(DVec3::ZERO, |g| g.0);
         let vk = kick(v.0, f, m.0, dt);
@@ -366,7 +470,13 @@ pub fn integrate_ballistic(motion: Res<Motion>, health: Res<Health>, mut q: Move
         if !(x1.is_finite() && v1.is_finite()) {
             health.raise();
         }
+        if let Some(d) = disp {
+            d.record((x1 - x.0).length_squared());
+        }
         x.0 = x1;
         v.0 = v1;
     });
+    if let Some(d) = disp {
+        d.mark_reported();
+    }
 }

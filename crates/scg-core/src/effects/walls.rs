@@ -64,16 +64,6 @@ pub fn plugin(world: &mut World, b: &mut StepBuilder, tangential: Option<WallTan
     }
 }
 
-/// Clear the force and torque accumulators (first system of the force stage).
-pub fn clear_forces(mut q: Query<(&mut Force, Option<&mut Torque>)>) {
-    crate::par::for_each_mut(&mut q, |(mut f, t)| {
-        f.0 = glam::DVec3::ZERO;
-        if let Some(mut t) = t {
-            t.0 = glam::DVec3::ZERO;
-        }
-    });
-}
-
 /// Normal force of every wall on every particle touching it.
 pub fn wall_normal_forces(
     walls: Res<WallSet>,
@@ -83,12 +73,17 @@ pub fn wall_normal_forces(
     let e_eff = walls.material.effective_modulus();
     crate::par::for_each_mut(&mut q, |(x, v, d, m, mut f)| {
         let r = 0.5 * d.0;
+        let mut sum = glam::DVec3::ZERO;
         for w in &walls.walls {
             if let Some(t) = w.shape.touch(x.0, r) {
                 let vn = v.0.dot(t.normal);
                 let (fn_, _) = walls.law.force(t.overlap, vn, e_eff, r, m.0);
-                f.0 += fn_ * t.normal;
+                sum += fn_ * t.normal;
             }
+        }
+        // The walls are the only writer of Force: set, not accumulate (no clearing pass).
+        if sum != f.0 {
+            f.0 = sum;
         }
     });
 }
@@ -122,6 +117,7 @@ pub fn wall_contact_forces(
     let e_eff = walls.material.effective_modulus();
     crate::par::for_each_mut(&mut q, |(x, v, w, d, m, mut f, mut torque, mut hist)| {
         let r = 0.5 * d.0;
+        let (mut fsum, mut tsum) = (glam::DVec3::ZERO, glam::DVec3::ZERO);
         let hist = &mut hist.0;
         let old_len = hist.len();
         for (wi, wall) in walls.walls.iter().enumerate() {
@@ -134,7 +130,7 @@ pub fn wall_contact_forces(
             let vc = v.0 + w.0.cross(-r * n);
             let vn = vc.dot(n);
             let (fn_, kn) = walls.law.force(t.overlap, vn, e_eff, r, m.0);
-            f.0 += fn_ * n;
+            fsum += fn_ * n;
             let prev = hist[..old_len]
                 .iter()
                 .find(|h| h.0 == wi)
@@ -146,15 +142,25 @@ pub fn wall_contact_forces(
                 let eta = tl.damping * (m.0 * kt).sqrt();
                 let u = tangential_force(prev, n, vt, kt, eta, tl.friction * fn_.abs(), dt);
                 xi = u.history;
-                f.0 += u.force;
-                torque.0 += (-r * n).cross(u.force);
+                fsum += u.force;
+                tsum += (-r * n).cross(u.force);
             }
             if tl.rolling > 0.0 {
-                torque.0 += rolling_torque(tl.rolling, fn_.abs(), r, w.0);
+                tsum += rolling_torque(tl.rolling, fn_.abs(), r, w.0);
             }
             hist.push((wi, xi));
         }
         // Keep only the contacts of this step (appended after the old entries).
-        hist.drain(..old_len);
+        if old_len > 0 {
+            hist.drain(..old_len);
+        }
+        // The walls are the only writer of Force and Torque: set, not accumulate (no
+        // clearing pass); untouched particles keep their zeros without a write.
+        if fsum != f.0 {
+            f.0 = fsum;
+        }
+        if tsum != torque.0 {
+            torque.0 = tsum;
+        }
     });
 }
