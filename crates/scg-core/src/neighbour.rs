@@ -22,13 +22,23 @@ use glam::DVec3;
 pub struct PeriodicBox {
     /// Box lengths, m.
     pub lengths: DVec3,
+    /// 1/L per axis, 1/m (so the minimum image multiplies instead of dividing).
+    inv: DVec3,
 }
 
 impl PeriodicBox {
+    /// A box of `lengths` (m).
+    pub fn new(lengths: DVec3) -> Self {
+        PeriodicBox {
+            lengths,
+            inv: lengths.recip(),
+        }
+    }
+
     /// The minimum-image form of the separation `d`.
     #[inline]
     pub fn min_image(&self, d: DVec3) -> DVec3 {
-        let q = d / self.lengths;
+        let q = d * self.inv;
         d - self.lengths * DVec3::new(round_nearest(q.x), round_nearest(q.y), round_nearest(q.z))
     }
 
@@ -501,7 +511,7 @@ mod tests {
                 .map(|p| DVec3::new(p.0 * 1.5 - 0.25, p.1 * 0.8, p.2 * 2.0 - 0.5))
                 .collect();
             let radius: Vec<f64> = pts.iter().map(|p| 0.5 * (0.01 + 0.07 * p.3)).collect();
-            let pb = periodic.then_some(PeriodicBox { lengths: l });
+            let pb = periodic.then_some(PeriodicBox::new(l));
             let mut list = NeighbourList::new(skin, pb);
             list.build(&pos, &radius);
             let expect = brute_force_pairs(&pos, &radius, skin, pb.as_ref());
@@ -515,7 +525,7 @@ mod tests {
             let l = DVec3::new(0.3, 0.25, 0.2);
             let pos: Vec<DVec3> = pts.iter().map(|p| DVec3::new(p.0, p.1, p.2) * l).collect();
             let radius: Vec<f64> = pts.iter().map(|p| 0.5 * (0.005 + 0.035 * p.3)).collect();
-            let pb = periodic.then_some(PeriodicBox { lengths: l });
+            let pb = periodic.then_some(PeriodicBox::new(l));
             let mut list = NeighbourList::new(0.004, pb);
             list.build(&pos, &radius);
             prop_assert_eq!(&list.pairs, &brute_force_pairs(&pos, &radius, 0.004, pb.as_ref()));
@@ -574,12 +584,7 @@ mod tests {
             })
             .collect();
         let radius: Vec<f64> = (0..n).map(|_| rng.random_range(0.002..0.016)).collect();
-        for periodic in [
-            None,
-            Some(PeriodicBox {
-                lengths: DVec3::ONE,
-            }),
-        ] {
+        for periodic in [None, Some(PeriodicBox::new(DVec3::ONE))] {
             let mut list = NeighbourList::new(0.004, periodic);
             list.build(&pos, &radius);
             let want = brute_force_pairs(&pos, &radius, 0.004, periodic.as_ref());
@@ -621,9 +626,7 @@ mod tests {
 
     #[test]
     fn minimum_image() {
-        let b = PeriodicBox {
-            lengths: DVec3::splat(1.0),
-        };
+        let b = PeriodicBox::new(DVec3::splat(1.0));
         let d = b.min_image(DVec3::new(0.9, -0.6, 0.2));
         assert!((d - DVec3::new(-0.1, 0.4, 0.2)).length() < 1e-15);
         let w = b.wrap(DVec3::new(-0.25, 1.5, 0.0));

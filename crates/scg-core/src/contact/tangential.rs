@@ -90,6 +90,45 @@ impl TangentialLaw {
     }
 }
 
+/// Hertz normal force with a Mindlin tangential spring, sharing their square roots (the
+/// pair kernel's common case). Returns (F_n, k_t, η_t): exactly what
+/// `NormalLaw::Hertz { gamma }.force(δ, v_n, E*, R*, m*).0`,
+/// [`mindlin_stiffness`]`(G*, R*, δ)` and `damping·√(m*·k_t)` give, up to rounding.
+///
+/// `mindlin_c` = √(6·G*/E*): with K = (4/3)·E*·√R*, m*·k_t = m*·K·(6·G*/E*)·√δ, so
+/// √(m*·k_t) = √(m*·K)·mindlin_c·δ^(1/4) needs no square root of its own.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn hertz_mindlin(
+    delta: f64,
+    vn: f64,
+    e_eff: f64,
+    g_eff: f64,
+    r_eff: f64,
+    m_eff: f64,
+    gamma: f64,
+    damping: f64,
+    mindlin_c: f64,
+) -> (f64, f64, f64) {
+    let sr = r_eff.sqrt();
+    let k = 4.0 / 3.0 * e_eff * sr;
+    let sd = delta.sqrt(); // the uncapped overlap: Mindlin
+    let q = sd.sqrt();
+    let smk = (m_eff * k).sqrt();
+    // The normal force uses the overlap capped at OVERLAP_CAP·R* (hard cases only).
+    let cap = super::normal::OVERLAP_CAP * r_eff;
+    let (dc, sdc, qc) = if delta > cap {
+        let s = cap.sqrt();
+        (cap, s, s.sqrt())
+    } else {
+        (delta, sd, q)
+    };
+    let fn_ = k * dc * sdc - gamma * smk * qc * vn;
+    let kt = 8.0 * g_eff * sr * sd;
+    let eta = damping * smk * mindlin_c * q;
+    (fn_, kt, eta)
+}
+
 /// Rotate the history `xi` onto the tangent plane of unit normal `n`, keeping its length.
 #[inline]
 pub fn rotate_history(xi: DVec3, n: DVec3) -> DVec3 {
@@ -254,5 +293,31 @@ mod tests {
         assert!((t - DVec3::new(0.0, -0.1, 0.0)).length() < 1e-15);
         assert_eq!(rolling_torque(0.0, 2.0, 0.5, DVec3::Y), DVec3::ZERO);
         assert_eq!(rolling_torque(0.1, 2.0, 0.5, DVec3::ZERO), DVec3::ZERO);
+    }
+
+    #[test]
+    fn hertz_mindlin_matches_the_separate_laws() {
+        use crate::contact::NormalLaw;
+        let (e, g): (f64, f64) = (
+            1.0e8 / (2.0 * (1.0 - 0.09)),
+            1.0e8 / (2.0 * 2.6) / (2.0 * 1.7),
+        );
+        let c = (6.0 * g / e).sqrt();
+        let gamma = 0.3;
+        let law = NormalLaw::Hertz { gamma };
+        for (delta, vn, r, m) in [
+            (1e-6, 0.3, 5e-4, 1e-6),
+            (3e-9, -2.0, 1e-4, 2e-9),
+            (2e-3, 0.0, 1e-3, 5e-6), // overlap above the cap R*
+            (7e-5, 11.0, 2.5e-4, 3e-8),
+        ] {
+            let (f, kt, eta) = hertz_mindlin(delta, vn, e, g, r, m, gamma, 0.7, c);
+            let (f0, _) = law.force(delta, vn, e, r, m);
+            let kt0 = mindlin_stiffness(g, r, delta);
+            let eta0 = 0.7 * (m * kt0).sqrt();
+            for (a, b) in [(f, f0), (kt, kt0), (eta, eta0)] {
+                assert!((a - b).abs() <= 1e-13 * b.abs().max(1e-300), "{a} vs {b}");
+            }
+        }
     }
 }

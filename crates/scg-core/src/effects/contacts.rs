@@ -19,7 +19,9 @@ use glam::DVec3;
 
 use crate::components::*;
 use crate::contact::normal::effective;
-use crate::contact::tangential::{TangentialStiffness, rolling_torque, tangential_force};
+use crate::contact::tangential::{
+    TangentialStiffness, hertz_mindlin, rolling_torque, tangential_force,
+};
 use crate::contact::{Material, NormalLaw, TangentialLaw};
 use crate::effects::motion::{Motion, StepDisplacement};
 use crate::effects::recording::Tally;
@@ -66,6 +68,8 @@ pub struct ContactParams {
     pub g_eff: f64,
     /// Periodic box.
     pub periodic: Option<PeriodicBox>,
+    /// √(6·G*/E*), for [`hertz_mindlin`].
+    pub mindlin_c: f64,
 }
 
 /// One candidate pair with its contact history.
@@ -136,13 +140,16 @@ pub struct ContactState {
 /// Insert the contact resources and add the systems (called only when the scene declares
 /// contacts).
 pub fn plugin(world: &mut World, b: &mut StepBuilder, cfg: &ContactConfig) {
-    let periodic = cfg.periodic.map(|l| PeriodicBox { lengths: l });
+    let periodic = cfg.periodic.map(PeriodicBox::new);
     world.insert_resource(ContactParams {
         law: cfg.law,
         tangential: cfg.tangential(),
         e_eff: cfg.material.effective_modulus(),
         g_eff: cfg.material.effective_shear_modulus(),
         periodic,
+        mindlin_c: (6.0 * cfg.material.effective_shear_modulus()
+            / cfg.material.effective_modulus())
+        .sqrt(),
     });
     world.insert_resource(StepDisplacement::default());
     world.insert_resource(ContactState {
@@ -338,7 +345,26 @@ fn pair_kernel(p: &mut PairState, b: &Bodies, par: &ContactParams, dt: f64) -> O
     // Velocity of i's contact point relative to j's.
     let v_rel = b.vel[i] - b.vel[j] + (ri * b.omega[i] + rj * b.omega[j]).cross(n);
     let vn_approach = v_rel.dot(n);
-    let (fn_, kn) = par.law.force(delta, -vn_approach, par.e_eff, r_eff, m_eff);
+    let tl = &par.tangential;
+    let (fn_, kt, eta) = match (par.law, tl.stiffness) {
+        // The common case in one pass (shared square roots).
+        (NormalLaw::Hertz { gamma }, TangentialStiffness::Mindlin) => hertz_mindlin(
+            delta,
+            -vn_approach,
+            par.e_eff,
+            par.g_eff,
+            r_eff,
+            m_eff,
+            gamma,
+            tl.damping,
+            par.mindlin_c,
+        ),
+        _ => {
+            let (fn_, kn) = par.law.force(delta, -vn_approach, par.e_eff, r_eff, m_eff);
+            let kt = tl.stiffness(par.g_eff, r_eff, delta, kn);
+            (fn_, kt, tl.damping * (m_eff * kt).sqrt())
+        }
+    };
     let mut c = PairContact {
         i: p.i,
         j: p.j,
@@ -346,11 +372,8 @@ fn pair_kernel(p: &mut PairState, b: &Bodies, par: &ContactParams, dt: f64) -> O
         force: -fn_ * n,
         ..Default::default()
     };
-    let tl = &par.tangential;
     if tl.friction > 0.0 {
         let vt = v_rel - vn_approach * n;
-        let kt = tl.stiffness(par.g_eff, r_eff, delta, kn);
-        let eta = tl.damping * (m_eff * kt).sqrt();
         let u = tangential_force(p.history, n, vt, kt, eta, tl.friction * fn_.abs(), dt);
         p.history = u.history;
         c.force += u.force;

@@ -145,10 +145,38 @@ pub fn integrate_rotation(
     mut q: Query<(&mut AngularVelocity, &Torque, &Mass, &Diameter)>,
 ) {
     let dt = motion.dt;
-    crate::par::for_each_mut(&mut q, |(mut w, t, m, d)| {
-        let inertia = 0.1 * m.0 * d.0 * d.0;
-        w.0 += t.0 * (dt / inertia);
-    });
+    type Item<'a> = (
+        bevy_ecs::change_detection::ContiguousMut<'a, AngularVelocity>,
+        &'a [Torque],
+        &'a [Mass],
+        &'a [Diameter],
+    );
+    let chunk = move |(mut ws, ts, ms, ds): Item| {
+        let ws = ws.bypass_change_detection();
+        for i in 0..ws.len() {
+            // Most particles touch no wall: skip the division for a zero torque.
+            if ts[i].0 != DVec3::ZERO {
+                let inertia = 0.1 * ms[i].0 * ds[i].0 * ds[i].0;
+                ws[i].0 += ts[i].0 * (dt / inertia);
+            }
+        }
+    };
+    let small = q.iter().len() < crate::par::PARALLEL_THRESHOLD;
+    let contiguous = if small {
+        q.contiguous_iter_mut().map(|it| it.for_each(chunk)).is_ok()
+    } else {
+        q.contiguous_par_iter_mut()
+            .map(|it| it.for_each(chunk))
+            .is_ok()
+    };
+    if !contiguous {
+        crate::par::for_each_mut(&mut q, |(mut w, t, m, d)| {
+            if t.0 != DVec3::ZERO {
+                let inertia = 0.1 * m.0 * d.0 * d.0;
+                w.0 += t.0 * (dt / inertia);
+            }
+        });
+    }
 }
 
 fn drag_effect_name(law: DragLaw) -> &'static str {
@@ -452,7 +480,8 @@ pub fn integrate_drag_explicit(
 }
 
 /// No fluid: contact kick, then the exact drift under gravity (free fall is exact;
-/// with contacts alone this is symplectic Euler).
+/// with contacts alone this is symplectic Euler). Iterates over contiguous component
+/// slices on every core.
 pub fn integrate_ballistic(
     motion: Res<Motion>,
     health: Res<Health>,
@@ -462,20 +491,62 @@ pub fn integrate_ballistic(
     let dt = motion.dt;
     let health = &*health;
     let disp = disp.as_deref();
-    crate::par::for_each_mut(&mut q, |(mut x, mut v, (), m, f, g)| {
-        let a = g.map_or(DVec3::ZERO, |g| g.0);
-        let vk = kick(v.0, f, m.0, dt);
-        let x1 = x.0 + vk * dt + 0.5 * a * dt * dt;
+    let one = move |x: &mut DVec3, v: &mut DVec3, f: Option<&Force>, m: f64, a: DVec3| -> f64 {
+        let vk = kick(*v, f, m, dt);
+        let x1 = *x + vk * dt + 0.5 * a * dt * dt;
         let v1 = vk + a * dt;
-        if !(x1.is_finite() && v1.is_finite()) {
+        if !(x1 + v1).element_sum().is_finite() {
             health.raise();
         }
-        if let Some(d) = disp {
-            d.record((x1 - x.0).length_squared());
+        let d2 = (x1 - *x).length_squared();
+        *x = x1;
+        *v = v1;
+        d2
+    };
+    type Item<'a> = (
+        bevy_ecs::change_detection::ContiguousMut<'a, Position>,
+        bevy_ecs::change_detection::ContiguousMut<'a, Velocity>,
+        (),
+        &'a [Mass],
+        Option<&'a [Force]>,
+        Option<&'a [BodyAcceleration]>,
+    );
+    let chunk = move |(mut xs, mut vs, (), ms, fs, gs): Item| {
+        let (xs, vs) = (xs.bypass_change_detection(), vs.bypass_change_detection());
+        let mut d2max = 0.0_f64;
+        for i in 0..xs.len() {
+            let a = gs.map_or(DVec3::ZERO, |g| g[i].0);
+            let d2 = one(&mut xs[i].0, &mut vs[i].0, fs.map(|f| &f[i]), ms[i].0, a);
+            if d2 > d2max {
+                d2max = d2;
+            }
         }
-        x.0 = x1;
-        v.0 = v1;
-    });
+        if let Some(d) = disp {
+            d.record(d2max);
+        }
+    };
+    let small = q.iter().len() < crate::par::PARALLEL_THRESHOLD;
+    let contiguous = if small {
+        q.contiguous_iter_mut().map(|it| it.for_each(chunk)).is_ok()
+    } else {
+        q.contiguous_par_iter_mut()
+            .map(|it| {
+                it.batching_strategy(
+                    bevy_ecs::batching::BatchingStrategy::new().batches_per_thread(4),
+                )
+                .for_each(chunk)
+            })
+            .is_ok()
+    };
+    if !contiguous {
+        crate::par::for_each_mut(&mut q, |(mut x, mut v, (), m, f, g)| {
+            let a = g.map_or(DVec3::ZERO, |g| g.0);
+            let d2 = one(&mut x.0, &mut v.0, f, m.0, a);
+            if let Some(d) = disp {
+                d.record(d2);
+            }
+        });
+    }
     if let Some(d) = disp {
         d.mark_reported();
     }

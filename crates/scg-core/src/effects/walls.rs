@@ -7,6 +7,7 @@
 //! per-particle history ([`WallHistory`]), the Coulomb limit, and the torque −r·n × F_t.
 
 use bevy_ecs::prelude::*;
+use glam::DVec3;
 
 use crate::components::*;
 use crate::contact::tangential::{rolling_torque, tangential_force};
@@ -115,38 +116,44 @@ pub fn wall_contact_forces(
     let g_eff = tangential.g_eff;
     let dt = motion.dt;
     let e_eff = walls.material.effective_modulus();
-    crate::par::for_each_mut(&mut q, |(x, v, w, d, m, mut f, mut torque, mut hist)| {
-        let r = 0.5 * d.0;
-        let (mut fsum, mut tsum) = (glam::DVec3::ZERO, glam::DVec3::ZERO);
-        let hist = &mut hist.0;
+    // One particle: its wall forces and torque, its history updated in place.
+    let one = move |x: DVec3,
+                    v: DVec3,
+                    w: DVec3,
+                    d: f64,
+                    m: f64,
+                    hist: &mut Vec<(u32, DVec3)>|
+          -> (DVec3, DVec3) {
+        let r = 0.5 * d;
+        let (mut fsum, mut tsum) = (DVec3::ZERO, DVec3::ZERO);
         let old_len = hist.len();
         for (wi, wall) in walls.walls.iter().enumerate() {
             let wi = wi as u32;
-            let Some(t) = wall.shape.touch(x.0, r) else {
+            let Some(t) = wall.shape.touch(x, r) else {
                 continue;
             };
             let n = t.normal; // from the wall toward the centre
             // Velocity of the contact point (at −r·n from the centre); the wall is at rest.
-            let vc = v.0 + w.0.cross(-r * n);
+            let vc = v + w.cross(-r * n);
             let vn = vc.dot(n);
-            let (fn_, kn) = walls.law.force(t.overlap, vn, e_eff, r, m.0);
+            let (fn_, kn) = walls.law.force(t.overlap, vn, e_eff, r, m);
             fsum += fn_ * n;
             let prev = hist[..old_len]
                 .iter()
                 .find(|h| h.0 == wi)
-                .map_or(glam::DVec3::ZERO, |h| h.1);
-            let mut xi = glam::DVec3::ZERO;
+                .map_or(DVec3::ZERO, |h| h.1);
+            let mut xi = DVec3::ZERO;
             if tl.friction > 0.0 {
                 let vt = vc - vn * n;
                 let kt = tl.stiffness(g_eff, r, t.overlap, kn);
-                let eta = tl.damping * (m.0 * kt).sqrt();
+                let eta = tl.damping * (m * kt).sqrt();
                 let u = tangential_force(prev, n, vt, kt, eta, tl.friction * fn_.abs(), dt);
                 xi = u.history;
                 fsum += u.force;
                 tsum += (-r * n).cross(u.force);
             }
             if tl.rolling > 0.0 {
-                tsum += rolling_torque(tl.rolling, fn_.abs(), r, w.0);
+                tsum += rolling_torque(tl.rolling, fn_.abs(), r, w);
             }
             hist.push((wi, xi));
         }
@@ -154,13 +161,60 @@ pub fn wall_contact_forces(
         if old_len > 0 {
             hist.drain(..old_len);
         }
-        // The walls are the only writer of Force and Torque: set, not accumulate (no
-        // clearing pass); untouched particles keep their zeros without a write.
-        if fsum != f.0 {
-            f.0 = fsum;
+        (fsum, tsum)
+    };
+    type Item<'a> = (
+        &'a [Position],
+        &'a [Velocity],
+        &'a [AngularVelocity],
+        &'a [Diameter],
+        &'a [Mass],
+        bevy_ecs::change_detection::ContiguousMut<'a, Force>,
+        bevy_ecs::change_detection::ContiguousMut<'a, Torque>,
+        bevy_ecs::change_detection::ContiguousMut<'a, WallHistory>,
+    );
+    // The walls are the only writer of Force and Torque: they are set, not accumulated
+    // (no clearing pass), and a particle away from every wall with zero force, torque and
+    // history is not written at all.
+    let chunk = move |(xs, vs, ws, ds, ms, mut fs, mut ts, mut hs): Item| {
+        let (fs, ts, hs) = (
+            fs.bypass_change_detection(),
+            ts.bypass_change_detection(),
+            hs.bypass_change_detection(),
+        );
+        for i in 0..xs.len() {
+            let r = 0.5 * ds[i].0;
+            let idle = hs[i].0.is_empty() && fs[i].0 == DVec3::ZERO && ts[i].0 == DVec3::ZERO;
+            if idle
+                && walls
+                    .walls
+                    .iter()
+                    .all(|w| w.shape.touch(xs[i].0, r).is_none())
+            {
+                continue;
+            }
+            let (f, t) = one(xs[i].0, vs[i].0, ws[i].0, ds[i].0, ms[i].0, &mut hs[i].0);
+            fs[i].0 = f;
+            ts[i].0 = t;
         }
-        if tsum != torque.0 {
-            torque.0 = tsum;
-        }
-    });
+    };
+    let small = q.iter().len() < crate::par::PARALLEL_THRESHOLD;
+    let contiguous = if small {
+        q.contiguous_iter_mut().map(|it| it.for_each(chunk)).is_ok()
+    } else {
+        q.contiguous_par_iter_mut()
+            .map(|it| it.for_each(chunk))
+            .is_ok()
+    };
+    if !contiguous {
+        crate::par::for_each_mut(&mut q, |(x, v, w, d, m, mut f, mut torque, mut hist)| {
+            let (fsum, tsum) = one(x.0, v.0, w.0, d.0, m.0, &mut hist.0);
+            if fsum != f.0 {
+                f.0 = fsum;
+            }
+            if tsum != torque.0 {
+                torque.0 = tsum;
+            }
+        });
+    }
 }
