@@ -291,8 +291,8 @@ impl NeighbourList {
     /// (or the periodic box), or `None` when such a grid would be too large or too coarse
     /// (particles spread far apart): then the hashed cells are used.
     ///
-    /// Cells have an edge of at least `min_cell` and about one particle each on average,
-    /// so a dilute cloud gets fewer, larger cells. Particles are counting-sorted by cell
+    /// Cells have an edge of `min_cell` (the largest cut-off), or larger in a dilute cloud
+    /// so that there are at most about 4 cells per particle. Particles are counting-sorted by cell
     /// (stable, so each cell lists its particles in index order), and every particle scans
     /// the cells around its own by direct indexing.
     fn dense_grid_pairs(
@@ -319,10 +319,12 @@ impl NeighbourList {
         if !extent.is_finite() {
             return None;
         }
-        // About one particle per cell: edge ≥ (volume / N)^(1/3), never below min_cell.
+        // Cells as small as the cut-off allows (few candidates per particle even where the
+        // particles crowd, e.g. against a wall), but at most about 4 per particle so a
+        // dilute cloud does not get a huge grid: edge ≥ (volume / 4·N)^(1/3).
         let volume = extent.x.max(min_cell) * extent.y.max(min_cell) * extent.z.max(min_cell);
-        let edge_target = min_cell.max((volume / n as f64).cbrt());
-        if edge_target > 8.0 * min_cell {
+        let edge_target = min_cell.max((volume / (4.0 * n as f64)).cbrt());
+        if edge_target > 4.0 * min_cell {
             // Mostly empty bounding box (far-apart clusters): cells this coarse could hold
             // many particles each.
             return None;
@@ -338,7 +340,7 @@ impl NeighbourList {
             ),
         };
         let cells = dims.x * dims.y * dims.z;
-        if cells > (4 * n + 4096) as f64 {
+        if cells > (64 * n + 4096) as f64 {
             return None;
         }
         let dims = [dims.x as i64, dims.y as i64, dims.z as i64];
@@ -447,7 +449,7 @@ impl NeighbourList {
 /// `pairs_of(lo, hi)` over blocks of particle indices, in parallel, concatenated in block
 /// order: the list is the same whatever the thread count.
 fn in_blocks(n: usize, pairs_of: impl Fn(usize, usize) -> Vec<[u32; 2]> + Sync) -> Vec<[u32; 2]> {
-    const BLOCK: usize = 4096;
+    const BLOCK: usize = 1024;
     if n <= 2 * BLOCK {
         return pairs_of(0, n);
     }

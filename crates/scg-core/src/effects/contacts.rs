@@ -283,33 +283,59 @@ pub fn maintain_neighbour_list(
 
 /// New pair states for the rebuilt list, each touching pair keeping its history
 /// (`ids_before`: the ids the old pair indices refer to, when the set changed).
+///
+/// Only the pairs in contact carry anything, and they are few: each is looked up in the
+/// new (sorted) list by binary search, after mapping its particles' ids to their new
+/// indices when the set changed.
 fn carry_history(st: &mut ContactState, ids_before: Option<&[u32]>) {
     let old = std::mem::take(&mut st.pairs);
-    let ids_before: &[u32] = ids_before.unwrap_or(&st.ids);
-    // Key (lower id, higher id) → (history, touching, id at the pair's first index).
-    let carried: std::collections::HashMap<(u32, u32), (DVec3, bool, u32)> = old
+    let mut pairs: Vec<PairState> = st
+        .list
+        .pairs
         .iter()
-        .filter(|p| p.touching)
-        .map(|p| {
-            let (a, b) = (ids_before[p.i as usize], ids_before[p.j as usize]);
-            ((a.min(b), a.max(b)), (p.history, p.touching, a))
-        })
-        .collect();
-    let mut pairs = Vec::with_capacity(st.list.pairs.len());
-    for &[i, j] in &st.list.pairs {
-        let (a, b) = (st.ids[i as usize], st.ids[j as usize]);
-        let mut p = PairState {
+        .map(|&[i, j]| PairState {
             i,
             j,
             ..Default::default()
-        };
-        if let Some((h, t, first)) = carried.get(&(a.min(b), a.max(b))) {
+        })
+        .collect();
+    let touching: Vec<&PairState> = old.iter().filter(|p| p.touching).collect();
+    if !touching.is_empty() {
+        // Old index → new index (identity while the set is unchanged).
+        let remap: Option<std::collections::HashMap<u32, u32>> = ids_before.map(|before| {
+            let wanted: std::collections::HashMap<u32, u32> = touching
+                .iter()
+                .flat_map(|p| [p.i, p.j])
+                .map(|k| (before[k as usize], k))
+                .collect();
+            let mut out = std::collections::HashMap::with_capacity(wanted.len());
+            for (new_k, id) in st.ids.iter().enumerate() {
+                if let Some(&old_k) = wanted.get(id) {
+                    out.insert(old_k, new_k as u32);
+                }
+            }
+            out
+        });
+        for p in touching {
+            let (a, b) = match &remap {
+                None => (p.i, p.j),
+                Some(m) => match (m.get(&p.i), m.get(&p.j)) {
+                    (Some(&a), Some(&b)) => (a, b),
+                    _ => continue, // a particle left
+                },
+            };
             // The history is stored as seen from the pair's first particle: flip it when
             // the pair's orientation changed.
-            p.history = if *first == a { *h } else { -*h };
-            p.touching = *t;
+            let (key, h) = if a < b {
+                ([a, b], p.history)
+            } else {
+                ([b, a], -p.history)
+            };
+            if let Ok(k) = st.list.pairs.binary_search(&key) {
+                pairs[k].history = h;
+                pairs[k].touching = true;
+            }
         }
-        pairs.push(p);
     }
     st.pairs = pairs;
 }
