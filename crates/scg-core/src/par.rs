@@ -1,6 +1,8 @@
 //! Parallel iteration that pays for threads only when there is enough work.
 
-use bevy_ecs::query::{ArchetypeFilter, ArchetypeQueryData, IterQueryData, QueryData, QueryItem};
+use bevy_ecs::query::{
+    ArchetypeFilter, ArchetypeQueryData, ContiguousQueryData, IterQueryData, QueryData, QueryItem,
+};
 use bevy_ecs::system::Query;
 
 /// Below this many entities a system iterates on one thread: starting tasks costs more
@@ -22,6 +24,33 @@ pub fn for_each_mut<'a, 's, D, F>(
         q.iter_mut().for_each(f);
     } else {
         q.par_iter_mut().for_each(f);
+    }
+}
+
+/// `f` on each contiguous table chunk of `q` (one tight loop per chunk), on every core in
+/// several batches per thread (they balance the load when a core is briefly busy) when
+/// the query is large. Returns false, having run nothing, when some component is not in
+/// table storage: the caller then iterates per entity.
+pub fn for_each_chunk_mut<'a, 's, D, F>(
+    q: &'a mut Query<'_, 's, D, F>,
+    f: impl Fn(D::Contiguous<'a, 's>) + Send + Sync + Clone,
+) -> bool
+where
+    D: ContiguousQueryData,
+    D::ReadOnly: ArchetypeQueryData,
+    F: ArchetypeFilter,
+{
+    if q.iter().len() < PARALLEL_THRESHOLD {
+        q.contiguous_iter_mut().map(|it| it.for_each(f)).is_ok()
+    } else {
+        q.contiguous_par_iter_mut()
+            .map(|it| {
+                it.batching_strategy(
+                    bevy_ecs::batching::BatchingStrategy::new().batches_per_thread(4),
+                )
+                .for_each(f)
+            })
+            .is_ok()
     }
 }
 

@@ -161,14 +161,7 @@ pub fn integrate_rotation(
             }
         }
     };
-    let small = q.iter().len() < crate::par::PARALLEL_THRESHOLD;
-    let contiguous = if small {
-        q.contiguous_iter_mut().map(|it| it.for_each(chunk)).is_ok()
-    } else {
-        q.contiguous_par_iter_mut()
-            .map(|it| it.for_each(chunk))
-            .is_ok()
-    };
+    let contiguous = crate::par::for_each_chunk_mut(&mut q, chunk);
     if !contiguous {
         crate::par::for_each_mut(&mut q, |(mut w, t, m, d)| {
             if t.0 != DVec3::ZERO {
@@ -333,20 +326,7 @@ fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
             d.record(d2max);
         }
     };
-    let small = q.iter().len() < crate::par::PARALLEL_THRESHOLD;
-    let contiguous = if small {
-        q.contiguous_iter_mut().map(|it| it.for_each(chunk)).is_ok()
-    } else {
-        // Several batches per thread balance the load when a core is briefly busy.
-        q.contiguous_par_iter_mut()
-            .map(|it| {
-                it.batching_strategy(
-                    bevy_ecs::batching::BatchingStrategy::new().batches_per_thread(4),
-                )
-                .for_each(chunk)
-            })
-            .is_ok()
-    };
+    let contiguous = crate::par::for_each_chunk_mut(&mut q, chunk);
     if !contiguous {
         // Sparse storage somewhere in the query: per-entity iteration.
         crate::par::for_each_mut(&mut q, |(mut x, mut v, (sf, fc), m, f, g)| {
@@ -525,19 +505,7 @@ pub fn integrate_ballistic(
             d.record(d2max);
         }
     };
-    let small = q.iter().len() < crate::par::PARALLEL_THRESHOLD;
-    let contiguous = if small {
-        q.contiguous_iter_mut().map(|it| it.for_each(chunk)).is_ok()
-    } else {
-        q.contiguous_par_iter_mut()
-            .map(|it| {
-                it.batching_strategy(
-                    bevy_ecs::batching::BatchingStrategy::new().batches_per_thread(4),
-                )
-                .for_each(chunk)
-            })
-            .is_ok()
-    };
+    let contiguous = crate::par::for_each_chunk_mut(&mut q, chunk);
     if !contiguous {
         crate::par::for_each_mut(&mut q, |(mut x, mut v, (), m, f, g)| {
             let a = g.map_or(DVec3::ZERO, |g| g.0);

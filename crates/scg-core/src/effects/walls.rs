@@ -198,14 +198,7 @@ pub fn wall_contact_forces(
             ts[i].0 = t;
         }
     };
-    let small = q.iter().len() < crate::par::PARALLEL_THRESHOLD;
-    let contiguous = if small {
-        q.contiguous_iter_mut().map(|it| it.for_each(chunk)).is_ok()
-    } else {
-        q.contiguous_par_iter_mut()
-            .map(|it| it.for_each(chunk))
-            .is_ok()
-    };
+    let contiguous = crate::par::for_each_chunk_mut(&mut q, chunk);
     if !contiguous {
         crate::par::for_each_mut(&mut q, |(x, v, w, d, m, mut f, mut torque, mut hist)| {
             let (fsum, tsum) = one(x.0, v.0, w.0, d.0, m.0, &mut hist.0);
