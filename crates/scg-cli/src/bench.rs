@@ -206,14 +206,7 @@ pub fn bench(a: BenchArgs) -> i32 {
         .world
         .get_resource::<scg_core::effects::contacts::ContactState>()
     {
-        println!(
-            "  neighbour list: {} builds ({:.3} s), {} exact displacement checks, {} candidate pairs, {} in contact",
-            c.list.builds,
-            c.list.build_time.as_secs_f64(),
-            c.list.checks,
-            c.list.pairs.len(),
-            c.active
-        );
+        println!("  neighbour list: {}", c.summary());
     }
     println!("particle-steps/s: {:.4e}", ps / wall);
     0

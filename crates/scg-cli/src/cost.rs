@@ -58,6 +58,7 @@ use scg_scene::{Placement, Scene};
 
 use crate::EXIT_BAD_INPUT;
 use crate::classify;
+use crate::study::AnalysisSink;
 
 /// Smallest error shown on the log–log plot.
 pub const ERROR_FLOOR: f64 = 1e-16;
@@ -347,8 +348,6 @@ fn run_point(
         plan_sets,
     )
 }
-
-use crate::study::AnalysisSink;
 
 /// True for classifier scenes (classifier flow): the error is per-class W1 and d50.
 pub fn is_classifier(scene: &Scene) -> bool {

@@ -185,14 +185,7 @@ pub fn run(args: RunArgs) -> i32 {
         .world
         .get_resource::<scg_core::effects::contacts::ContactState>()
     {
-        eprintln!(
-            "neighbour list: {} builds ({:.3} s), {} exact displacement checks, {} candidate pairs and {} contacts at the end",
-            c.list.builds,
-            c.list.build_time.as_secs_f64(),
-            c.list.checks,
-            c.list.pairs.len(),
-            c.active
-        );
+        eprintln!("neighbour list: {} at the end", c.summary());
     }
     for p in &paths {
         eprintln!("wrote {}", p.display());

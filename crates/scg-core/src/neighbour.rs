@@ -296,7 +296,7 @@ impl NeighbourList {
     /// (stable, so each cell lists its particles in index order), and every particle scans
     /// the cells around its own by direct indexing.
     fn dense_grid_pairs(
-        &mut self,
+        &self,
         pos: &[DVec3],
         radius: &[f64],
         min_cell: f64,
@@ -360,7 +360,8 @@ impl NeighbourList {
         };
         let linear = |c: [i64; 3]| ((c[2] * dims[1] + c[1]) * dims[0] + c[0]) as usize;
         // Counting sort by cell: start[c]..start[c + 1] are the slots of cell c in `sorted`.
-        let cell: Vec<u32> = pos.iter().map(|x| linear(coord(*x)) as u32).collect();
+        let coords: Vec<[i64; 3]> = pos.iter().map(|x| coord(*x)).collect();
+        let cell: Vec<u32> = coords.iter().map(|c| linear(*c) as u32).collect();
         let mut start = vec![0u32; cells as usize + 1];
         for &c in &cell {
             start[c as usize + 1] += 1;
@@ -413,8 +414,7 @@ impl NeighbourList {
             let mut cand: Vec<u32> = Vec::new();
             let (mut xs, mut ys, mut zs) = ([0i64; 3], [0i64; 3], [0i64; 3]);
             for i in lo_i..hi_i {
-                let (xi, ri) = (pos[i], radius[i]);
-                let c = coord(xi);
+                let (xi, ri, c) = (pos[i], radius[i], coords[i]);
                 let nx = around(c[0], dims[0], &mut xs);
                 let ny = around(c[1], dims[1], &mut ys);
                 let nz = around(c[2], dims[2], &mut zs);

@@ -57,50 +57,6 @@ where
 /// Elements per task of the slice helpers below.
 const SLICE_CHUNK: usize = 8192;
 
-/// `dst[k] = f(&src[k])` for every k, on all cores when the slices are long.
-pub fn par_map_into<S: Sync, T: Send>(dst: &mut [T], src: &[S], f: impl Fn(&S) -> T + Send + Sync) {
-    assert_eq!(dst.len(), src.len());
-    if dst.len() < 2 * SLICE_CHUNK {
-        for (d, s) in dst.iter_mut().zip(src) {
-            *d = f(s);
-        }
-        return;
-    }
-    let pool = bevy_tasks::ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
-    bevy_tasks::ParallelSliceMut::par_chunk_map_mut(
-        &mut &mut *dst,
-        pool,
-        SLICE_CHUNK,
-        |i, chunk| {
-            let base = i * SLICE_CHUNK;
-            for (d, s) in chunk.iter_mut().zip(&src[base..]) {
-                *d = f(s);
-            }
-        },
-    );
-}
-
-/// Whether `pred(&a[k], &b[k])` holds for some k, on all cores when the slices are long.
-pub fn par_any_zip<A: Sync, B: Sync>(
-    a: &[A],
-    b: &[B],
-    pred: impl Fn(&A, &B) -> bool + Send + Sync,
-) -> bool {
-    let n = a.len().min(b.len());
-    if n < 2 * SLICE_CHUNK {
-        return a.iter().zip(b).any(|(x, y)| pred(x, y));
-    }
-    let pool = bevy_tasks::ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
-    bevy_tasks::ParallelSlice::par_chunk_map(&&a[..n], pool, SLICE_CHUNK, |i, chunk| {
-        chunk
-            .iter()
-            .zip(&b[i * SLICE_CHUNK..])
-            .any(|(x, y)| pred(x, y))
-    })
-    .into_iter()
-    .any(|hit| hit)
-}
-
 /// The largest `f(&a[k], &b[k])` over k (0 for empty slices), on all cores when the
 /// slices are long. The maximum does not depend on the chunking.
 pub fn par_max_zip<A: Sync, B: Sync>(
@@ -126,7 +82,7 @@ pub fn par_max_zip<A: Sync, B: Sync>(
     .fold(0.0_f64, f64::max)
 }
 
-/// `f(k, chunk_k, &mut out[k])` for the chunks of `chunk` elements of `items`, with one
+/// `f(chunk_k, &mut out[k])` for the chunks of `chunk` elements of `items`, with one
 /// output slot per chunk (`out.len()` = number of chunks), on all cores when there are
 /// several chunks. Consecutive chunks are grouped into a few tasks per thread, so the
 /// task count stays small whatever the length; each chunk's result does not depend on the
@@ -135,29 +91,28 @@ pub fn par_chunks_with<A: Send, B: Send>(
     items: &mut [A],
     chunk: usize,
     out: &mut [B],
-    f: impl Fn(usize, &mut [A], &mut B) + Send + Sync,
+    f: impl Fn(&mut [A], &mut B) + Send + Sync,
 ) {
     let chunk = chunk.max(1);
     assert_eq!(out.len(), items.len().div_ceil(chunk));
     let pool = bevy_tasks::ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
     let tasks = (pool.thread_num() * 4).max(1);
     if out.len() < 2 || pool.thread_num() < 2 {
-        for (k, (c, o)) in items.chunks_mut(chunk).zip(out.iter_mut()).enumerate() {
-            f(k, c, o);
+        for (c, o) in items.chunks_mut(chunk).zip(out.iter_mut()) {
+            f(c, o);
         }
         return;
     }
     let per_task = out.len().div_ceil(tasks);
     let f = &f;
     pool.scope(|s| {
-        for (t, (cs, os)) in items
+        for (cs, os) in items
             .chunks_mut(chunk * per_task)
             .zip(out.chunks_mut(per_task))
-            .enumerate()
         {
             s.spawn(async move {
-                for (k, (c, o)) in cs.chunks_mut(chunk).zip(os.iter_mut()).enumerate() {
-                    f(t * per_task + k, c, o);
+                for (c, o) in cs.chunks_mut(chunk).zip(os.iter_mut()) {
+                    f(c, o);
                 }
             });
         }

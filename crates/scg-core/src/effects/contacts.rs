@@ -25,6 +25,7 @@ use crate::contact::tangential::{
 use crate::contact::{Material, NormalLaw, TangentialLaw};
 use crate::effects::motion::{Motion, StepDisplacement};
 use crate::effects::recording::Tally;
+use crate::integrate::{angular_kick, linear_kick};
 use crate::neighbour::{NeighbourList, PeriodicBox, separation};
 use crate::step::{StepBuilder, StepSet};
 
@@ -135,6 +136,21 @@ pub struct ContactState {
     marked: Vec<bool>,
     /// Particle–particle contacts in touch after the last step.
     pub active: usize,
+}
+
+impl ContactState {
+    /// One line on the neighbour list for run reports: builds (and their time), exact
+    /// displacement checks, candidate pairs and pairs in contact.
+    pub fn summary(&self) -> String {
+        format!(
+            "{} builds ({:.3} s), {} exact displacement checks, {} candidate pairs, {} in contact",
+            self.list.builds,
+            self.list.build_time.as_secs_f64(),
+            self.list.checks,
+            self.list.pairs.len(),
+            self.active
+        )
+    }
 }
 
 /// Insert the contact resources and add the systems (called only when the scene declares
@@ -259,9 +275,7 @@ pub fn maintain_neighbour_list(
             st.pos.clear();
             st.pos.extend_from_slice(c);
         }
-        let pos = std::mem::take(&mut st.pos);
-        st.list.build(&pos, &st.radius);
-        st.pos = pos;
+        st.list.build(&st.pos, &st.radius);
         carry_history(st, None);
         return;
     }
@@ -419,22 +433,33 @@ fn pair_kernel(p: &mut PairState, b: &Bodies, par: &ContactParams, dt: f64) -> O
 /// Pairs per parallel task.
 const CHUNK: usize = 1024;
 
-/// The velocity and angular velocity columns when every particle is in one table and
-/// the table still holds the gathered particles.
-fn motion_columns<'a>(
-    q: &'a Query<(&Velocity, Option<&AngularVelocity>)>,
-    n: usize,
-) -> Option<(&'a [DVec3], Option<&'a [DVec3]>)> {
+/// The position, velocity and angular velocity columns when every particle is in one
+/// table holding exactly the `n` gathered particles.
+fn state_columns<'a>(q: &'a StateQuery, n: usize) -> Option<Columns<'a>> {
     let mut it = q.contiguous_iter().ok()?;
-    let (vs, ws) = it.next()?;
-    if it.next().is_some() || vs.len() != n {
+    let (xs, vs, ws) = it.next()?;
+    if it.next().is_some() || xs.len() != n {
         return None;
     }
     Some((
+        Position::peel_slice(xs),
         Velocity::peel_slice(vs),
         ws.map(AngularVelocity::peel_slice),
     ))
 }
+
+/// Positions, velocities and (when present) angular velocities, in table order.
+type Columns<'a> = (&'a [DVec3], &'a [DVec3], Option<&'a [DVec3]>);
+
+type StateQuery<'w, 's> = Query<
+    'w,
+    's,
+    (
+        &'static Position,
+        &'static Velocity,
+        Option<&'static AngularVelocity>,
+    ),
+>;
 
 /// Compute every pair's force (parallel), then sum them per particle (fixed order) for
 /// the particles in contact. The sums are applied by [`apply_contact_kicks`].
@@ -443,8 +468,7 @@ pub fn particle_contact_forces(
     params: Res<ContactParams>,
     motion: Res<Motion>,
     mut tally: ResMut<Tally>,
-    xq: Query<&Position>,
-    q: Query<(&Velocity, Option<&AngularVelocity>)>,
+    q: StateQuery,
 ) {
     let st = &mut *state;
     let par = *params;
@@ -452,26 +476,24 @@ pub fn particle_contact_forces(
     let n = st.ids.len();
     // Read the columns in place when possible; otherwise copy them in table order (the
     // same order the neighbour stage checked).
-    let direct = motion_columns(&q, n);
-    let pos_col = xq.contiguous_iter().ok().and_then(|mut it| {
-        let xs = it.next()?;
-        (it.next().is_none() && xs.len() == n).then(|| Position::peel_slice(xs))
-    });
-    if direct.is_none() || pos_col.is_none() {
+    let cols = state_columns(&q, n);
+    if cols.is_none() {
         st.pos.clear();
-        st.pos.extend(xq.iter().map(|x| x.0));
         st.vel.clear();
-        st.vel.extend(q.iter().map(|(v, _)| v.0));
+        for (x, v, _) in q.iter() {
+            st.pos.push(x.0);
+            st.vel.push(v.0);
+        }
     }
-    let omega_col = direct.and_then(|(_, w)| w);
+    let omega_col = cols.and_then(|(_, _, w)| w);
     if omega_col.is_none() {
         st.omega.clear();
         st.omega
-            .extend(q.iter().map(|(_, w)| w.map_or(DVec3::ZERO, |w| w.0)));
+            .extend(q.iter().map(|(_, _, w)| w.map_or(DVec3::ZERO, |w| w.0)));
     }
-    let (pos, vel): (&[DVec3], &[DVec3]) = match (pos_col, direct) {
-        (Some(x), Some((v, _))) => (x, v),
-        _ => (&st.pos, &st.vel),
+    let (pos, vel): (&[DVec3], &[DVec3]) = match cols {
+        Some((x, v, _)) => (x, v),
+        None => (&st.pos, &st.vel),
     };
     let bodies = Bodies {
         pos,
@@ -483,7 +505,7 @@ pub fn particle_contact_forces(
     // One reusable output buffer per chunk of pairs.
     let chunks = st.pairs.len().div_ceil(CHUNK);
     st.contacts.resize_with(chunks, Vec::new);
-    crate::par::par_chunks_with(&mut st.pairs, CHUNK, &mut st.contacts, |_, chunk, out| {
+    crate::par::par_chunks_with(&mut st.pairs, CHUNK, &mut st.contacts, |chunk, out| {
         out.clear();
         out.extend(
             chunk
@@ -544,10 +566,9 @@ pub fn apply_contact_kicks(
     let n = st.ids.len();
     let kick = |k: usize, v: &mut DVec3, w: Option<&mut DVec3>| {
         let m = st.mass[k];
-        *v += st.force[k] * (dt / m);
+        *v = linear_kick(*v, st.force[k], m, dt);
         if let Some(w) = w {
-            let r = st.radius[k];
-            *w += st.torque[k] * (dt / (0.4 * m * r * r));
+            *w = angular_kick(*w, st.torque[k], m, 2.0 * st.radius[k], dt);
         }
     };
     // One table holding exactly the gathered particles (checked by the neighbour stage
@@ -609,8 +630,8 @@ pub fn apply_contact_kicks(
     st.touched.clear();
 }
 
-/// v += F·dt/m and ω += T·dt/(0.4·m·r²) for every particle, clearing F and T, in
-/// parallel chunks (each particle's update is independent).
+/// The kicks of [`apply_contact_kicks`] for every particle, clearing F and T, in parallel
+/// chunks (each particle's update is independent).
 fn kick_all(
     v: &mut [DVec3],
     w: Option<&mut [DVec3]>,
@@ -639,13 +660,12 @@ fn kick_all(
             );
             s.spawn(async move {
                 for i in 0..vc.len() {
-                    vc[i] += fc[i] * (dt / mc[i]);
+                    vc[i] = linear_kick(vc[i], fc[i], mc[i], dt);
                     fc[i] = DVec3::ZERO;
                 }
                 if let Some(wc) = wc {
                     for i in 0..wc.len() {
-                        let r = rc[i];
-                        wc[i] += tc[i] * (dt / (0.4 * mc[i] * r * r));
+                        wc[i] = angular_kick(wc[i], tc[i], mc[i], 2.0 * rc[i], dt);
                     }
                 }
                 tc.iter_mut().for_each(|t| *t = DVec3::ZERO);

@@ -16,7 +16,8 @@ use crate::drag::{DragLaw, particle_reynolds};
 use crate::effects::guard::Health;
 use crate::flow::{FlowField, Fluid};
 use crate::integrate::{
-    Integrator, explicit_euler, explicit_substeps, exponential_drift, exponential_factors,
+    Integrator, angular_kick, explicit_euler, explicit_substeps, exponential_drift,
+    exponential_factors, linear_kick,
 };
 use crate::step::{StepBuilder, StepSet};
 
@@ -151,24 +152,21 @@ pub fn integrate_rotation(
         &'a [Mass],
         &'a [Diameter],
     );
+    // Most particles touch no wall: skip the division for a zero torque.
+    let one = move |w: &mut DVec3, t: DVec3, m: f64, d: f64| {
+        if t != DVec3::ZERO {
+            *w = angular_kick(*w, t, m, d, dt);
+        }
+    };
     let chunk = move |(mut ws, ts, ms, ds): Item| {
         let ws = ws.bypass_change_detection();
         for i in 0..ws.len() {
-            // Most particles touch no wall: skip the division for a zero torque.
-            if ts[i].0 != DVec3::ZERO {
-                let inertia = 0.1 * ms[i].0 * ds[i].0 * ds[i].0;
-                ws[i].0 += ts[i].0 * (dt / inertia);
-            }
+            one(&mut ws[i].0, ts[i].0, ms[i].0, ds[i].0);
         }
     };
     let contiguous = crate::par::for_each_chunk_mut(&mut q, chunk);
     if !contiguous {
-        crate::par::for_each_mut(&mut q, |(mut w, t, m, d)| {
-            if t.0 != DVec3::ZERO {
-                let inertia = 0.1 * m.0 * d.0 * d.0;
-                w.0 += t.0 * (dt / inertia);
-            }
-        });
+        crate::par::for_each_mut(&mut q, |(mut w, t, m, d)| one(&mut w.0, t.0, m.0, d.0));
     }
 }
 
@@ -189,7 +187,7 @@ pub fn advance_clock(mut clock: ResMut<SimClock>, q: Query<(), With<ParticleId>>
 #[inline]
 fn kick(v: DVec3, f: Option<&Force>, m: f64, dt: f64) -> DVec3 {
     match f {
-        Some(f) => v + f.0 * (dt / m),
+        Some(f) => linear_kick(v, f.0, m, dt),
         None => v,
     }
 }
@@ -315,10 +313,7 @@ fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
         let mut d2max = 0.0_f64;
         for i in 0..n {
             let v = vs[i].0;
-            let vk = match fs {
-                Some(f) => v + f[i].0 * (dt / ms[i].0),
-                None => v,
-            };
+            let vk = kick(v, fs.map(|f| &f[i]), ms[i].0, dt);
             let a = gs.map_or(DVec3::ZERO, |g| g[i].0);
             d2max = d2max.max(step(&mut xs[i].0, &mut vs[i].0, &sfs[i], fcs[i].tau, vk, a));
         }
