@@ -197,6 +197,9 @@ pub fn bench(a: BenchArgs) -> i32 {
         threads,
         wall / ps
     );
+    if std::env::var_os("SCG_BENCH_PLAN").is_some() {
+        print!("{}", sim.plan().render());
+    }
     for (set, d) in sim.timers().by_set() {
         if d.as_nanos() > 0 {
             println!("  {:<18} {:>9.3} s", set.name(), d.as_secs_f64());

@@ -119,15 +119,9 @@ fn head_on(e: f64, v: f64) -> HeadOn {
         sim.step().unwrap();
         let d = overlap(&mut sim);
         let t = sim.time();
-        for c in sim
-            .world
-            .resource::<ContactState>()
-            .contacts
-            .iter()
-            .flatten()
-        {
-            max_force = max_force.max(c.force.length());
-        }
+        // One pair: the summed force on either particle is the pair force.
+        let f = sim.world.resource::<ContactState>().contact_force(0).0;
+        max_force = max_force.max(f.length());
         max_overlap = max_overlap.max(d);
         if prev <= 0.0 && d > 0.0 {
             t_in = Some(t - dt * d / (d - prev));
@@ -311,7 +305,10 @@ fn oblique_wall_impact_sticking_reverses_the_contact_point_velocity() {
     for ratio in [1.0, 1.5] {
         let vt = ratio * vn;
         let psi1 = scale * ratio;
-        assert!(psi1 > 1.5 && psi1 < 4.0 * chi, "ψ₁ = {psi1} in the sticking range");
+        assert!(
+            psi1 > 1.5 && psi1 < 4.0 * chi,
+            "ψ₁ = {psi1} in the sticking range"
+        );
         let reference = sticking_reference(mu, vt, vn, 20_000.0);
         let (v, w) = oblique(e, mu, vt, vn, 500.0);
         let out = contact_point_velocity(v, w) / vt;
@@ -325,7 +322,10 @@ fn oblique_wall_impact_sticking_reverses_the_contact_point_velocity() {
         // Less tangential impulse than sliding throughout would apply.
         assert!(psi2 > psi1 - 4.0 * chi);
         let (l0, l1) = (m * r * vt, m * r * v.x + 0.4 * m * r * r * w.y);
-        assert!((l1 / l0 - 1.0).abs() < 1e-3, "L about the contact point {l1} vs {l0}");
+        assert!(
+            (l1 / l0 - 1.0).abs() < 1e-3,
+            "L about the contact point {l1} vs {l0}"
+        );
     }
 }
 
@@ -344,7 +344,9 @@ fn oblique_wall_impact_small_angle_follows_mindlin_no_slip() {
     let (v, w) = oblique(e, mu, vt, vn, 500.0);
     let r = 0.5 * D;
     let out = contact_point_velocity(v, w) / vt;
-    eprintln!("contact point tangential velocity ratio {out:.4}, reference {reference:.4}; v = {v:?}, w = {w:?}");
+    eprintln!(
+        "contact point tangential velocity ratio {out:.4}, reference {reference:.4}; v = {v:?}, w = {w:?}"
+    );
     assert!((out - reference).abs() < 0.01);
     let m = sphere_mass(D, RHO);
     let l0 = m * r * vt;
@@ -537,30 +539,86 @@ fn run_box_bits(steps: u64) -> Vec<u64> {
     state_bits(&mut sim)
 }
 
-#[test]
-fn same_run_twice_is_bit_identical() {
-    // The box has more candidate pairs than one parallel chunk (1024), so the pair forces
-    // really are computed in several tasks.
-    let (mut sim, _) = periodic_box_sized(1000, 0.8, 0.3, 3, 10.5 * D);
-    sim.step().unwrap();
-    let pairs = sim.world.resource::<ContactState>().pairs.len();
-    assert!(pairs > 2 * 1024, "{pairs} pairs");
-    assert_eq!(run_box_bits(300), run_box_bits(300));
+/// A compressed packing: 22³ = 10 648 spheres on a simple cubic lattice of spacing 0.995·D
+/// in a periodic box, with random velocities, so every particle touches its six
+/// neighbours from the first step (the force stage's dense path, in several slots, and
+/// the kicks in parallel chunks).
+fn dense_packing(seed: u64) -> Simulation {
+    let k = 22;
+    let a = 0.995 * D;
+    let mut cfg = contact_cfg(0.6, 0.4, Some(DVec3::splat(k as f64 * a)));
+    cfg.skin = 0.1 * D;
+    cfg.rolling_friction = 0.05;
+    let dt = hertz_contact_time(0.5 * sphere_mass(D, RHO), 0.25 * D, e_eff(), 1.0) / 50.0;
+    let mut sim = Simulation::new(config(dt, Some(cfg), None));
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    for i in 0..k {
+        for j in 0..k {
+            for l in 0..k {
+                let x = DVec3::new(i as f64, j as f64, l as f64) * a + DVec3::splat(0.5 * a);
+                let v = DVec3::new(
+                    rng.random_range(-0.2..0.2),
+                    rng.random_range(-0.2..0.2),
+                    rng.random_range(-0.2..0.2),
+                );
+                sim.spawn(&spec(x, v, D));
+            }
+        }
+    }
+    sim.scale_new_particles();
+    sim
 }
 
-/// Child side of the thread test: prints a digest of the final state.
+fn run_dense_bits(steps: u64) -> Vec<u64> {
+    let mut sim = dense_packing(5);
+    sim.run(steps, |_| true).unwrap();
+    state_bits(&mut sim)
+}
+
+#[test]
+fn same_run_twice_is_bit_identical() {
+    assert_eq!(run_box_bits(300), run_box_bits(300));
+    assert_eq!(run_dense_bits(30), run_dense_bits(30));
+}
+
+#[test]
+fn dense_packing_conserves_momentum_in_every_particle_contact() {
+    let mut sim = dense_packing(5);
+    let (_, p0) = kinetic_energy_and_momentum(&mut sim.world);
+    let scale = momentum_scale(&mut sim);
+    sim.run(100, |_| true).unwrap();
+    let st = sim.world.resource::<ContactState>();
+    let n = st.ids.len();
+    eprintln!(
+        "dense packing: {n} particles, {} in contact, {}",
+        st.active,
+        st.summary()
+    );
+    // Each particle touches its six neighbours, across the periodic faces too.
+    assert_eq!(st.active, 3 * n, "{} contacts", st.active);
+    assert!(st.slot_count() >= 4, "{} slots", st.slot_count());
+    let (_, p) = kinetic_energy_and_momentum(&mut sim.world);
+    let scale = scale.max(momentum_scale(&mut sim));
+    let err = (p - p0).length() / scale;
+    eprintln!("|ΔP|/Σm|v| = {err:.2e}");
+    assert!(err < 1e-12);
+}
+
+/// Child side of the thread test: prints a digest of the final state of the dilute box
+/// and of the dense packing.
 #[test]
 #[ignore]
 fn child_state_digest() {
     if std::env::var("SCG_CONTACTS_CHILD").is_err() {
         return;
     }
-    let bits = run_box_bits(300);
-    let mut h: u64 = 0xcbf29ce484222325;
-    for b in bits {
-        h = (h ^ b).wrapping_mul(0x100000001b3);
+    for (name, bits) in [("box", run_box_bits(300)), ("dense", run_dense_bits(60))] {
+        let mut h: u64 = 0xcbf29ce484222325;
+        for b in bits {
+            h = (h ^ b).wrapping_mul(0x100000001b3);
+        }
+        println!("STATE_DIGEST_{name}={h:016x}");
     }
-    println!("STATE_DIGEST={h:016x}");
 }
 
 #[test]
@@ -568,7 +626,7 @@ fn one_and_two_threads_give_identical_results() {
     // The compute pool is process-wide and set once, so each thread count runs in a child
     // process of this test binary (SCG_THREADS is read by Simulation::new).
     let exe = std::env::current_exe().unwrap();
-    let digest = |threads: &str| {
+    let digests = |threads: &str| {
         let out = std::process::Command::new(&exe)
             .args([
                 "child_state_digest",
@@ -582,14 +640,15 @@ fn one_and_two_threads_give_identical_results() {
             .output()
             .unwrap();
         let s = String::from_utf8_lossy(&out.stdout).into_owned();
-        s.lines()
-            .find_map(|l| {
-                l.split_once("STATE_DIGEST=")
-                    .map(|(_, d)| d.trim().to_string())
-            })
-            .unwrap_or_else(|| panic!("no digest from child: {s}"))
+        let found: Vec<String> = s
+            .lines()
+            .filter_map(|l| l.find("STATE_DIGEST_").map(|k| l[k..].to_string()))
+            .collect();
+        assert_eq!(found.len(), 2, "digests from child: {s}");
+        found
     };
-    let (a, b) = (digest("1"), digest("2"));
+    let (a, b) = (digests("1"), digests("2"));
+    eprintln!("{a:?}");
     assert_eq!(a, b);
 }
 

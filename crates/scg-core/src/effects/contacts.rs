@@ -4,10 +4,12 @@
 //!   id, into contiguous arrays and rebuilds the Verlet list ([`crate::neighbour`]) when
 //!   some particle moved more than half the skin; the tangential history of every listed
 //!   pair is carried over by (id_i, id_j).
-//! * [`particle_contact_forces`] (StepSet::Forces) computes each pair's force once, in
-//!   parallel chunks, into a per-pair buffer, then adds it to the two particles in pair
-//!   order on one thread: +F on i, −F (exactly) on j. Each pair's arithmetic does not depend
-//!   on the chunking, so the result is bit-identical whatever the thread count.
+//! * [`particle_contact_forces`] (StepSet::Forces) computes each pair's force once and
+//!   adds it to its two particles at once (+F on i, −F exactly on j). The pair list is cut
+//!   into a few fixed *slots* (by pair count, never by thread count); each slot sums its
+//!   pairs in pair order into its own per-particle arrays, and the slots run in parallel.
+//!   [`apply_contact_kicks`] adds the slots' sums per particle in slot order. The result is
+//!   bit-identical whatever the thread count.
 //!
 //! Physics: the normal law of [`crate::contact::normal`], the tangential Mindlin spring and
 //! rolling resistance of [`crate::contact::tangential`], torque r_i·n × F_t (paper eq. 3).
@@ -103,6 +105,164 @@ pub struct PairContact {
     pub torque_j: DVec3,
 }
 
+/// Pairs per accumulation slot (the slot count is fixed by the pair count).
+const PAIRS_PER_SLOT: usize = 4096;
+/// Most slots.
+const MAX_SLOTS: usize = 16;
+
+/// One slot of the force accumulation: a fixed range of the pair list whose forces are
+/// summed, in pair order, into per-particle arrays covering particles `base..base+len`.
+/// Invariant between steps: the arrays are zero except where the last step wrote
+/// (`touched`, or anywhere when `dirty`).
+#[derive(Debug, Default)]
+struct Slot {
+    /// Pair indices of this slot.
+    pairs: std::ops::Range<usize>,
+    /// First particle index covered.
+    base: usize,
+    /// Summed force per covered particle, N.
+    force: Vec<DVec3>,
+    /// Summed torque per covered particle, N·m.
+    torque: Vec<DVec3>,
+    /// Covered particles written this step (sparse steps), global indices.
+    touched: Vec<u32>,
+    /// `touched` membership, local indices.
+    marked: Vec<bool>,
+    /// Written anywhere (a dense step): clear everything before the next step.
+    dirty: bool,
+    /// Contacts started this step, per group.
+    collisions: Vec<u64>,
+    /// Pairs in contact this step.
+    active: usize,
+}
+
+impl Slot {
+    /// True when particle `k` is covered.
+    #[inline]
+    fn covers(&self, k: usize) -> bool {
+        k >= self.base && k - self.base < self.force.len()
+    }
+
+    /// Zero what the last step wrote.
+    fn clear(&mut self, groups: usize) {
+        if self.dirty {
+            self.force.fill(DVec3::ZERO);
+            self.torque.fill(DVec3::ZERO);
+            self.dirty = false;
+        } else {
+            for &k in &self.touched {
+                let l = k as usize - self.base;
+                self.force[l] = DVec3::ZERO;
+                self.torque[l] = DVec3::ZERO;
+                self.marked[l] = false;
+            }
+        }
+        self.touched.clear();
+        self.collisions.clear();
+        self.collisions.resize(groups, 0);
+        self.active = 0;
+    }
+
+    /// Compute the slot's pairs and sum them; `sparse` records the particles written.
+    fn run(
+        &mut self,
+        pairs: &mut [PairState],
+        b: &Bodies,
+        par: &ContactParams,
+        dt: f64,
+        group: &[u32],
+        groups: usize,
+        sparse: bool,
+    ) {
+        self.clear(groups);
+        let base = self.base;
+        for p in pairs {
+            let Some(c) = pair_kernel(p, b, par, dt) else {
+                continue;
+            };
+            let (i, j) = (c.i as usize, c.j as usize);
+            let (li, lj) = (i - base, j - base);
+            self.force[li] += c.force;
+            self.force[lj] -= c.force;
+            self.torque[li] += c.torque_i;
+            self.torque[lj] += c.torque_j;
+            self.active += 1;
+            if sparse {
+                for (l, k) in [(li, i), (lj, j)] {
+                    if !self.marked[l] {
+                        self.marked[l] = true;
+                        self.touched.push(k as u32);
+                    }
+                }
+            }
+            if c.started {
+                for g in [group[i], group[j]] {
+                    if let Some(n) = self.collisions.get_mut(g as usize) {
+                        *n += 1;
+                    }
+                }
+            }
+        }
+        self.dirty = !sparse;
+    }
+}
+
+/// Cut `pairs` (sorted by i, with i < j) into slots: as many as the pair count gives (at
+/// most [`MAX_SLOTS`]), halved while their arrays together would cover more than
+/// max(4·n, 2²⁰) particles (particles stored far from their neighbours in index order).
+fn layout_slots(pairs: &[[u32; 2]], n: usize) -> Vec<Slot> {
+    if pairs.is_empty() {
+        return Vec::new();
+    }
+    let budget = (4 * n).max(1 << 20);
+    let mut count = pairs.len().div_ceil(PAIRS_PER_SLOT).clamp(1, MAX_SLOTS);
+    loop {
+        let per = pairs.len().div_ceil(count);
+        let spans: Vec<(std::ops::Range<usize>, usize, usize)> = (0..pairs.len())
+            .step_by(per)
+            .map(|p0| {
+                let p1 = (p0 + per).min(pairs.len());
+                let base = pairs[p0][0] as usize;
+                let top = pairs[p0..p1]
+                    .iter()
+                    .map(|p| p[1] as usize)
+                    .max()
+                    .unwrap_or(base);
+                (p0..p1, base, top - base + 1)
+            })
+            .collect();
+        let covered: usize = spans.iter().map(|s| s.2).sum();
+        if count == 1 || covered <= budget {
+            return spans
+                .into_iter()
+                .map(|(range, base, len)| Slot {
+                    pairs: range,
+                    base,
+                    force: vec![DVec3::ZERO; len],
+                    torque: vec![DVec3::ZERO; len],
+                    marked: vec![false; len],
+                    ..Default::default()
+                })
+                .collect();
+        }
+        count /= 2;
+    }
+}
+
+/// The summed contact force and torque on particle `k`: the covering slots' sums added
+/// in slot order (the same order on every path).
+#[inline]
+fn slot_sum(slots: &[Slot], k: usize) -> (DVec3, DVec3) {
+    let (mut f, mut t) = (DVec3::ZERO, DVec3::ZERO);
+    for s in slots {
+        if s.covers(k) {
+            f += s.force[k - s.base];
+            t += s.torque[k - s.base];
+        }
+    }
+    (f, t)
+}
+
 /// The particles gathered in id order, the neighbour list and the pair states (resource).
 #[derive(Resource, Debug, Default)]
 pub struct ContactState {
@@ -124,13 +284,12 @@ pub struct ContactState {
     pub list: NeighbourList,
     /// Pair states aligned with `list.pairs`.
     pub pairs: Vec<PairState>,
-    /// The pairs in contact this step, in pair order, in chunks of the pair list.
-    pub contacts: Vec<Vec<PairContact>>,
-    /// Accumulated force per particle (scratch), N.
-    force: Vec<DVec3>,
-    /// Accumulated torque per particle (scratch), N·m.
-    torque: Vec<DVec3>,
-    /// Particles with a contact this step (scratch).
+    /// Force accumulation slots over the pair list (laid out at each rebuild).
+    slots: Vec<Slot>,
+    /// Whether this step's slots record the particles they touch (few contacts) or
+    /// every particle is summed (dense packings).
+    sparse: bool,
+    /// Particles with a contact this step (scratch of the sparse kick).
     touched: Vec<u32>,
     /// `touched` membership (scratch).
     marked: Vec<bool>,
@@ -139,17 +298,29 @@ pub struct ContactState {
 }
 
 impl ContactState {
+    /// The summed contact force (N) and torque (N·m) on the particle at index `k` of the
+    /// gathered arrays (`ids[k]`) from this step's force stage.
+    pub fn contact_force(&self, k: usize) -> (DVec3, DVec3) {
+        slot_sum(&self.slots, k)
+    }
+
     /// One line on the neighbour list for run reports: builds (and their time), exact
     /// displacement checks, candidate pairs and pairs in contact.
     pub fn summary(&self) -> String {
         format!(
-            "{} builds ({:.3} s), {} exact displacement checks, {} candidate pairs, {} in contact",
+            "{} builds ({:.3} s), {} exact displacement checks, {} candidate pairs in {} force slots, {} in contact",
             self.list.builds,
             self.list.build_time.as_secs_f64(),
             self.list.checks,
             self.list.pairs.len(),
+            self.slots.len(),
             self.active
         )
+    }
+
+    /// Number of force accumulation slots (fixed by the pair list, not the threads).
+    pub fn slot_count(&self) -> usize {
+        self.slots.len()
     }
 }
 
@@ -277,6 +448,7 @@ pub fn maintain_neighbour_list(
         }
         st.list.build(&st.pos, &st.radius);
         carry_history(st, None);
+        st.slots = layout_slots(&st.list.pairs, st.ids.len());
         return;
     }
     let old_ids = std::mem::take(&mut st.ids);
@@ -293,6 +465,7 @@ pub fn maintain_neighbour_list(
     }
     st.list.build(&st.pos, &st.radius);
     carry_history(st, Some(&old_ids));
+    st.slots = layout_slots(&st.list.pairs, st.ids.len());
 }
 
 /// New pair states for the rebuilt list, each touching pair keeping its history
@@ -430,9 +603,6 @@ fn pair_kernel(p: &mut PairState, b: &Bodies, par: &ContactParams, dt: f64) -> O
     Some(c)
 }
 
-/// Pairs per parallel task.
-const CHUNK: usize = 1024;
-
 /// The position, velocity and angular velocity columns when every particle is in one
 /// table holding exactly the `n` gathered particles.
 fn state_columns<'a>(q: &'a StateQuery, n: usize) -> Option<Columns<'a>> {
@@ -502,78 +672,93 @@ pub fn particle_contact_forces(
         radius: &st.radius,
         mass: &st.mass,
     };
-    // One reusable output buffer per chunk of pairs.
-    let chunks = st.pairs.len().div_ceil(CHUNK);
-    st.contacts.resize_with(chunks, Vec::new);
-    crate::par::par_chunks_with(&mut st.pairs, CHUNK, &mut st.contacts, |chunk, out| {
-        out.clear();
-        out.extend(
-            chunk
-                .iter_mut()
-                .filter_map(|p| pair_kernel(p, &bodies, &par, dt)),
-        );
-    });
-    // Per-particle sums for the particles in contact only: `force`/`torque` stay zero
-    // elsewhere, so a step with few contacts pays for those few, not for every particle.
-    if st.force.len() != n {
-        st.force.clear();
-        st.force.resize(n, DVec3::ZERO);
-        st.torque.clear();
-        st.torque.resize(n, DVec3::ZERO);
+    // Few contacts last step: record the particles written, so the kick and the next
+    // clear visit only those. Many: sum and clear every particle (no bookkeeping).
+    st.sparse = st.active * 8 <= n;
+    if st.marked.len() != n {
         st.marked.clear();
         st.marked.resize(n, false);
     }
+    let sparse = st.sparse;
+    let groups = tally.collisions.len();
+    let group = &st.group;
+    let mut work: Vec<(&mut Slot, &mut [PairState])> = Vec::with_capacity(st.slots.len());
+    let mut rest: &mut [PairState] = &mut st.pairs;
+    let mut at = 0;
+    for slot in st.slots.iter_mut() {
+        let (mine, tail) = std::mem::take(&mut rest).split_at_mut(slot.pairs.end - at);
+        at = slot.pairs.end;
+        rest = tail;
+        work.push((slot, mine));
+    }
+    let pool = ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
+    let run = |(slot, pairs): (&mut Slot, &mut [PairState])| {
+        slot.run(pairs, &bodies, &par, dt, group, groups, sparse);
+    };
+    if work.len() < 2 || pool.thread_num() < 2 {
+        work.into_iter().for_each(run);
+    } else {
+        pool.scope(|s| {
+            for w in work {
+                s.spawn(async move { run(w) });
+            }
+        });
+    }
     let mut active = 0;
-    for c in st.contacts.iter().flatten() {
-        active += 1;
-        let (i, j) = (c.i as usize, c.j as usize);
-        st.force[i] += c.force;
-        st.force[j] -= c.force;
-        st.torque[i] += c.torque_i;
-        st.torque[j] += c.torque_j;
-        for k in [i, j] {
-            if !st.marked[k] {
-                st.marked[k] = true;
-                st.touched.push(k as u32);
-            }
-        }
-        if c.started {
-            for g in [st.group[i], st.group[j]] {
-                if let Some(n) = tally.collisions.get_mut(g as usize) {
-                    *n += 1;
-                }
-            }
+    for slot in &st.slots {
+        active += slot.active;
+        for (t, c) in tally.collisions.iter_mut().zip(&slot.collisions) {
+            *t += c;
         }
     }
     st.active = active;
 }
 
 /// Apply the contact forces and torques of this step as kicks (first system of the
-/// integration stage): v += F·dt/m, ω += T·dt/I with I = 0.4·m·r², for the particles in
-/// contact only. Equivalent to adding them to the force the integrator kicks with, since
-/// every force of the step was computed from the state before any kick.
+/// integration stage): v += F·dt/m, ω += T·dt/I with I = 0.4·m·r², F and T the slots'
+/// sums. After a step with few contacts only the particles touched are visited; after a
+/// dense one every particle, in parallel chunks. Equivalent to adding them to the force
+/// the integrator kicks with, since every force of the step was computed from the state
+/// before any kick.
 pub fn apply_contact_kicks(
     mut state: ResMut<ContactState>,
     motion: Res<Motion>,
     mut q: Query<(&ParticleId, &mut Velocity, Option<&mut AngularVelocity>)>,
 ) {
     let st = &mut *state;
-    if st.touched.is_empty() {
+    if st.active == 0 {
         return;
     }
     let dt = motion.dt;
-    let touched = std::mem::take(&mut st.touched);
     let n = st.ids.len();
+    // The particles to visit on a sparse step, in slot order, each once.
+    let mut touched = std::mem::take(&mut st.touched);
+    touched.clear();
+    if st.sparse {
+        for s in &st.slots {
+            for &k in &s.touched {
+                if !st.marked[k as usize] {
+                    st.marked[k as usize] = true;
+                    touched.push(k);
+                }
+            }
+        }
+        for &k in &touched {
+            st.marked[k as usize] = false;
+        }
+    }
+    let slots = &st.slots;
+    let (mass, radius) = (&st.mass, &st.radius);
     let kick = |k: usize, v: &mut DVec3, w: Option<&mut DVec3>| {
-        let m = st.mass[k];
-        *v = linear_kick(*v, st.force[k], m, dt);
+        let (f, t) = slot_sum(slots, k);
+        let m = mass[k];
+        *v = linear_kick(*v, f, m, dt);
         if let Some(w) = w {
-            *w = angular_kick(*w, st.torque[k], m, 2.0 * st.radius[k], dt);
+            *w = angular_kick(*w, t, m, 2.0 * radius[k], dt);
         }
     };
     // One table holding exactly the gathered particles (checked by the neighbour stage
     // this step; nothing spawns or despawns in between): index the columns directly.
-    let mut done = false;
     if let Ok(mut it) = q.contiguous_iter_mut()
         && let Some((ids, mut vs, ws)) = it.next()
         && it.next().is_none()
@@ -581,34 +766,20 @@ pub fn apply_contact_kicks(
         && ids.first().map(|i| i.0) == st.ids.first().copied()
         && ids.last().map(|i| i.0) == st.ids.last().copied()
     {
-        let vs = vs.bypass_change_detection();
+        let vs = Velocity::peel_slice_mut(vs.bypass_change_detection());
         let mut ws = ws;
-        let mut ws = ws.as_mut().map(|w| w.bypass_change_detection());
-        if touched.len() * 4 > n && n >= crate::par::PARALLEL_THRESHOLD {
-            // Most particles touch something (dense packing): one parallel pass over all
-            // of them, kicking and clearing; untouched ones have zero sums.
-            kick_all(
-                Velocity::peel_slice_mut(vs),
-                ws.as_deref_mut().map(AngularVelocity::peel_slice_mut),
-                &mut st.force,
-                &mut st.torque,
-                &st.mass,
-                &st.radius,
-                dt,
-            );
-            st.marked.iter_mut().for_each(|m| *m = false);
-            st.touched = touched;
-            st.touched.clear();
-            return;
+        let mut ws = ws
+            .as_mut()
+            .map(|w| AngularVelocity::peel_slice_mut(w.bypass_change_detection()));
+        if st.sparse {
+            for &k in &touched {
+                let k = k as usize;
+                kick(k, &mut vs[k], ws.as_deref_mut().map(|w| &mut w[k]));
+            }
+        } else {
+            kick_all(vs, ws, slots, mass, radius, dt);
         }
-        for &k in &touched {
-            let k = k as usize;
-            let w = ws.as_deref_mut().map(|w| &mut w[k].0);
-            kick(k, &mut vs[k].0, w);
-        }
-        done = true;
-    }
-    if !done {
+    } else if st.sparse {
         let slot: std::collections::HashMap<u32, usize> = touched
             .iter()
             .map(|&k| (st.ids[k as usize], k as usize))
@@ -619,57 +790,63 @@ pub fn apply_contact_kicks(
                 kick(k, &mut v.0, w.as_deref_mut().map(|w| &mut w.0));
             }
         }
-    }
-    for &k in &touched {
-        let k = k as usize;
-        st.force[k] = DVec3::ZERO;
-        st.torque[k] = DVec3::ZERO;
-        st.marked[k] = false;
+    } else {
+        let index: std::collections::HashMap<u32, usize> =
+            st.ids.iter().enumerate().map(|(k, id)| (*id, k)).collect();
+        for (id, mut v, w) in q.iter_mut() {
+            if let Some(&k) = index.get(&id.0) {
+                let mut w = w;
+                kick(k, &mut v.0, w.as_deref_mut().map(|w| &mut w.0));
+            }
+        }
     }
     st.touched = touched;
-    st.touched.clear();
 }
 
-/// The kicks of [`apply_contact_kicks`] for every particle, clearing F and T, in parallel
-/// chunks (each particle's update is independent).
+/// The kicks of [`apply_contact_kicks`] for every particle, in parallel chunks (each
+/// particle's update is independent; each chunk looks only at the slots covering it).
 fn kick_all(
     v: &mut [DVec3],
     w: Option<&mut [DVec3]>,
-    force: &mut [DVec3],
-    torque: &mut [DVec3],
+    slots: &[Slot],
     mass: &[f64],
     radius: &[f64],
     dt: f64,
 ) {
-    const C: usize = 8192;
-    let n = v.len();
+    const C: usize = 4096;
+    let chunk = |base: usize, vc: &mut [DVec3], wc: Option<&mut [DVec3]>| {
+        let end = base + vc.len();
+        let mine: Vec<&Slot> = slots
+            .iter()
+            .filter(|s| s.base < end && s.base + s.force.len() > base)
+            .collect();
+        let mut wc = wc;
+        for (l, v) in vc.iter_mut().enumerate() {
+            let k = base + l;
+            let (mut f, mut t) = (DVec3::ZERO, DVec3::ZERO);
+            for s in &mine {
+                if s.covers(k) {
+                    f += s.force[k - s.base];
+                    t += s.torque[k - s.base];
+                }
+            }
+            *v = linear_kick(*v, f, mass[k], dt);
+            if let Some(wc) = wc.as_deref_mut() {
+                wc[l] = angular_kick(wc[l], t, mass[k], 2.0 * radius[k], dt);
+            }
+        }
+    };
     let pool = ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
+    if v.len() < 2 * C || pool.thread_num() < 2 {
+        chunk(0, v, w);
+        return;
+    }
+    let chunk = &chunk;
     pool.scope(|s| {
         let mut w_chunks = w.map(|w| w.chunks_mut(C));
-        for (k, ((vc, fc), tc)) in v
-            .chunks_mut(C)
-            .zip(force.chunks_mut(C))
-            .zip(torque.chunks_mut(C))
-            .enumerate()
-        {
+        for (k, vc) in v.chunks_mut(C).enumerate() {
             let wc = w_chunks.as_mut().and_then(|it| it.next());
-            let base = k * C;
-            let (mc, rc) = (
-                &mass[base..(base + C).min(n)],
-                &radius[base..(base + C).min(n)],
-            );
-            s.spawn(async move {
-                for i in 0..vc.len() {
-                    vc[i] = linear_kick(vc[i], fc[i], mc[i], dt);
-                    fc[i] = DVec3::ZERO;
-                }
-                if let Some(wc) = wc {
-                    for i in 0..wc.len() {
-                        wc[i] = angular_kick(wc[i], tc[i], mc[i], 2.0 * rc[i], dt);
-                    }
-                }
-                tc.iter_mut().for_each(|t| *t = DVec3::ZERO);
-            });
+            s.spawn(async move { chunk(k * C, vc, wc) });
         }
     });
 }
