@@ -164,20 +164,12 @@ impl Slot {
     }
 
     /// Compute the slot's pairs and sum them; `sparse` records the particles written.
-    fn run(
-        &mut self,
-        pairs: &mut [PairState],
-        b: &Bodies,
-        par: &ContactParams,
-        dt: f64,
-        group: &[u32],
-        groups: usize,
-        sparse: bool,
-    ) {
+    fn run(&mut self, pairs: &mut [PairState], k: &Kernel, groups: usize, sparse: bool) {
         self.clear(groups);
         let base = self.base;
+        let group = k.group;
         for p in pairs {
-            let Some(c) = pair_kernel(p, b, par, dt) else {
+            let Some(c) = pair_kernel(p, &k.bodies, &k.par, k.dt) else {
                 continue;
             };
             let (i, j) = (c.i as usize, c.j as usize);
@@ -527,6 +519,16 @@ fn carry_history(st: &mut ContactState, ids_before: Option<&[u32]>) {
     st.pairs = pairs;
 }
 
+/// Everything the pair kernel reads.
+struct Kernel<'a> {
+    bodies: Bodies<'a>,
+    par: ContactParams,
+    /// Time step, s.
+    dt: f64,
+    /// Group of each particle (collision counts).
+    group: &'a [u32],
+}
+
 /// Per-particle inputs of the pair kernel.
 struct Bodies<'a> {
     pos: &'a [DVec3],
@@ -692,8 +694,14 @@ pub fn particle_contact_forces(
         work.push((slot, mine));
     }
     let pool = ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
+    let kernel = Kernel {
+        bodies,
+        par,
+        dt,
+        group,
+    };
     let run = |(slot, pairs): (&mut Slot, &mut [PairState])| {
-        slot.run(pairs, &bodies, &par, dt, group, groups, sparse);
+        slot.run(pairs, &kernel, groups, sparse);
     };
     if work.len() < 2 || pool.thread_num() < 2 {
         work.into_iter().for_each(run);
