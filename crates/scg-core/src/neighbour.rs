@@ -35,11 +35,17 @@ impl PeriodicBox {
         }
     }
 
-    /// The minimum-image form of the separation `d`.
+    /// The minimum-image form of the separation `d`: `d − image_shift(d)`.
     #[inline]
     pub fn min_image(&self, d: DVec3) -> DVec3 {
+        d - self.image_shift(d)
+    }
+
+    /// The whole-box offset the minimum image removes from the separation `d`, m.
+    #[inline]
+    pub fn image_shift(&self, d: DVec3) -> DVec3 {
         let q = d * self.inv;
-        d - self.lengths * DVec3::new(round_nearest(q.x), round_nearest(q.y), round_nearest(q.z))
+        self.lengths * DVec3::new(round_nearest(q.x), round_nearest(q.y), round_nearest(q.z))
     }
 
     /// `x` wrapped into [0, L).

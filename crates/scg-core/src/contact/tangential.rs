@@ -110,13 +110,59 @@ pub fn hertz_mindlin(
     damping: f64,
     mindlin_c: f64,
 ) -> (f64, f64, f64) {
-    let sr = r_eff.sqrt();
+    let pc = HertzPair::new(e_eff, r_eff, m_eff);
+    hertz_mindlin_pair(delta, vn, &pc, e_eff, g_eff, gamma, damping, mindlin_c)
+}
+
+/// The constants of one Hertz contact that depend only on the two bodies: computed once
+/// per listed pair, not per step.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HertzPair {
+    /// Effective radius R*, m.
+    pub r_eff: f64,
+    /// Effective mass m*, kg.
+    pub m_eff: f64,
+    /// √R*, √m.
+    pub sqrt_r: f64,
+    /// √(m*·K) with K = (4/3)·E*·√R*, kg/(s·m^(1/4)).
+    pub smk: f64,
+}
+
+impl HertzPair {
+    /// Constants for effective modulus `e_eff` (Pa), radius `r_eff` (m), mass `m_eff` (kg).
+    #[inline]
+    pub fn new(e_eff: f64, r_eff: f64, m_eff: f64) -> Self {
+        let sqrt_r = r_eff.sqrt();
+        let k = 4.0 / 3.0 * e_eff * sqrt_r;
+        HertzPair {
+            r_eff,
+            m_eff,
+            sqrt_r,
+            smk: (m_eff * k).sqrt(),
+        }
+    }
+}
+
+/// [`hertz_mindlin`] from a pair's precomputed constants.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn hertz_mindlin_pair(
+    delta: f64,
+    vn: f64,
+    pc: &HertzPair,
+    e_eff: f64,
+    g_eff: f64,
+    gamma: f64,
+    damping: f64,
+    mindlin_c: f64,
+) -> (f64, f64, f64) {
+    let sr = pc.sqrt_r;
     let k = 4.0 / 3.0 * e_eff * sr;
+    let smk = pc.smk;
     let sd = delta.sqrt(); // the uncapped overlap: Mindlin
     let q = sd.sqrt();
-    let smk = (m_eff * k).sqrt();
     // The normal force uses the overlap capped at OVERLAP_CAP·R* (hard cases only).
-    let cap = super::normal::OVERLAP_CAP * r_eff;
+    let cap = super::normal::OVERLAP_CAP * pc.r_eff;
     let (dc, sdc, qc) = if delta > cap {
         let s = cap.sqrt();
         (cap, s, s.sqrt())

@@ -22,13 +22,13 @@ use glam::DVec3;
 use crate::components::*;
 use crate::contact::normal::effective;
 use crate::contact::tangential::{
-    TangentialStiffness, hertz_mindlin, rolling_torque, tangential_force,
+    HertzPair, TangentialStiffness, hertz_mindlin_pair, rolling_torque, tangential_force,
 };
 use crate::contact::{Material, NormalLaw, TangentialLaw};
 use crate::effects::motion::{Motion, StepDisplacement};
 use crate::effects::recording::Tally;
 use crate::integrate::{angular_kick, linear_kick};
-use crate::neighbour::{NeighbourList, PeriodicBox, separation};
+use crate::neighbour::{NeighbourList, PeriodicBox};
 use crate::step::{StepBuilder, StepSet};
 
 /// Particle–particle contact settings (part of [`crate::SimConfig`]).
@@ -75,17 +75,23 @@ pub struct ContactParams {
     pub mindlin_c: f64,
 }
 
-/// One candidate pair with its contact history.
+/// One candidate pair with its contact history and the constants of its contact law.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PairState {
     /// Particle indices (into the gathered arrays), i < j.
     pub i: u32,
     /// Second index.
     pub j: u32,
-    /// Tangential history displacement, m.
-    pub history: DVec3,
     /// In contact after this step's force evaluation.
     pub touching: bool,
+    /// Whole periodic box lengths taken off x_j − x_i for the minimum image (zero in an
+    /// open domain), m. Fixed between list builds: positions are not wrapped and move less
+    /// than half the skin.
+    pub shift: DVec3,
+    /// Tangential history displacement, m (zero while not touching).
+    pub history: DVec3,
+    /// R*, m*, √R* and √(m*·K) of the pair.
+    pub hertz: HertzPair,
 }
 
 /// A pair in contact this step and what it does to its two particles.
@@ -380,6 +386,7 @@ type GatherQuery<'w, 's> = Query<
 /// pair's history is carried over by (id_i, id_j).
 pub fn maintain_neighbour_list(
     mut state: ResMut<ContactState>,
+    params: Res<ContactParams>,
     disp: Res<StepDisplacement>,
     q: GatherQuery,
 ) {
@@ -439,7 +446,7 @@ pub fn maintain_neighbour_list(
             st.pos.extend_from_slice(c);
         }
         st.list.build(&st.pos, &st.radius);
-        carry_history(st, None);
+        carry_history(st, &params, None);
         st.slots = layout_slots(&st.list.pairs, st.ids.len());
         return;
     }
@@ -456,7 +463,7 @@ pub fn maintain_neighbour_list(
         st.mass.push(m.0);
     }
     st.list.build(&st.pos, &st.radius);
-    carry_history(st, Some(&old_ids));
+    carry_history(st, &params, Some(&old_ids));
     st.slots = layout_slots(&st.list.pairs, st.ids.len());
 }
 
@@ -466,16 +473,28 @@ pub fn maintain_neighbour_list(
 /// Only the pairs in contact carry anything, and they are few: each is looked up in the
 /// new (sorted) list by binary search, after mapping its particles' ids to their new
 /// indices when the set changed.
-fn carry_history(st: &mut ContactState, ids_before: Option<&[u32]>) {
+fn carry_history(st: &mut ContactState, par: &ContactParams, ids_before: Option<&[u32]>) {
     let old = std::mem::take(&mut st.pairs);
+    let (pos, radius, mass) = (&st.pos, &st.radius, &st.mass);
     let mut pairs: Vec<PairState> = st
         .list
         .pairs
         .iter()
-        .map(|&[i, j]| PairState {
-            i,
-            j,
-            ..Default::default()
+        .map(|&[i, j]| {
+            let (a, b) = (i as usize, j as usize);
+            PairState {
+                i,
+                j,
+                shift: par
+                    .periodic
+                    .map_or(DVec3::ZERO, |pb| pb.image_shift(pos[b] - pos[a])),
+                hertz: HertzPair::new(
+                    par.e_eff,
+                    effective(radius[a], radius[b]),
+                    effective(mass[a], mass[b]),
+                ),
+                ..Default::default()
+            }
         })
         .collect();
     let touching: Vec<&PairState> = old.iter().filter(|p| p.touching).collect();
@@ -535,49 +554,50 @@ struct Bodies<'a> {
     vel: &'a [DVec3],
     omega: &'a [DVec3],
     radius: &'a [f64],
-    mass: &'a [f64],
 }
 
 /// The force, torques and new history of one pair (pure); `None` when it does not touch.
 #[inline]
 fn pair_kernel(p: &mut PairState, b: &Bodies, par: &ContactParams, dt: f64) -> Option<PairContact> {
     let (i, j) = (p.i as usize, p.j as usize);
-    let d = separation(b.pos[i], b.pos[j], par.periodic.as_ref());
+    let d = b.pos[j] - b.pos[i] - p.shift;
     let (ri, rj) = (b.radius[i], b.radius[j]);
     let dist2 = d.length_squared();
     let reach = ri + rj;
     let was = p.touching;
     if dist2 >= reach * reach || dist2 == 0.0 {
-        p.touching = false;
-        p.history = DVec3::ZERO;
+        if was {
+            p.touching = false;
+            p.history = DVec3::ZERO;
+        }
         return None;
     }
     let dist = dist2.sqrt();
-    let n = d / dist; // from i to j
+    let n = d * (1.0 / dist); // from i to j
     let delta = reach - dist;
-    let r_eff = effective(ri, rj);
-    let m_eff = effective(b.mass[i], b.mass[j]);
+    let pc = &p.hertz;
     // Velocity of i's contact point relative to j's.
     let v_rel = b.vel[i] - b.vel[j] + (ri * b.omega[i] + rj * b.omega[j]).cross(n);
     let vn_approach = v_rel.dot(n);
     let tl = &par.tangential;
     let (fn_, kt, eta) = match (par.law, tl.stiffness) {
-        // The common case in one pass (shared square roots).
-        (NormalLaw::Hertz { gamma }, TangentialStiffness::Mindlin) => hertz_mindlin(
+        // The common case in one pass (shared square roots, per-pair constants).
+        (NormalLaw::Hertz { gamma }, TangentialStiffness::Mindlin) => hertz_mindlin_pair(
             delta,
             -vn_approach,
+            pc,
             par.e_eff,
             par.g_eff,
-            r_eff,
-            m_eff,
             gamma,
             tl.damping,
             par.mindlin_c,
         ),
         _ => {
-            let (fn_, kn) = par.law.force(delta, -vn_approach, par.e_eff, r_eff, m_eff);
-            let kt = tl.stiffness(par.g_eff, r_eff, delta, kn);
-            (fn_, kt, tl.damping * (m_eff * kt).sqrt())
+            let (fn_, kn) = par
+                .law
+                .force(delta, -vn_approach, par.e_eff, pc.r_eff, pc.m_eff);
+            let kt = tl.stiffness(par.g_eff, pc.r_eff, delta, kn);
+            (fn_, kt, tl.damping * (pc.m_eff * kt).sqrt())
         }
     };
     let mut c = PairContact {
@@ -592,12 +612,13 @@ fn pair_kernel(p: &mut PairState, b: &Bodies, par: &ContactParams, dt: f64) -> O
         let u = tangential_force(p.history, n, vt, kt, eta, tl.friction * fn_.abs(), dt);
         p.history = u.history;
         c.force += u.force;
-        // Torque about each centre from the force at its contact point.
-        c.torque_i = (ri * n).cross(u.force);
-        c.torque_j = (rj * n).cross(u.force);
+        // Torque about each centre from the force at its contact point (r·n × F_t).
+        let nf = n.cross(u.force);
+        c.torque_i = ri * nf;
+        c.torque_j = rj * nf;
     }
     if tl.rolling > 0.0 {
-        let t = rolling_torque(tl.rolling, fn_.abs(), r_eff, b.omega[i] - b.omega[j]);
+        let t = rolling_torque(tl.rolling, fn_.abs(), pc.r_eff, b.omega[i] - b.omega[j]);
         c.torque_i += t;
         c.torque_j -= t;
     }
@@ -672,7 +693,6 @@ pub fn particle_contact_forces(
         vel,
         omega: omega_col.unwrap_or(&st.omega),
         radius: &st.radius,
-        mass: &st.mass,
     };
     // Few contacts last step: record the particles written, so the kick and the next
     // clear visit only those. Many: sum and clear every particle (no bookkeeping).
