@@ -81,14 +81,26 @@ pub fn exponential_drift(
 /// Velocity after the force `f` (N) acted for `dt` (s) on mass `m` (kg): v + F·dt/m.
 #[inline(always)]
 pub fn linear_kick(v: DVec3, f: DVec3, m: f64, dt: f64) -> DVec3 {
-    v + f * (dt / m)
+    v + f * linear_kick_factor(m, dt)
+}
+
+/// dt/m of [`linear_kick`], s/kg (precomputed, it gives the same kick to the last bit).
+#[inline(always)]
+pub fn linear_kick_factor(m: f64, dt: f64) -> f64 {
+    dt / m
 }
 
 /// Angular velocity after the torque `t` (N·m) acted for `dt` (s) on a solid sphere of
 /// mass `m` (kg) and diameter `d` (m): ω + T·dt/I with I = m·d²/10 (paper eq. 3).
 #[inline(always)]
 pub fn angular_kick(w: DVec3, t: DVec3, m: f64, d: f64, dt: f64) -> DVec3 {
-    w + t * (dt / (0.1 * m * d * d))
+    w + t * angular_kick_factor(m, d, dt)
+}
+
+/// dt/I of [`angular_kick`], s/(kg·m²) (precomputed, the same kick to the last bit).
+#[inline(always)]
+pub fn angular_kick_factor(m: f64, d: f64, dt: f64) -> f64 {
+    dt / (0.1 * m * d * d)
 }
 
 /// One semi-implicit Euler step of dv/dt = (u − v)/τ + a: v' = v + dt·((u − v)/τ + a),

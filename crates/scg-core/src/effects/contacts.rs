@@ -27,7 +27,7 @@ use crate::contact::tangential::{
 use crate::contact::{Material, NormalLaw, TangentialLaw};
 use crate::effects::motion::{Motion, StepDisplacement};
 use crate::effects::recording::Tally;
-use crate::integrate::{angular_kick, linear_kick};
+use crate::integrate::{angular_kick_factor, linear_kick_factor};
 use crate::neighbour::{NeighbourList, PeriodicBox};
 use crate::step::{StepBuilder, StepSet};
 
@@ -278,6 +278,10 @@ pub struct ContactState {
     pub radius: Vec<f64>,
     /// Masses, kg.
     pub mass: Vec<f64>,
+    /// dt/m per particle ([`linear_kick_factor`]), s/kg.
+    kick_v: Vec<f64>,
+    /// dt/I per particle ([`angular_kick_factor`]), s/(kg·m²).
+    kick_w: Vec<f64>,
     /// Verlet list.
     pub list: NeighbourList,
     /// Pair states aligned with `list.pairs`.
@@ -387,6 +391,7 @@ type GatherQuery<'w, 's> = Query<
 pub fn maintain_neighbour_list(
     mut state: ResMut<ContactState>,
     params: Res<ContactParams>,
+    motion: Res<Motion>,
     disp: Res<StepDisplacement>,
     q: GatherQuery,
 ) {
@@ -462,6 +467,11 @@ pub fn maintain_neighbour_list(
         st.radius.push(0.5 * d.0);
         st.mass.push(m.0);
     }
+    let dt = motion.dt;
+    st.kick_v = st.mass.iter().map(|&m| linear_kick_factor(m, dt)).collect();
+    st.kick_w = (st.mass.iter().zip(&st.radius))
+        .map(|(&m, &r)| angular_kick_factor(m, 2.0 * r, dt))
+        .collect();
     st.list.build(&st.pos, &st.radius);
     carry_history(st, &params, Some(&old_ids));
     st.slots = layout_slots(&st.list.pairs, st.ids.len());
@@ -750,14 +760,12 @@ pub fn particle_contact_forces(
 /// before any kick.
 pub fn apply_contact_kicks(
     mut state: ResMut<ContactState>,
-    motion: Res<Motion>,
     mut q: Query<(&ParticleId, &mut Velocity, Option<&mut AngularVelocity>)>,
 ) {
     let st = &mut *state;
     if st.active == 0 {
         return;
     }
-    let dt = motion.dt;
     let n = st.ids.len();
     // The particles to visit on a sparse step, in slot order, each once.
     let mut touched = std::mem::take(&mut st.touched);
@@ -776,13 +784,12 @@ pub fn apply_contact_kicks(
         }
     }
     let slots = &st.slots;
-    let (mass, radius) = (&st.mass, &st.radius);
+    let (kick_v, kick_w) = (&st.kick_v, &st.kick_w);
     let kick = |k: usize, v: &mut DVec3, w: Option<&mut DVec3>| {
         let (f, t) = slot_sum(slots, k);
-        let m = mass[k];
-        *v = linear_kick(*v, f, m, dt);
+        *v += f * kick_v[k];
         if let Some(w) = w {
-            *w = angular_kick(*w, t, m, 2.0 * radius[k], dt);
+            *w += t * kick_w[k];
         }
     };
     // One table holding exactly the gathered particles (checked by the neighbour stage
@@ -805,7 +812,7 @@ pub fn apply_contact_kicks(
                 kick(k, &mut vs[k], ws.as_deref_mut().map(|w| &mut w[k]));
             }
         } else {
-            kick_all(vs, ws, slots, mass, radius, dt);
+            kick_all(vs, ws, slots, kick_v, kick_w);
         }
     } else if st.sparse {
         let slot: std::collections::HashMap<u32, usize> = touched
@@ -832,35 +839,46 @@ pub fn apply_contact_kicks(
 }
 
 /// The kicks of [`apply_contact_kicks`] for every particle, in parallel chunks (each
-/// particle's update is independent; each chunk looks only at the slots covering it).
+/// particle's update is independent). A chunk sums the slots covering it, in slot order,
+/// into a buffer (contiguous runs), then kicks.
 fn kick_all(
     v: &mut [DVec3],
     w: Option<&mut [DVec3]>,
     slots: &[Slot],
-    mass: &[f64],
-    radius: &[f64],
-    dt: f64,
+    kick_v: &[f64],
+    kick_w: &[f64],
 ) {
     const C: usize = 4096;
     let chunk = |base: usize, vc: &mut [DVec3], wc: Option<&mut [DVec3]>| {
-        let end = base + vc.len();
-        let mine: Vec<&Slot> = slots
-            .iter()
-            .filter(|s| s.base < end && s.base + s.force.len() > base)
-            .collect();
-        let mut wc = wc;
-        for (l, v) in vc.iter_mut().enumerate() {
-            let k = base + l;
-            let (mut f, mut t) = (DVec3::ZERO, DVec3::ZERO);
-            for s in &mine {
-                if s.covers(k) {
-                    f += s.force[k - s.base];
-                    t += s.torque[k - s.base];
-                }
+        let len = vc.len();
+        let (mut f, mut t) = (vec![DVec3::ZERO; len], vec![DVec3::ZERO; len]);
+        for s in slots {
+            let lo = base.max(s.base);
+            let hi = (base + len).min(s.base + s.force.len());
+            if lo >= hi {
+                continue;
             }
-            *v = linear_kick(*v, f, mass[k], dt);
-            if let Some(wc) = wc.as_deref_mut() {
-                wc[l] = angular_kick(wc[l], t, mass[k], 2.0 * radius[k], dt);
+            let (sf, st) = (
+                &s.force[lo - s.base..hi - s.base],
+                &s.torque[lo - s.base..hi - s.base],
+            );
+            for ((a, b), (c, d)) in f[lo - base..hi - base]
+                .iter_mut()
+                .zip(sf)
+                .zip(t[lo - base..hi - base].iter_mut().zip(st))
+            {
+                *a += *b;
+                *c += *d;
+            }
+        }
+        let kv = &kick_v[base..base + len];
+        for ((v, f), k) in vc.iter_mut().zip(&f).zip(kv) {
+            *v += *f * *k;
+        }
+        if let Some(wc) = wc {
+            let kw = &kick_w[base..base + len];
+            for ((w, t), k) in wc.iter_mut().zip(&t).zip(kw) {
+                *w += *t * *k;
             }
         }
     };
