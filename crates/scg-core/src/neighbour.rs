@@ -461,8 +461,10 @@ fn in_blocks(n: usize, pairs_of: impl Fn(usize, usize) -> Vec<[u32; 2]> + Sync) 
     }
     let pool = bevy_tasks::ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
     let starts: Vec<usize> = (0..n).step_by(BLOCK).collect();
-    let blocks = bevy_tasks::ParallelSlice::par_chunk_map(&&starts[..], pool, 1, |_, s| {
-        pairs_of(s[0], (s[0] + BLOCK).min(n))
+    let blocks = crate::par::section(|| {
+        bevy_tasks::ParallelSlice::par_chunk_map(&&starts[..], pool, 1, |_, s| {
+            pairs_of(s[0], (s[0] + BLOCK).min(n))
+        })
     });
     let mut out = Vec::with_capacity(blocks.iter().map(Vec::len).sum());
     for b in blocks {

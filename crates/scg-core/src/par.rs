@@ -1,9 +1,58 @@
 //! Parallel iteration that pays for threads only when there is enough work.
+//!
+//! Every parallel section runs through [`section`]: after it, one worker per core beyond
+//! the calling thread spins for a short *block time* (as OpenMP runtimes do, e.g.
+//! `KMP_BLOCKTIME`) instead of going to sleep at once, until the next section starts.
+//! A step has several short sections; a core that sleeps between them is halted, and on a
+//! shared virtual machine the host then lends it to someone else and hands it back late
+//! (steal time), which stalls the next section. `SCG_BLOCKTIME_US` sets the block time in
+//! µs (default 1000; 0 = sleep at once).
 
 use bevy_ecs::query::{
     ArchetypeFilter, ArchetypeQueryData, ContiguousQueryData, IterQueryData, QueryData, QueryItem,
 };
 use bevy_ecs::system::Query;
+
+static SECTION: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+static BLOCK_TIME_US: std::sync::OnceLock<u64> = std::sync::OnceLock::new();
+
+fn block_time() -> std::time::Duration {
+    let us = *BLOCK_TIME_US.get_or_init(|| {
+        std::env::var("SCG_BLOCKTIME_US")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(1000)
+    });
+    std::time::Duration::from_micros(us)
+}
+
+/// Run one parallel section `f`, then keep the cores warm for the next one (see the
+/// module documentation). Results never depend on it: the spinning tasks touch no data.
+pub fn section<R>(f: impl FnOnce() -> R) -> R {
+    use std::sync::atomic::Ordering;
+    let me = SECTION.fetch_add(1, Ordering::AcqRel) + 1;
+    let out = f();
+    let wait = block_time();
+    let pool = bevy_tasks::ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let spinners = pool.thread_num().min(cores);
+    if !wait.is_zero() && spinners > 1 {
+        for _ in 0..spinners {
+            pool.spawn(async move {
+                let start = std::time::Instant::now();
+                while SECTION.load(Ordering::Acquire) == me && start.elapsed() < wait {
+                    for _ in 0..64 {
+                        std::hint::spin_loop();
+                    }
+                    // Let a thread with work (the caller's serial part) have the core.
+                    std::thread::yield_now();
+                }
+            })
+            .detach();
+        }
+    }
+    out
+}
 
 /// Below this many entities a system iterates on one thread: starting tasks costs more
 /// than the work (a few µs per system per step, which dominates single-particle scenes).
@@ -23,7 +72,7 @@ pub fn for_each_mut<'a, 's, D, F>(
     if q.iter().len() < PARALLEL_THRESHOLD {
         q.iter_mut().for_each(f);
     } else {
-        q.par_iter_mut().for_each(f);
+        section(|| q.par_iter_mut().for_each(f));
     }
 }
 
@@ -43,14 +92,16 @@ where
     if q.iter().len() < PARALLEL_THRESHOLD {
         q.contiguous_iter_mut().map(|it| it.for_each(f)).is_ok()
     } else {
-        q.contiguous_par_iter_mut()
-            .map(|it| {
-                it.batching_strategy(
-                    bevy_ecs::batching::BatchingStrategy::new().batches_per_thread(4),
-                )
-                .for_each(f)
-            })
-            .is_ok()
+        section(|| {
+            q.contiguous_par_iter_mut()
+                .map(|it| {
+                    it.batching_strategy(
+                        bevy_ecs::batching::BatchingStrategy::new().batches_per_thread(4),
+                    )
+                    .for_each(f)
+                })
+                .is_ok()
+        })
     }
 }
 
@@ -75,8 +126,10 @@ pub fn par_max_zip<A: Sync, B: Sync>(
         return max(&a[..n], &b[..n]);
     }
     let pool = bevy_tasks::ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
-    bevy_tasks::ParallelSlice::par_chunk_map(&&a[..n], pool, SLICE_CHUNK, |i, chunk| {
-        max(chunk, &b[i * SLICE_CHUNK..])
+    section(|| {
+        bevy_tasks::ParallelSlice::par_chunk_map(&&a[..n], pool, SLICE_CHUNK, |i, chunk| {
+            max(chunk, &b[i * SLICE_CHUNK..])
+        })
     })
     .into_iter()
     .fold(0.0_f64, f64::max)
@@ -105,16 +158,18 @@ pub fn par_chunks_with<A: Send, B: Send>(
     }
     let per_task = out.len().div_ceil(tasks);
     let f = &f;
-    pool.scope(|s| {
-        for (cs, os) in items
-            .chunks_mut(chunk * per_task)
-            .zip(out.chunks_mut(per_task))
-        {
-            s.spawn(async move {
-                for (c, o) in cs.chunks_mut(chunk).zip(os.iter_mut()) {
-                    f(c, o);
-                }
-            });
-        }
+    section(|| {
+        pool.scope(|s| {
+            for (cs, os) in items
+                .chunks_mut(chunk * per_task)
+                .zip(out.chunks_mut(per_task))
+            {
+                s.spawn(async move {
+                    for (c, o) in cs.chunks_mut(chunk).zip(os.iter_mut()) {
+                        f(c, o);
+                    }
+                });
+            }
+        })
     });
 }

@@ -757,10 +757,12 @@ pub fn particle_contact_forces(
     if work.len() < 2 || pool.thread_num() < 2 {
         work.into_iter().for_each(run);
     } else {
-        pool.scope(|s| {
-            for w in work {
-                s.spawn(async move { run(w) });
-            }
+        crate::par::section(|| {
+            pool.scope(|s| {
+                for w in work {
+                    s.spawn(async move { run(w) });
+                }
+            })
         });
     }
     let mut active = 0;
@@ -909,12 +911,14 @@ fn kick_all(
         return;
     }
     let chunk = &chunk;
-    pool.scope(|s| {
-        let mut w_chunks = w.map(|w| w.chunks_mut(C));
-        for (k, vc) in v.chunks_mut(C).enumerate() {
-            let wc = w_chunks.as_mut().and_then(|it| it.next());
-            s.spawn(async move { chunk(k * C, vc, wc) });
-        }
+    crate::par::section(|| {
+        pool.scope(|s| {
+            let mut w_chunks = w.map(|w| w.chunks_mut(C));
+            for (k, vc) in v.chunks_mut(C).enumerate() {
+                let wc = w_chunks.as_mut().and_then(|it| it.next());
+                s.spawn(async move { chunk(k * C, vc, wc) });
+            }
+        })
     });
 }
 
