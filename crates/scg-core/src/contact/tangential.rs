@@ -219,8 +219,10 @@ pub fn tangential_force(
 ) -> TangentialUpdate {
     let xi = rotate_history(xi, n) + vt * dt;
     let trial = -kt * xi - eta * vt;
-    let mag = trial.length();
-    if mag > limit {
+    // Compared squared: a sticking contact (the usual case) needs no square root.
+    let mag2 = trial.length_squared();
+    if mag2 > limit * limit {
+        let mag = mag2.sqrt();
         let force = if mag > 0.0 {
             trial * (limit / mag)
         } else {
