@@ -76,6 +76,7 @@ fn radial(
 impl WallShape {
     /// Signed distance from the wall surface to `x`, positive on the domain side, m, with
     /// the unit normal pointing into the domain; `None` outside a finite cylinder's extent.
+    #[inline]
     pub fn distance(&self, x: DVec3) -> Option<(f64, DVec3)> {
         match *self {
             WallShape::Plane { point, normal } => Some(((x - point).dot(normal), normal)),
@@ -91,6 +92,42 @@ impl WallShape {
                 radius,
                 extent,
             } => radial(center, axis, extent, x).map(|(rho, out)| (rho - radius, out)),
+        }
+    }
+
+    /// True when a sphere of radius `radius` (m) centred at `x` is certainly clear of the
+    /// wall: the cheap test of the particles away from every wall (no square root or
+    /// division). Exactly `touch(..).is_none()` for a plane; for a cylinder it answers
+    /// `false` (not sure) within a relative 1e-9 of the touching distance, where the caller
+    /// falls back to [`WallShape::touch`].
+    #[inline]
+    pub fn surely_clear(&self, x: DVec3, radius: f64) -> bool {
+        const MARGIN: f64 = 1e-9;
+        let radial2 = |center: DVec3, axis: DVec3, extent: Option<(f64, f64)>| {
+            let rel = x - center;
+            let h = rel.dot(axis);
+            in_extent(extent, h).then(|| (rel - h * axis).length_squared())
+        };
+        match *self {
+            WallShape::Plane { point, normal } => (x - point).dot(normal) >= radius,
+            WallShape::CylinderInside {
+                center,
+                axis,
+                radius: rc,
+                extent,
+            } => radial2(center, axis, extent).is_none_or(|rho2| {
+                let lim = rc - radius;
+                lim > 0.0 && rho2 < lim * lim * (1.0 - MARGIN)
+            }),
+            WallShape::CylinderOutside {
+                center,
+                axis,
+                radius: rc,
+                extent,
+            } => radial2(center, axis, extent).is_none_or(|rho2| {
+                let lim = rc + radius;
+                rho2 > lim * lim * (1.0 + MARGIN)
+            }),
         }
     }
 
@@ -198,5 +235,38 @@ mod tests {
         };
         assert!(w.touch(DVec3::new(0.55, 0.0, 0.5), 0.1).is_some());
         assert!(w.touch(DVec3::new(0.55, 0.0, 1.5), 0.1).is_none());
+    }
+
+    proptest::proptest! {
+        /// The cheap clearance test never calls a touching sphere clear, and for a plane
+        /// it is exactly the negation of `touch`; near the surface it may be unsure.
+        #[test]
+        fn surely_clear_never_misses_a_touch(
+            x in -1.2..1.2_f64, y in -1.2..1.2_f64, z in -0.5..1.5_f64,
+            r in 1e-4..0.3_f64, wall in 0..3_usize,
+        ) {
+            let p = DVec3::new(x, y, z);
+            let axis = DVec3::new(0.3, -0.2, 1.0).normalize();
+            let shape = match wall {
+                0 => WallShape::Plane { point: DVec3::new(0.1, 0.0, 0.2), normal: axis },
+                1 => WallShape::CylinderInside {
+                    center: DVec3::ZERO, axis, radius: 1.0, extent: Some((0.0, 1.0)),
+                },
+                _ => WallShape::CylinderOutside {
+                    center: DVec3::ZERO, axis, radius: 0.5, extent: None,
+                },
+            };
+            if shape.surely_clear(p, r) {
+                proptest::prop_assert!(shape.touch(p, r).is_none());
+            }
+            if wall == 0 {
+                proptest::prop_assert_eq!(shape.surely_clear(p, r), shape.touch(p, r).is_none());
+            } else if let Some((d, _)) = shape.distance(p) {
+                // Unsure only within the margin of the touching distance.
+                if !shape.surely_clear(p, r) && shape.touch(p, r).is_none() {
+                    proptest::prop_assert!((d - r).abs() <= 1e-8 * (1.0 + d.abs()));
+                }
+            }
+        }
     }
 }

@@ -870,9 +870,13 @@ fn kick_all(
     kick_w: &[f64],
 ) {
     const C: usize = 4096;
-    let chunk = |base: usize, vc: &mut [DVec3], wc: Option<&mut [DVec3]>| {
+    // Sums are built in blocks small enough to stay in the L1 cache.
+    const B: usize = 256;
+    let block = |base: usize, vc: &mut [DVec3], wc: Option<&mut [DVec3]>| {
         let len = vc.len();
-        let (mut f, mut t) = (vec![DVec3::ZERO; len], vec![DVec3::ZERO; len]);
+        let mut f = [DVec3::ZERO; B];
+        let mut t = [DVec3::ZERO; B];
+        let (f, t) = (&mut f[..len], &mut t[..len]);
         for s in slots {
             let lo = base.max(s.base);
             let hi = (base + len).min(s.base + s.sums.len());
@@ -890,14 +894,20 @@ fn kick_all(
             }
         }
         let kv = &kick_v[base..base + len];
-        for ((v, f), k) in vc.iter_mut().zip(&f).zip(kv) {
+        for ((v, f), k) in vc.iter_mut().zip(&*f).zip(kv) {
             *v += *f * *k;
         }
         if let Some(wc) = wc {
             let kw = &kick_w[base..base + len];
-            for ((w, t), k) in wc.iter_mut().zip(&t).zip(kw) {
+            for ((w, t), k) in wc.iter_mut().zip(&*t).zip(kw) {
                 *w += *t * *k;
             }
+        }
+    };
+    let chunk = |base: usize, vc: &mut [DVec3], wc: Option<&mut [DVec3]>| {
+        let mut w_blocks = wc.map(|w| w.chunks_mut(B));
+        for (b, vb) in vc.chunks_mut(B).enumerate() {
+            block(base + b * B, vb, w_blocks.as_mut().and_then(|it| it.next()));
         }
     };
     let pool = ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);

@@ -174,8 +174,9 @@ pub fn wall_contact_forces(
         bevy_ecs::change_detection::ContiguousMut<'a, WallHistory>,
     );
     // The walls are the only writer of Force and Torque: they are set, not accumulated
-    // (no clearing pass), and a particle away from every wall with zero force, torque and
-    // history is not written at all.
+    // (no clearing pass). A particle whose history is empty touched no wall last step (a
+    // touch always leaves an entry), so its force and torque are zero: when it is clear of
+    // every wall now it is not written at all.
     let chunk = move |(xs, vs, ws, ds, ms, mut fs, mut ts, mut hs): Item| {
         let (fs, ts, hs) = (
             fs.bypass_change_detection(),
@@ -184,13 +185,7 @@ pub fn wall_contact_forces(
         );
         for i in 0..xs.len() {
             let r = 0.5 * ds[i].0;
-            let idle = hs[i].0.is_empty() && fs[i].0 == DVec3::ZERO && ts[i].0 == DVec3::ZERO;
-            if idle
-                && walls
-                    .walls
-                    .iter()
-                    .all(|w| w.shape.touch(xs[i].0, r).is_none())
-            {
+            if hs[i].0.is_empty() && walls.walls.iter().all(|w| w.shape.surely_clear(xs[i].0, r)) {
                 continue;
             }
             let (f, t) = one(xs[i].0, vs[i].0, ws[i].0, ds[i].0, ms[i].0, &mut hs[i].0);
