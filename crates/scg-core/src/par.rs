@@ -54,9 +54,26 @@ pub fn section<R>(f: impl FnOnce() -> R) -> R {
     out
 }
 
-/// Below this many entities a system iterates on one thread: starting tasks costs more
-/// than the work (a few µs per system per step, which dominates single-particle scenes).
-pub const PARALLEL_THRESHOLD: usize = 2048;
+/// Default of [`parallel_min`]. A parallel section costs some 10 µs on this 2-core VM
+/// (waking and joining the workers); the per-particle passes (drag, integration, walls)
+/// take a few ns per particle, so below about 2·10^4 particles one thread is faster: the
+/// dilute contact benchmark at 10^4 particles ran at 12–14 ns per particle-step on two
+/// threads with a threshold of 2048 and at 7–10 ns with this one.
+pub const PARALLEL_THRESHOLD: usize = 16384;
+
+static PARALLEL_MIN: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+
+/// Below this many entities a per-entity system iterates on one thread. Default
+/// [`PARALLEL_THRESHOLD`]; `SCG_PARALLEL_MIN` sets it (tests set it low so that small
+/// scenes go through every parallel path). Results never depend on it.
+pub fn parallel_min() -> usize {
+    *PARALLEL_MIN.get_or_init(|| {
+        std::env::var("SCG_PARALLEL_MIN")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(PARALLEL_THRESHOLD)
+    })
+}
 
 /// `q.par_iter_mut().for_each(f)` for large queries, a plain loop for small ones.
 /// Each entity is visited once either way; `f` must not depend on the visiting order.
@@ -69,7 +86,7 @@ pub fn for_each_mut<'a, 's, D, F>(
     D::ReadOnly: ArchetypeQueryData,
     F: ArchetypeFilter,
 {
-    if q.iter().len() < PARALLEL_THRESHOLD {
+    if q.iter().len() < parallel_min() {
         q.iter_mut().for_each(f);
     } else {
         section(|| q.par_iter_mut().for_each(f));
@@ -89,7 +106,7 @@ where
     D::ReadOnly: ArchetypeQueryData,
     F: ArchetypeFilter,
 {
-    if q.iter().len() < PARALLEL_THRESHOLD {
+    if q.iter().len() < parallel_min() {
         q.contiguous_iter_mut().map(|it| it.for_each(f)).is_ok()
     } else {
         section(|| {

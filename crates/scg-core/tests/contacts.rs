@@ -658,7 +658,7 @@ fn one_and_two_threads_give_identical_results() {
     // The compute pool is process-wide and set once, so each thread count runs in a child
     // process of this test binary (SCG_THREADS is read by Simulation::new).
     let exe = std::env::current_exe().unwrap();
-    let digests = |threads: &str| {
+    let digests = |threads: &str, parallel_min: &str| {
         let out = std::process::Command::new(&exe)
             .args([
                 "child_state_digest",
@@ -668,6 +668,7 @@ fn one_and_two_threads_give_identical_results() {
                 "--test-threads=1",
             ])
             .env("SCG_THREADS", threads)
+            .env("SCG_PARALLEL_MIN", parallel_min)
             .env("SCG_CONTACTS_CHILD", "1")
             .output()
             .unwrap();
@@ -679,9 +680,14 @@ fn one_and_two_threads_give_identical_results() {
         assert_eq!(found.len(), 2, "digests from child: {s}");
         found
     };
-    let (a, b) = (digests("1"), digests("2"));
+    // Two threads twice: with the default threshold, and with every per-particle pass
+    // split over the threads (SCG_PARALLEL_MIN=1: the test scenes are small).
+    let a = digests("1", "16384");
+    let b = digests("2", "16384");
+    let c = digests("2", "1");
     eprintln!("{a:?}");
     assert_eq!(a, b);
+    assert_eq!(a, c);
 }
 
 #[test]
