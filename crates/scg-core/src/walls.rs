@@ -50,6 +50,20 @@ fn in_extent(extent: Option<(f64, f64)>, h: f64) -> bool {
     extent.is_none_or(|(a, b)| h >= a && h <= b)
 }
 
+/// The offset of `x` from a cylinder's axis, perpendicular to it; `None` outside the
+/// axial extent.
+#[inline]
+fn radial_offset(
+    center: DVec3,
+    axis: DVec3,
+    extent: Option<(f64, f64)>,
+    x: DVec3,
+) -> Option<DVec3> {
+    let rel = x - center;
+    let h = rel.dot(axis);
+    in_extent(extent, h).then(|| rel - h * axis)
+}
+
 /// Distance of `x` from a cylinder's axis and the unit outward radial direction; `None`
 /// outside the axial extent. On the axis any direction perpendicular to it will do.
 fn radial(
@@ -58,12 +72,7 @@ fn radial(
     extent: Option<(f64, f64)>,
     x: DVec3,
 ) -> Option<(f64, DVec3)> {
-    let rel = x - center;
-    let h = rel.dot(axis);
-    if !in_extent(extent, h) {
-        return None;
-    }
-    let r = rel - h * axis;
+    let r = radial_offset(center, axis, extent, x)?;
     let rho = r.length();
     let outward = if rho > 0.0 {
         r / rho
@@ -103,10 +112,8 @@ impl WallShape {
     #[inline]
     pub fn surely_clear(&self, x: DVec3, radius: f64) -> bool {
         const MARGIN: f64 = 1e-9;
-        let radial2 = |center: DVec3, axis: DVec3, extent: Option<(f64, f64)>| {
-            let rel = x - center;
-            let h = rel.dot(axis);
-            in_extent(extent, h).then(|| (rel - h * axis).length_squared())
+        let radial2 = |center, axis, extent| {
+            radial_offset(center, axis, extent, x).map(DVec3::length_squared)
         };
         match *self {
             WallShape::Plane { point, normal } => (x - point).dot(normal) >= radius,

@@ -682,8 +682,9 @@ fn one_and_two_threads_give_identical_results() {
     };
     // Two threads twice: with the default threshold, and with every per-particle pass
     // split over the threads (SCG_PARALLEL_MIN=1: the test scenes are small).
-    let a = digests("1", "16384");
-    let b = digests("2", "16384");
+    let default_min = scg_core::par::PARALLEL_THRESHOLD.to_string();
+    let a = digests("1", &default_min);
+    let b = digests("2", &default_min);
     let c = digests("2", "1");
     eprintln!("{a:?}");
     assert_eq!(a, b);
