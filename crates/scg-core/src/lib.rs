@@ -17,6 +17,7 @@ pub mod region;
 pub mod scaling;
 pub mod sim;
 pub mod step;
+pub mod team;
 pub mod walls;
 
 pub use sim::{ParticleSpec, SimConfig, SimError, Simulation};

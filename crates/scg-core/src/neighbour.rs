@@ -459,15 +459,13 @@ fn in_blocks(n: usize, pairs_of: impl Fn(usize, usize) -> Vec<[u32; 2]> + Sync) 
     if n <= 2 * BLOCK {
         return pairs_of(0, n);
     }
-    let pool = bevy_tasks::ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
-    let starts: Vec<usize> = (0..n).step_by(BLOCK).collect();
-    let blocks = crate::par::section(|| {
-        bevy_tasks::ParallelSlice::par_chunk_map(&&starts[..], pool, 1, |_, s| {
-            pairs_of(s[0], (s[0] + BLOCK).min(n))
-        })
+    let mut blocks: Vec<(usize, Vec<[u32; 2]>)> =
+        (0..n).step_by(BLOCK).map(|s| (s, Vec::new())).collect();
+    crate::team::for_each_item(&mut blocks, |(s, out)| {
+        *out = pairs_of(*s, (*s + BLOCK).min(n));
     });
-    let mut out = Vec::with_capacity(blocks.iter().map(Vec::len).sum());
-    for b in blocks {
+    let mut out = Vec::with_capacity(blocks.iter().map(|(_, b)| b.len()).sum());
+    for (_, b) in blocks {
         out.extend_from_slice(&b);
     }
     out

@@ -1,12 +1,19 @@
 //! Parallel iteration that pays for threads only when there is enough work.
 //!
-//! Every parallel section runs through [`section`]: after it, one worker per core beyond
-//! the calling thread spins for a short *block time* (as OpenMP runtimes do, e.g.
-//! `KMP_BLOCKTIME`) instead of going to sleep at once, until the next section starts.
-//! A step has several short sections; a core that sleeps between them is halted, and on a
-//! shared virtual machine the host then lends it to someone else and hands it back late
-//! (steal time), which stalls the next section. `SCG_BLOCKTIME_US` sets the block time in
-//! µs (default 1000; 0 = sleep at once).
+//! The hot loops (table columns cut into pieces, contact slots, kicks, list builds) run
+//! on the fork–join [`crate::team`]: the calling thread plus one worker per further core,
+//! each taking mostly the same share of the work at every step, so that its data stays in
+//! its core's caches. On two cores, work split among bevy's task pool (two threads plus
+//! the calling thread) and handed out in arbitrary order ran the dense contact bed 1.3×
+//! faster than one thread; on the team it runs 1.65–1.75× faster.
+//!
+//! Between jobs the workers spin for a short *block time* (as OpenMP runtimes do, e.g.
+//! `KMP_BLOCKTIME`) instead of going to sleep at once: a step has several short jobs, and a
+//! core that sleeps between them is halted, lent by the host to someone else and handed
+//! back late (steal time). `SCG_BLOCKTIME_US` sets the block time in µs (default 1000;
+//! 0 = sleep at once). The per-entity fallback ([`for_each_mut`], for components outside
+//! table storage) still uses bevy's parallel iteration through [`section`], which keeps
+//! the pool's threads warm the same way.
 
 use bevy_ecs::query::{
     ArchetypeFilter, ArchetypeQueryData, ContiguousQueryData, IterQueryData, QueryData, QueryItem,
@@ -16,7 +23,7 @@ use bevy_ecs::system::Query;
 static SECTION: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 static BLOCK_TIME_US: std::sync::OnceLock<u64> = std::sync::OnceLock::new();
 
-fn block_time() -> std::time::Duration {
+pub(crate) fn block_time() -> std::time::Duration {
     let us = *BLOCK_TIME_US.get_or_init(|| {
         std::env::var("SCG_BLOCKTIME_US")
             .ok()
@@ -24,6 +31,12 @@ fn block_time() -> std::time::Duration {
             .unwrap_or(1000)
     });
     std::time::Duration::from_micros(us)
+}
+
+/// Release the cores kept warm after the last section (a new section or team job is
+/// starting).
+pub(crate) fn end_block_time() {
+    SECTION.fetch_add(1, std::sync::atomic::Ordering::AcqRel);
 }
 
 /// Run one parallel section `f`, then keep the cores warm for the next one (see the
@@ -93,33 +106,135 @@ pub fn for_each_mut<'a, 's, D, F>(
     }
 }
 
-/// `f` on each contiguous table chunk of `q` (one tight loop per chunk), on every core in
-/// several batches per thread (they balance the load when a core is briefly busy) when
-/// the query is large. Returns false, having run nothing, when some component is not in
-/// table storage: the caller then iterates per entity.
-pub fn for_each_chunk_mut<'a, 's, D, F>(
+/// Column slices that can be cut at a row: a slice, an optional slice, or a tuple of
+/// those (all of one table, so of one length).
+pub trait Split: Sized + Send {
+    /// Rows (the shortest member; `usize::MAX` when there is no column).
+    fn rows(&self) -> usize;
+    /// Rows `..k` and `k..`.
+    fn split_at(self, k: usize) -> (Self, Self);
+}
+
+impl<T: Send> Split for &mut [T] {
+    fn rows(&self) -> usize {
+        self.len()
+    }
+    fn split_at(self, k: usize) -> (Self, Self) {
+        self.split_at_mut(k)
+    }
+}
+
+impl<T: Sync> Split for &[T] {
+    fn rows(&self) -> usize {
+        self.len()
+    }
+    fn split_at(self, k: usize) -> (Self, Self) {
+        <[T]>::split_at(self, k)
+    }
+}
+
+impl<S: Split> Split for Option<S> {
+    fn rows(&self) -> usize {
+        self.as_ref().map_or(usize::MAX, S::rows)
+    }
+    fn split_at(self, k: usize) -> (Self, Self) {
+        match self {
+            Some(s) => {
+                let (a, b) = s.split_at(k);
+                (Some(a), Some(b))
+            }
+            None => (None, None),
+        }
+    }
+}
+
+impl Split for () {
+    fn rows(&self) -> usize {
+        usize::MAX
+    }
+    fn split_at(self, _: usize) -> (Self, Self) {
+        ((), ())
+    }
+}
+
+macro_rules! split_tuple {
+    ($($t:ident $v:ident $a:ident $b:ident),+) => {
+        impl<$($t: Split),+> Split for ($($t,)+) {
+            fn rows(&self) -> usize {
+                let ($($v,)+) = self;
+                usize::MAX$(.min($v.rows()))+
+            }
+            fn split_at(self, k: usize) -> (Self, Self) {
+                let ($($v,)+) = self;
+                $(let ($a, $b) = $v.split_at(k);)+
+                (($($a,)+), ($($b,)+))
+            }
+        }
+    };
+}
+split_tuple!(A a a0 a1, B b b0 b1);
+split_tuple!(A a a0 a1, B b b0 b1, C c c0 c1);
+split_tuple!(A a a0 a1, B b b0 b1, C c c0 c1, D d d0 d1);
+split_tuple!(A a a0 a1, B b b0 b1, C c c0 c1, D d d0 d1, E e e0 e1);
+split_tuple!(A a a0 a1, B b b0 b1, C c c0 c1, D d d0 d1, E e e0 e1, F f f0 f1);
+split_tuple!(A a a0 a1, B b b0 b1, C c c0 c1, D d d0 d1, E e e0 e1, F f f0 f1, G g g0 g1);
+split_tuple!(A a a0 a1, B b b0 b1, C c c0 c1, D d d0 d1, E e e0 e1, F f f0 f1, G g g0 g1, H h h0 h1);
+
+/// The column of a mutable component as a plain slice, skipping the change ticks (for
+/// columns nothing filters on).
+pub fn bypass<T>(c: bevy_ecs::change_detection::ContiguousMut<'_, T>) -> &mut [T] {
+    bevy_ecs::change_detection::ContiguousMut::bypass_change_detection_split(c).0
+}
+
+/// Rows per piece when a table's columns are cut for the team.
+const PIECE_ROWS: usize = 4096;
+
+/// `body` on the column slices of each table of `q` (one tight loop per piece): `parts`
+/// turns a table's columns into slices (on the calling thread), which are cut into pieces
+/// of [`PIECE_ROWS`] rows run on the [`crate::team`] when the query is large. The pieces
+/// depend on the row count only, and `body` must treat rows independently. Returns false,
+/// having run nothing, when some component is not in table storage: the caller then
+/// iterates per entity.
+pub fn for_each_split<'a, 's, D, F, P>(
     q: &'a mut Query<'_, 's, D, F>,
-    f: impl Fn(D::Contiguous<'a, 's>) + Send + Sync + Clone,
+    parts: impl Fn(D::Contiguous<'a, 's>) -> P,
+    body: impl Fn(P) + Sync,
 ) -> bool
 where
     D: ContiguousQueryData,
     D::ReadOnly: ArchetypeQueryData,
     F: ArchetypeFilter,
+    P: Split,
 {
-    if q.iter().len() < parallel_min() {
-        q.contiguous_iter_mut().map(|it| it.for_each(f)).is_ok()
-    } else {
-        section(|| {
-            q.contiguous_par_iter_mut()
-                .map(|it| {
-                    it.batching_strategy(
-                        bevy_ecs::batching::BatchingStrategy::new().batches_per_thread(4),
-                    )
-                    .for_each(f)
-                })
-                .is_ok()
-        })
+    let parallel = q.iter().len() >= parallel_min();
+    let Ok(tables) = q.contiguous_iter_mut() else {
+        return false;
+    };
+    // Small pieces when the threshold is set low (tests), so that small scenes are cut too.
+    let piece = PIECE_ROWS.min(parallel_min().div_ceil(2).max(64));
+    for table in tables {
+        let mut rest = parts(table);
+        let rows = rest.rows();
+        if !parallel || rows == usize::MAX || rows < 2 * piece {
+            body(rest);
+            continue;
+        }
+        let mut pieces = Vec::with_capacity(rows.div_ceil(piece));
+        let mut left = rows;
+        while left > piece {
+            let (a, b) = rest.split_at(piece);
+            pieces.push(Some(a));
+            rest = b;
+            left -= piece;
+        }
+        pieces.push(Some(rest));
+        crate::team::for_each_item(&mut pieces, |p| {
+            if let Some(p) = p.take() {
+                body(p)
+            }
+        });
     }
+    true
 }
 
 /// Elements per task of the slice helpers below.
@@ -142,51 +257,10 @@ pub fn par_max_zip<A: Sync, B: Sync>(
     if n < 2 * SLICE_CHUNK {
         return max(&a[..n], &b[..n]);
     }
-    let pool = bevy_tasks::ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
-    section(|| {
-        bevy_tasks::ParallelSlice::par_chunk_map(&&a[..n], pool, SLICE_CHUNK, |i, chunk| {
-            max(chunk, &b[i * SLICE_CHUNK..])
-        })
-    })
-    .into_iter()
-    .fold(0.0_f64, f64::max)
-}
-
-/// `f(chunk_k, &mut out[k])` for the chunks of `chunk` elements of `items`, with one
-/// output slot per chunk (`out.len()` = number of chunks), on all cores when there are
-/// several chunks. Consecutive chunks are grouped into a few tasks per thread, so the
-/// task count stays small whatever the length; each chunk's result does not depend on the
-/// grouping.
-pub fn par_chunks_with<A: Send, B: Send>(
-    items: &mut [A],
-    chunk: usize,
-    out: &mut [B],
-    f: impl Fn(&mut [A], &mut B) + Send + Sync,
-) {
-    let chunk = chunk.max(1);
-    assert_eq!(out.len(), items.len().div_ceil(chunk));
-    let pool = bevy_tasks::ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
-    let tasks = (pool.thread_num() * 4).max(1);
-    if out.len() < 2 || pool.thread_num() < 2 {
-        for (c, o) in items.chunks_mut(chunk).zip(out.iter_mut()) {
-            f(c, o);
-        }
-        return;
-    }
-    let per_task = out.len().div_ceil(tasks);
-    let f = &f;
-    section(|| {
-        pool.scope(|s| {
-            for (cs, os) in items
-                .chunks_mut(chunk * per_task)
-                .zip(out.chunks_mut(per_task))
-            {
-                s.spawn(async move {
-                    for (c, o) in cs.chunks_mut(chunk).zip(os.iter_mut()) {
-                        f(c, o);
-                    }
-                });
-            }
-        })
+    let mut out: Vec<(usize, f64)> = (0..n).step_by(SLICE_CHUNK).map(|k| (k, 0.0)).collect();
+    crate::team::for_each_item(&mut out, |(k, m)| {
+        let hi = (*k + SLICE_CHUNK).min(n);
+        *m = max(&a[*k..hi], &b[*k..hi]);
     });
+    out.into_iter().map(|(_, m)| m).fold(0.0_f64, f64::max)
 }

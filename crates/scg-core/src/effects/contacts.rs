@@ -15,7 +15,6 @@
 //! rolling resistance of [`crate::contact::tangential`], torque r_i·n × F_t (paper eq. 3).
 
 use bevy_ecs::prelude::*;
-use bevy_tasks::ComputeTaskPool;
 use bytemuck::TransparentWrapper;
 use glam::DVec3;
 
@@ -744,27 +743,15 @@ pub fn particle_contact_forces(
         rest = tail;
         work.push((slot, mine));
     }
-    let pool = ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
     let kernel = Kernel {
         bodies,
         par,
         dt,
         group,
     };
-    let run = |(slot, pairs): (&mut Slot, &mut [PairState])| {
+    crate::team::for_each_item(&mut work, |(slot, pairs)| {
         slot.run(pairs, &kernel, groups, sparse);
-    };
-    if work.len() < 2 || pool.thread_num() < 2 {
-        work.into_iter().for_each(run);
-    } else {
-        crate::par::section(|| {
-            pool.scope(|s| {
-                for w in work {
-                    s.spawn(async move { run(w) });
-                }
-            })
-        });
-    }
+    });
     let mut active = 0;
     for slot in &st.slots {
         active += slot.active;
@@ -912,20 +899,20 @@ fn kick_all(
             block(base + b * B, vb, w_blocks.as_mut().and_then(|it| it.next()));
         }
     };
-    let pool = ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
-    if v.len() < 2 * C || pool.thread_num() < 2 {
+    if v.len() < 2 * C {
         chunk(0, v, w);
         return;
     }
-    let chunk = &chunk;
-    crate::par::section(|| {
-        pool.scope(|s| {
-            let mut w_chunks = w.map(|w| w.chunks_mut(C));
-            for (k, vc) in v.chunks_mut(C).enumerate() {
-                let wc = w_chunks.as_mut().and_then(|it| it.next());
-                s.spawn(async move { chunk(k * C, vc, wc) });
-            }
-        })
+    let mut w_chunks = w.map(|w| w.chunks_mut(C));
+    // (first particle, velocities, angular velocities) of each chunk.
+    type Chunk<'a> = (usize, &'a mut [DVec3], Option<&'a mut [DVec3]>);
+    let mut work: Vec<Chunk> = v
+        .chunks_mut(C)
+        .enumerate()
+        .map(|(k, vc)| (k * C, vc, w_chunks.as_mut().and_then(|it| it.next())))
+        .collect();
+    crate::team::for_each_item(&mut work, |(base, vc, wc)| {
+        chunk(*base, vc, wc.as_deref_mut())
     });
 }
 

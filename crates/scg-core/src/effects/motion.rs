@@ -158,13 +158,21 @@ pub fn integrate_rotation(
             *w = angular_kick(*w, t, m, d, dt);
         }
     };
-    let chunk = move |(mut ws, ts, ms, ds): Item| {
-        let ws = ws.bypass_change_detection();
+    type Parts<'a> = (
+        &'a mut [AngularVelocity],
+        &'a [Torque],
+        &'a [Mass],
+        &'a [Diameter],
+    );
+    fn parts<'a>((ws, ts, ms, ds): Item<'a>) -> Parts<'a> {
+        (crate::par::bypass(ws), ts, ms, ds)
+    }
+    let body = move |(ws, ts, ms, ds): Parts| {
         for i in 0..ws.len() {
             one(&mut ws[i].0, ts[i].0, ms[i].0, ds[i].0);
         }
     };
-    let contiguous = crate::par::for_each_chunk_mut(&mut q, chunk);
+    let contiguous = crate::par::for_each_split(&mut q, parts, body);
     if !contiguous {
         crate::par::for_each_mut(&mut q, |(mut w, t, m, d)| one(&mut w.0, t.0, m.0, d.0));
     }
@@ -265,6 +273,17 @@ type ChunkItem<'a> = (
     Option<&'a [BodyAcceleration]>,
 );
 
+/// [`ChunkItem`] as plain slices (nothing filters on changes of position or velocity:
+/// the tick writes are skipped).
+type ChunkParts<'a> = (
+    &'a mut [Position],
+    &'a mut [Velocity],
+    (&'a [StokesFactors], &'a [FluidCoupling]),
+    &'a [Mass],
+    Option<&'a [Force]>,
+    Option<&'a [BodyAcceleration]>,
+);
+
 /// The fast-path loop for a flow given as a function of position.
 fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
     mut q: MoveQuery<(&'static StokesFactors, &'static FluidCoupling)>,
@@ -287,12 +306,20 @@ fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
             *v = v1;
             d2
         };
-    let chunk = move |(mut xs, mut vs, (sfs, fcs), ms, fs, gs): ChunkItem| {
+    fn parts<'a>((xs, vs, sf, ms, fs, gs): ChunkItem<'a>) -> ChunkParts<'a> {
+        (
+            crate::par::bypass(xs),
+            crate::par::bypass(vs),
+            sf,
+            ms,
+            fs,
+            gs,
+        )
+    }
+    let chunk = move |(xs, vs, (sfs, fcs), ms, fs, gs): ChunkParts| {
         // Local copies: the loop then keeps the flow and dt in registers instead of
         // reloading them through the closure on every particle.
         let (step, dt, flow) = (step, dt, flow);
-        // Nothing filters on changes of position or velocity: skip the tick writes.
-        let (xs, vs) = (xs.bypass_change_detection(), vs.bypass_change_detection());
         let n = xs.len().min(vs.len()).min(sfs.len());
         let (xs, vs, sfs) = (&mut xs[..n], &mut vs[..n], &sfs[..n]);
         if fs.is_none() && gs.is_none() {
@@ -321,7 +348,7 @@ fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
             d.record(d2max);
         }
     };
-    let contiguous = crate::par::for_each_chunk_mut(&mut q, chunk);
+    let contiguous = crate::par::for_each_split(&mut q, parts, chunk);
     if !contiguous {
         // Sparse storage somewhere in the query: per-entity iteration.
         crate::par::for_each_mut(&mut q, |(mut x, mut v, (sf, fc), m, f, g)| {
@@ -486,8 +513,25 @@ pub fn integrate_ballistic(
         Option<&'a [Force]>,
         Option<&'a [BodyAcceleration]>,
     );
-    let chunk = move |(mut xs, mut vs, (), ms, fs, gs): Item| {
-        let (xs, vs) = (xs.bypass_change_detection(), vs.bypass_change_detection());
+    type Parts<'a> = (
+        &'a mut [Position],
+        &'a mut [Velocity],
+        (),
+        &'a [Mass],
+        Option<&'a [Force]>,
+        Option<&'a [BodyAcceleration]>,
+    );
+    fn parts<'a>((xs, vs, (), ms, fs, gs): Item<'a>) -> Parts<'a> {
+        (
+            crate::par::bypass(xs),
+            crate::par::bypass(vs),
+            (),
+            ms,
+            fs,
+            gs,
+        )
+    }
+    let chunk = move |(xs, vs, (), ms, fs, gs): Parts| {
         let mut d2max = 0.0_f64;
         for i in 0..xs.len() {
             let a = gs.map_or(DVec3::ZERO, |g| g[i].0);
@@ -500,7 +544,7 @@ pub fn integrate_ballistic(
             d.record(d2max);
         }
     };
-    let contiguous = crate::par::for_each_chunk_mut(&mut q, chunk);
+    let contiguous = crate::par::for_each_split(&mut q, parts, chunk);
     if !contiguous {
         crate::par::for_each_mut(&mut q, |(mut x, mut v, (), m, f, g)| {
             let a = g.map_or(DVec3::ZERO, |g| g.0);

@@ -177,12 +177,21 @@ pub fn wall_contact_forces(
     // (no clearing pass). A particle whose history is empty touched no wall last step (a
     // touch always leaves an entry), so its force and torque are zero: when it is clear of
     // every wall now it is not written at all.
-    let chunk = move |(xs, vs, ws, ds, ms, mut fs, mut ts, mut hs): Item| {
-        let (fs, ts, hs) = (
-            fs.bypass_change_detection(),
-            ts.bypass_change_detection(),
-            hs.bypass_change_detection(),
-        );
+    type Parts<'a> = (
+        &'a [Position],
+        &'a [Velocity],
+        &'a [AngularVelocity],
+        &'a [Diameter],
+        &'a [Mass],
+        &'a mut [Force],
+        &'a mut [Torque],
+        &'a mut [WallHistory],
+    );
+    fn parts<'a>((xs, vs, ws, ds, ms, fs, ts, hs): Item<'a>) -> Parts<'a> {
+        use crate::par::bypass;
+        (xs, vs, ws, ds, ms, bypass(fs), bypass(ts), bypass(hs))
+    }
+    let chunk = move |(xs, vs, ws, ds, ms, fs, ts, hs): Parts| {
         for i in 0..xs.len() {
             let r = 0.5 * ds[i].0;
             if hs[i].0.is_empty() && walls.walls.iter().all(|w| w.shape.surely_clear(xs[i].0, r)) {
@@ -193,7 +202,7 @@ pub fn wall_contact_forces(
             ts[i].0 = t;
         }
     };
-    let contiguous = crate::par::for_each_chunk_mut(&mut q, chunk);
+    let contiguous = crate::par::for_each_split(&mut q, parts, chunk);
     if !contiguous {
         crate::par::for_each_mut(&mut q, |(x, v, w, d, m, mut f, mut torque, mut hist)| {
             let (fsum, tsum) = one(x.0, v.0, w.0, d.0, m.0, &mut hist.0);
