@@ -5,7 +5,7 @@
 //! each taking mostly the same share of the work at every step, so that its data stays in
 //! its core's caches. On two cores, work split among bevy's task pool (two threads plus
 //! the calling thread) and handed out in arbitrary order ran the dense contact bed 1.3×
-//! faster than one thread; on the team it runs 1.65–1.75× faster.
+//! faster than one thread; on the team it runs 1.7–1.8× faster.
 //!
 //! Between jobs the workers spin for a short *block time* (as OpenMP runtimes do, e.g.
 //! `KMP_BLOCKTIME`) instead of going to sleep at once: a step has several short jobs, and a
@@ -67,12 +67,13 @@ pub fn section<R>(f: impl FnOnce() -> R) -> R {
     out
 }
 
-/// Default of [`parallel_min`]. A parallel section costs some 10 µs on this 2-core VM
-/// (waking and joining the workers); the per-particle passes (drag, integration, walls)
-/// take a few ns per particle, so below about 2·10^4 particles one thread is faster: the
-/// dilute contact benchmark at 10^4 particles ran at 12–14 ns per particle-step on two
-/// threads with a threshold of 2048 and at 7–10 ns with this one.
-pub const PARALLEL_THRESHOLD: usize = 16384;
+/// Default of [`parallel_min`]. A team job starts in under a microsecond, but on a small
+/// scene the second core gains nothing: its share is a few µs of work and the particle
+/// data moves between the two cores' caches. On the dilute contact benchmark on two
+/// threads (`scg bench dilute`, best of 3), 10^4 particles ran at 7.4 ns per
+/// particle-step with a threshold of 16 384 and at 5.2 ns with this one; 10^3 particles
+/// ran at 8.6–8.8 ns with any threshold down to 256.
+pub const PARALLEL_THRESHOLD: usize = 4096;
 
 static PARALLEL_MIN: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
 

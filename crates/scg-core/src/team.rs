@@ -1,11 +1,15 @@
 //! A fork–join team of worker threads for the hot parallel loops (OpenMP style).
 //!
 //! The caller runs tasks itself, so a team of `n` workers has `n − 1` extra threads: on
-//! two cores there are never more running threads than cores. Tasks are handed out one
-//! index at a time from an atomic counter (the faster thread takes more), and
+//! two cores there are never more running threads than cores. Worker `w` first runs its
+//! own share of the tasks (the `w`-th contiguous block, in order), then helps the others
+//! with what is left of theirs; each task index is handed out once by an atomic counter
+//! per share. A worker thus runs mostly the same tasks at every step and finds their data
+//! in its own core's caches (when any thread took any task, the dense contact bed gained
+//! only 1.3× from the second core, the pair data migrating between cores at every step).
 //! [`Team::run`] returns when every worker has finished the job. Between jobs a worker
 //! spins for the block time (see [`crate::par`]) before it sleeps, so that the many short
-//! jobs of a step start without a wake-up.
+//! jobs of a step start without a wake-up (an empty job costs about 0.7 µs on two cores).
 //!
 //! The team never decides *what* is computed, only *where*: callers split their work into
 //! tasks by data size, never by thread count, so results are the same bits for any team.
@@ -264,4 +268,3 @@ mod tests {
         assert!(v.iter().all(|&x| x == 2));
     }
 }
-
