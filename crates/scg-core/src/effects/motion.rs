@@ -264,10 +264,11 @@ pub fn integrate_stokes_exponential(
     }
 }
 
-type ChunkItem<'a> = (
+/// The columns of a move query's table; `S` the drag columns (none for `()`).
+type ChunkItem<'a, S = (&'a [StokesFactors], &'a [FluidCoupling])> = (
     bevy_ecs::change_detection::ContiguousMut<'a, Position>,
     bevy_ecs::change_detection::ContiguousMut<'a, Velocity>,
-    (&'a [StokesFactors], &'a [FluidCoupling]),
+    S,
     &'a [Mass],
     Option<&'a [Force]>,
     Option<&'a [BodyAcceleration]>,
@@ -275,14 +276,26 @@ type ChunkItem<'a> = (
 
 /// [`ChunkItem`] as plain slices (nothing filters on changes of position or velocity:
 /// the tick writes are skipped).
-type ChunkParts<'a> = (
+type ChunkParts<'a, S = (&'a [StokesFactors], &'a [FluidCoupling])> = (
     &'a mut [Position],
     &'a mut [Velocity],
-    (&'a [StokesFactors], &'a [FluidCoupling]),
+    S,
     &'a [Mass],
     Option<&'a [Force]>,
     Option<&'a [BodyAcceleration]>,
 );
+
+/// [`ChunkItem`] → [`ChunkParts`].
+fn chunk_parts<S>((xs, vs, s, ms, fs, gs): ChunkItem<'_, S>) -> ChunkParts<'_, S> {
+    (
+        crate::par::bypass(xs),
+        crate::par::bypass(vs),
+        s,
+        ms,
+        fs,
+        gs,
+    )
+}
 
 /// The fast-path loop for a flow given as a function of position.
 fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
@@ -306,16 +319,6 @@ fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
             *v = v1;
             d2
         };
-    fn parts<'a>((xs, vs, sf, ms, fs, gs): ChunkItem<'a>) -> ChunkParts<'a> {
-        (
-            crate::par::bypass(xs),
-            crate::par::bypass(vs),
-            sf,
-            ms,
-            fs,
-            gs,
-        )
-    }
     let chunk = move |(xs, vs, (sfs, fcs), ms, fs, gs): ChunkParts| {
         // Local copies: the loop then keeps the flow and dt in registers instead of
         // reloading them through the closure on every particle.
@@ -348,7 +351,7 @@ fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
             d.record(d2max);
         }
     };
-    let contiguous = crate::par::for_each_split(&mut q, parts, chunk);
+    let contiguous = crate::par::for_each_split(&mut q, chunk_parts, chunk);
     if !contiguous {
         // Sparse storage somewhere in the query: per-entity iteration.
         crate::par::for_each_mut(&mut q, |(mut x, mut v, (sf, fc), m, f, g)| {
@@ -505,33 +508,7 @@ pub fn integrate_ballistic(
         *v = v1;
         d2
     };
-    type Item<'a> = (
-        bevy_ecs::change_detection::ContiguousMut<'a, Position>,
-        bevy_ecs::change_detection::ContiguousMut<'a, Velocity>,
-        (),
-        &'a [Mass],
-        Option<&'a [Force]>,
-        Option<&'a [BodyAcceleration]>,
-    );
-    type Parts<'a> = (
-        &'a mut [Position],
-        &'a mut [Velocity],
-        (),
-        &'a [Mass],
-        Option<&'a [Force]>,
-        Option<&'a [BodyAcceleration]>,
-    );
-    fn parts<'a>((xs, vs, (), ms, fs, gs): Item<'a>) -> Parts<'a> {
-        (
-            crate::par::bypass(xs),
-            crate::par::bypass(vs),
-            (),
-            ms,
-            fs,
-            gs,
-        )
-    }
-    let chunk = move |(xs, vs, (), ms, fs, gs): Parts| {
+    let chunk = move |(xs, vs, (), ms, fs, gs): ChunkParts<()>| {
         let mut d2max = 0.0_f64;
         for i in 0..xs.len() {
             let a = gs.map_or(DVec3::ZERO, |g| g[i].0);
@@ -544,7 +521,7 @@ pub fn integrate_ballistic(
             d.record(d2max);
         }
     };
-    let contiguous = crate::par::for_each_split(&mut q, parts, chunk);
+    let contiguous = crate::par::for_each_split(&mut q, chunk_parts::<()>, chunk);
     if !contiguous {
         crate::par::for_each_mut(&mut q, |(mut x, mut v, (), m, f, g)| {
             let a = g.map_or(DVec3::ZERO, |g| g.0);
