@@ -459,13 +459,12 @@ fn in_blocks(n: usize, pairs_of: impl Fn(usize, usize) -> Vec<[u32; 2]> + Sync) 
     if n <= 2 * BLOCK {
         return pairs_of(0, n);
     }
-    let mut blocks: Vec<(usize, Vec<[u32; 2]>)> =
-        (0..n).step_by(BLOCK).map(|s| (s, Vec::new())).collect();
-    crate::team::for_each_item(&mut blocks, |(s, out)| {
-        *out = pairs_of(*s, (*s + BLOCK).min(n));
+    let mut blocks: Vec<Vec<[u32; 2]>> = vec![Vec::new(); n.div_ceil(BLOCK)];
+    crate::team::for_each_item(&mut blocks, |k, out| {
+        *out = pairs_of(k * BLOCK, ((k + 1) * BLOCK).min(n));
     });
-    let mut out = Vec::with_capacity(blocks.iter().map(|(_, b)| b.len()).sum());
-    for (_, b) in blocks {
+    let mut out = Vec::with_capacity(blocks.iter().map(Vec::len).sum());
+    for b in blocks {
         out.extend_from_slice(&b);
     }
     out

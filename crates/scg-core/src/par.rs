@@ -229,7 +229,7 @@ where
             left -= piece;
         }
         pieces.push(Some(rest));
-        crate::team::for_each_item(&mut pieces, |p| {
+        crate::team::for_each_item(&mut pieces, |_, p| {
             if let Some(p) = p.take() {
                 body(p)
             }
@@ -238,7 +238,7 @@ where
     true
 }
 
-/// Elements per task of the slice helpers below.
+/// Elements per task of [`par_max_zip`].
 const SLICE_CHUNK: usize = 8192;
 
 /// The largest `f(&a[k], &b[k])` over k (0 for empty slices), on all cores when the
@@ -258,10 +258,10 @@ pub fn par_max_zip<A: Sync, B: Sync>(
     if n < 2 * SLICE_CHUNK {
         return max(&a[..n], &b[..n]);
     }
-    let mut out: Vec<(usize, f64)> = (0..n).step_by(SLICE_CHUNK).map(|k| (k, 0.0)).collect();
-    crate::team::for_each_item(&mut out, |(k, m)| {
-        let hi = (*k + SLICE_CHUNK).min(n);
-        *m = max(&a[*k..hi], &b[*k..hi]);
+    let mut out = vec![0.0_f64; n.div_ceil(SLICE_CHUNK)];
+    crate::team::for_each_item(&mut out, |c, m| {
+        let (lo, hi) = (c * SLICE_CHUNK, ((c + 1) * SLICE_CHUNK).min(n));
+        *m = max(&a[lo..hi], &b[lo..hi]);
     });
-    out.into_iter().map(|(_, m)| m).fold(0.0_f64, f64::max)
+    out.into_iter().fold(0.0_f64, f64::max)
 }

@@ -226,15 +226,15 @@ struct SendPtr<T>(*mut T);
 unsafe impl<T: Send> Sync for SendPtr<T> {}
 unsafe impl<T: Send> Send for SendPtr<T> {}
 
-/// `f(&mut items[k])` for every k on the team, each element once.
-pub fn for_each_item<T: Send>(items: &mut [T], f: impl Fn(&mut T) + Sync) {
+/// `f(k, &mut items[k])` for every k on the team, each element once.
+pub fn for_each_item<T: Send>(items: &mut [T], f: impl Fn(usize, &mut T) + Sync) {
     let n = items.len();
     let base = SendPtr(items.as_mut_ptr());
     let base = &base;
     team().run(n, &move |k| {
         // SAFETY: k < n, and the team hands out each index once, so no two calls alias.
         let item = unsafe { &mut *base.0.add(k) };
-        f(item)
+        f(k, item)
     });
 }
 
@@ -246,8 +246,11 @@ mod tests {
     fn every_index_once() {
         for n in [0, 1, 2, 3, 17, 1000] {
             let mut hits = vec![0u32; n];
-            for_each_item(&mut hits, |h| *h += 1);
-            assert!(hits.iter().all(|&h| h == 1), "n = {n}");
+            for_each_item(&mut hits, |k, h| *h += 1 + k as u32);
+            assert!(
+                hits.iter().enumerate().all(|(k, &h)| h == 1 + k as u32),
+                "n = {n}"
+            );
         }
     }
 
@@ -255,7 +258,7 @@ mod tests {
     fn panics_reach_the_caller() {
         let r = std::panic::catch_unwind(|| {
             let mut v = vec![0u8; 64];
-            for_each_item(&mut v, |x| {
+            for_each_item(&mut v, |_, x| {
                 if *x == 0 {
                     panic!("task failed")
                 }
@@ -264,7 +267,7 @@ mod tests {
         assert!(r.is_err());
         // The team still works afterwards.
         let mut v = vec![1u8; 64];
-        for_each_item(&mut v, |x| *x += 1);
+        for_each_item(&mut v, |_, x| *x += 1);
         assert!(v.iter().all(|&x| x == 2));
     }
 }

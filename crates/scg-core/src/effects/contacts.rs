@@ -749,7 +749,7 @@ pub fn particle_contact_forces(
         dt,
         group,
     };
-    crate::team::for_each_item(&mut work, |(slot, pairs)| {
+    crate::team::for_each_item(&mut work, |_, (slot, pairs)| {
         slot.run(pairs, &kernel, groups, sparse);
     });
     let mut active = 0;
@@ -903,17 +903,13 @@ fn kick_all(
         chunk(0, v, w);
         return;
     }
+    // (velocities, angular velocities) of each chunk; chunk k starts at particle k·C.
     let mut w_chunks = w.map(|w| w.chunks_mut(C));
-    // (first particle, velocities, angular velocities) of each chunk.
-    type Chunk<'a> = (usize, &'a mut [DVec3], Option<&'a mut [DVec3]>);
-    let mut work: Vec<Chunk> = v
+    let mut work: Vec<(&mut [DVec3], Option<&mut [DVec3]>)> = v
         .chunks_mut(C)
-        .enumerate()
-        .map(|(k, vc)| (k * C, vc, w_chunks.as_mut().and_then(|it| it.next())))
+        .map(|vc| (vc, w_chunks.as_mut().and_then(|it| it.next())))
         .collect();
-    crate::team::for_each_item(&mut work, |(base, vc, wc)| {
-        chunk(*base, vc, wc.as_deref_mut())
-    });
+    crate::team::for_each_item(&mut work, |k, (vc, wc)| chunk(k * C, vc, wc.as_deref_mut()));
 }
 
 /// Total kinetic energy (translational + rotational, I = m·d²/10) and momentum of the
