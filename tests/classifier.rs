@@ -100,13 +100,9 @@ fn feeders_are_deterministic_and_exact() {
     a.run(scene.steps(), |_| true).unwrap();
     b.run(scene.steps(), |_| true).unwrap();
     assert_eq!(a.particles(), b.particles());
-    let fed = a
-        .world
-        .resource::<scg::core::effects::recording::Tally>()
-        .fed
-        .clone();
+    let fed = a.world.resource::<scg::core::state::Tally>().fed.clone();
     for (f, fd) in fed.iter().zip(&scene.feeders) {
-        let due = scg::core::effects::feeder::fed_by(fd.rate, fd.window.0, fd.window.1, a.time());
+        let due = scg::core::stages::feeder::fed_by(fd.rate, fd.window.0, fd.window.1, a.time());
         assert_eq!(*f, due, "rate {}", fd.rate);
         assert!(due as f64 >= fd.rate * 0.01 - 1.0);
     }

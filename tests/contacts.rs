@@ -2,9 +2,9 @@
 //! step, `scg check` warnings and a run through the `scg` binary with 1 and 2 threads.
 //! (The physics against theory is in crates/scg-core/tests/contacts.rs.)
 
-use scg::core::contact::normal::{effective, hertz_contact_time};
-use scg::core::scaling::sphere_mass;
-use scg::core::step::StepSet;
+use scg::core::physics::contact::normal::{effective, hertz_contact_time};
+use scg::core::physics::scaling::sphere_mass;
+use scg::core::step::{StepSet, StepSystem};
 use scg::scene::{check, parse};
 
 const SCENE: &str = r#"
@@ -56,11 +56,11 @@ fn contacts_table_wires_the_effect() {
         plan.render()
     );
     let names: Vec<_> = plan.in_set(StepSet::Forces).map(|s| s.system).collect();
-    assert_eq!(names, ["particle_contact_forces"]);
+    assert_eq!(names, [StepSystem::ParticleContactForces]);
     // Contact forces and torques are applied as kicks before the drift; the rotation
     // pass exists only for wall torques.
-    assert!(plan.contains("apply_contact_kicks"));
-    assert!(!plan.contains("integrate_rotation"));
+    assert!(plan.contains(StepSystem::ApplyContactKicks));
+    assert!(!plan.contains(StepSystem::IntegrateRotation));
 }
 
 #[test]
@@ -150,7 +150,7 @@ fn contact_scene_runs_and_counts_collisions() {
     let scene = parse(SCENE, "contact_box.toml", "contact_box", &[]).unwrap();
     let mut sim = scene.build(false);
     sim.run(scene.steps(), |_| true).unwrap();
-    let tally = sim.world.resource::<scg::core::effects::recording::Tally>();
+    let tally = sim.world.resource::<scg::core::state::Tally>();
     eprintln!(
         "collisions per group: {:?} in {} steps",
         tally.collisions,

@@ -3,10 +3,10 @@
 mod common;
 
 use glam::DVec3;
-use scg::core::drag::DragLaw;
-use scg::core::flow::{FlowField, Fluid};
-use scg::core::integrate::Integrator;
-use scg::core::scaling::CoarseGrainLaw;
+use scg::core::physics::drag::DragLaw;
+use scg::core::physics::flow::{FlowField, Fluid};
+use scg::core::physics::integrate::Integrator;
+use scg::core::physics::scaling::CoarseGrainLaw;
 use scg::core::{ParticleSpec, SimConfig, Simulation};
 
 const RHO: f64 = 1000.0;

@@ -8,8 +8,8 @@ mod common;
 use std::process::Command;
 
 use glam::DVec3;
-use scg::core::contact::normal::{OVERLAP_CAP, effective, hertz_stiffness};
-use scg::core::effects::contacts::kinetic_energy_and_momentum;
+use scg::core::diagnostics::kinetic_energy_and_momentum;
+use scg::core::physics::contact::normal::{OVERLAP_CAP, effective, hertz_stiffness};
 use scg::scene::{Scene, check, parse};
 
 fn scene(text: &str, set: &[&str]) -> Scene {
@@ -100,7 +100,7 @@ fn stiff_drag_exponential_stays_exact() {
 fn stiff_drag_explicit_is_substepped_with_a_warning() {
     let text = stiff_scene("explicit");
     let s = scene(&text, &[]);
-    let n = scg::core::integrate::explicit_substeps(TAU_1UM, s.dt);
+    let n = scg::core::physics::integrate::explicit_substeps(TAU_1UM, s.dt);
     assert!(n >= 2000, "sub-steps {n}");
     let msgs = messages(&s);
     assert!(
@@ -172,7 +172,7 @@ fn hertz_energy(s: &Scene, a: DVec3, b: DVec3, d: f64, m: f64) -> f64 {
 fn head_on_impact_at_50_m_per_s() {
     let s = scene(IMPACT, &[]);
     let mut sim = s.build(false);
-    let m = scg::core::scaling::sphere_mass(1e-3, 2500.0);
+    let m = scg::core::physics::scaling::sphere_mass(1e-3, 2500.0);
     let energy = |sim: &mut scg::core::Simulation| {
         let (ke, _) = kinetic_energy_and_momentum(&mut sim.world);
         let p = sim.particles();
@@ -233,7 +233,7 @@ fn particles_started_half_overlapping_separate_with_bounded_speed() {
             .any(|m| m.contains("overlap") && m.contains("50.0 %")),
         "{msgs:?}"
     );
-    let m = scg::core::scaling::sphere_mass(1e-3, 2500.0);
+    let m = scg::core::physics::scaling::sphere_mass(1e-3, 2500.0);
     let mut sim = s.build(false);
     let p = sim.particles();
     // The stored elastic energy bounds the kinetic energy the contact can release.
@@ -399,7 +399,7 @@ velocities = [{}]
 fn box_drift(steps: u64) -> f64 {
     let s = scene(&box_scene(), &[]);
     let mut sim = s.build(false);
-    let m = scg::core::scaling::sphere_mass(1e-3, 2500.0);
+    let m = scg::core::physics::scaling::sphere_mass(1e-3, 2500.0);
     let energy = |sim: &mut scg::core::Simulation| {
         let (ke, _) = kinetic_energy_and_momentum(&mut sim.world);
         let p = sim.particles();

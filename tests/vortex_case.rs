@@ -3,7 +3,7 @@
 mod common;
 
 use glam::DVec3;
-use scg::core::flow::rpm_to_rad_per_s;
+use scg::core::physics::flow::rpm_to_rad_per_s;
 
 const R_VESSEL: f64 = 5e-4;
 

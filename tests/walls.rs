@@ -3,13 +3,13 @@
 mod common;
 
 use glam::DVec3;
-use scg::core::contact::normal::{hertz_contact_time, hertz_max_overlap};
-use scg::core::contact::{Material, NormalLaw};
-use scg::core::effects::walls::{Wall, WallSet};
-use scg::core::flow::FlowField;
-use scg::core::integrate::Integrator;
-use scg::core::scaling::{CoarseGrainLaw, sphere_mass};
-use scg::core::walls::WallShape;
+use scg::core::physics::contact::normal::{hertz_contact_time, hertz_max_overlap};
+use scg::core::physics::contact::{Material, NormalLaw};
+use scg::core::physics::flow::FlowField;
+use scg::core::physics::integrate::Integrator;
+use scg::core::physics::scaling::{CoarseGrainLaw, sphere_mass};
+use scg::core::physics::wall_shape::WallShape;
+use scg::core::stages::walls::{Wall, WallSet};
 use scg::core::{ParticleSpec, SimConfig, Simulation};
 
 const D: f64 = 1e-3;

@@ -187,7 +187,7 @@ pub fn bench(a: BenchArgs) -> i32 {
     }
     let wall = t0.elapsed().as_secs_f64();
     let ps = (sim.particle_steps() - ps0) as f64;
-    let threads = bevy_tasks_threads();
+    let threads = scg_core::exec::settings().team_size();
     println!(
         "bench {:?}: {} particles × {} steps in {:.3} s on {} threads ({:.3e} s per particle-step)",
         a.kind,
@@ -207,18 +207,10 @@ pub fn bench(a: BenchArgs) -> i32 {
     }
     if let Some(c) = sim
         .world
-        .get_resource::<scg_core::effects::contacts::ContactState>()
+        .get_resource::<scg_core::stages::contacts::ContactState>()
     {
         println!("  neighbour list: {}", c.summary());
     }
     println!("particle-steps/s: {:.4e}", ps / wall);
     0
-}
-
-fn bevy_tasks_threads() -> usize {
-    std::env::var("SCG_THREADS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .filter(|n| *n > 0)
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
 }

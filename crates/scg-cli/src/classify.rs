@@ -9,8 +9,8 @@
 
 use glam::DVec3;
 
-use scg_core::flow::FlowField;
 use scg_core::frame::{Frame, RunMeta};
+use scg_core::physics::flow::FlowField;
 
 /// Time windows of the analysis.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -345,7 +345,7 @@ pub fn radial_csv(r: &Result) -> String {
 /// largest radial sample.
 pub fn vessel_radius(scene: &scg_scene::Scene) -> f64 {
     for w in &scene.walls {
-        if let scg_core::walls::WallShape::CylinderInside { radius, .. } = w.shape {
+        if let scg_core::physics::wall_shape::WallShape::CylinderInside { radius, .. } = w.shape {
             return radius;
         }
     }

@@ -50,9 +50,9 @@ use clap::Args;
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use scg_core::contact::NormalLaw;
-use scg_core::integrate::Integrator;
-use scg_core::scaling::CoarseGrainLaw;
+use scg_core::physics::contact::NormalLaw;
+use scg_core::physics::integrate::Integrator;
+use scg_core::physics::scaling::CoarseGrainLaw;
 use scg_core::step::StepSet;
 use scg_scene::{Placement, Scene};
 
@@ -351,7 +351,10 @@ fn run_point(
 
 /// True for classifier scenes (classifier flow): the error is per-class W1 and d50.
 pub fn is_classifier(scene: &Scene) -> bool {
-    matches!(scene.flow, scg_core::flow::FlowField::Classifier { .. })
+    matches!(
+        scene.flow,
+        scg_core::physics::flow::FlowField::Classifier { .. }
+    )
 }
 
 /// The `--set` overrides of a classifier point: every group at once through
@@ -463,7 +466,7 @@ type PlanSets = Vec<(StepSet, Vec<&'static str>)>;
 fn plan_sets(sim: &scg_core::Simulation) -> PlanSets {
     StepSet::ORDER
         .iter()
-        .map(|s| (*s, sim.plan().in_set(*s).map(|x| x.system).collect()))
+        .map(|s| (*s, sim.plan().in_set(*s).map(|x| x.system.name()).collect()))
         .collect()
 }
 

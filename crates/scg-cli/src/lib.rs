@@ -17,6 +17,10 @@ use clap::{Parser, Subcommand};
 pub struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
+    /// Worker threads, the caller included (default: `SCG_THREADS`, else one per core).
+    /// Results are bit-identical for any count.
+    #[arg(long, global = true, value_name = "N")]
+    threads: Option<usize>,
 }
 
 #[derive(Subcommand, Debug)]
@@ -56,6 +60,12 @@ pub fn main() -> i32 {
             };
         }
     };
+    // The execution settings are read once, here, before anything runs in parallel.
+    let mut exec = scg_core::exec::ExecSettings::from_env();
+    if let Some(n) = cli.threads {
+        exec.threads = n;
+    }
+    scg_core::exec::configure(exec);
     match cli.command {
         None => run::run(run::RunArgs::default()),
         Some(Command::Run(a)) => run::run(a),

@@ -6,8 +6,8 @@ use std::sync::{Arc, Mutex};
 use clap::Args;
 use glam::DVec3;
 
-use scg_core::flow::FlowField;
 use scg_core::frame::{Frame, FrameSink};
+use scg_core::physics::flow::FlowField;
 use scg_record::{Recording, read_mcap, write_rrd};
 
 use crate::EXIT_BAD_INPUT;

@@ -183,7 +183,7 @@ pub fn run(args: RunArgs) -> i32 {
     }
     if let Some(c) = sim
         .world
-        .get_resource::<scg_core::effects::contacts::ContactState>()
+        .get_resource::<scg_core::stages::contacts::ContactState>()
     {
         eprintln!("neighbour list: {} at the end", c.summary());
     }

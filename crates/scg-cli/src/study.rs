@@ -11,8 +11,8 @@ use std::time::Instant;
 
 use clap::Args;
 
-use scg_core::effects::outlet::OutletLog;
 use scg_core::frame::{Frame, FrameSink};
+use scg_core::stages::outlet::OutletLog;
 
 use crate::EXIT_BAD_INPUT;
 use crate::classify::{self, Analysis, Params};
@@ -147,11 +147,7 @@ pub fn run_variant(
     let total_s = t0.elapsed().as_secs_f64();
     sim.finish_recorders().map_err(|e| e.to_string())?;
     let log = sim.world.resource::<OutletLog>().clone();
-    let fed = sim
-        .world
-        .resource::<scg_core::effects::recording::Tally>()
-        .fed
-        .clone();
+    let fed = sim.world.resource::<scg_core::state::Tally>().fed.clone();
     let resident = sim.particles().len();
     let result = analysis.lock().map_err(|e| e.to_string())?.result();
     Ok(VariantRun {

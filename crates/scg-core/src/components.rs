@@ -1,10 +1,12 @@
-//! Per-particle components. SI units throughout; each doc says the unit.
+//! Per-particle components. SI units throughout; each doc says the unit. Every particle
+//! has the same set (the scene's layout, [`crate::spawn::SpawnRules`]), so all live in one
+//! storage table ([`crate::stages::table`]).
 
 use bevy_ecs::prelude::Component;
 use bytemuck::TransparentWrapper;
 use glam::DVec3;
 
-use crate::scaling::CoarseGrainLaw;
+use crate::physics::scaling::CoarseGrainLaw;
 
 /// Centre position, m.
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq, TransparentWrapper)]
@@ -55,7 +57,7 @@ pub struct ParticleId(pub u32);
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct GroupId(pub u32);
 
-/// How the particle was coarse grained (written by the scaling stage).
+/// How the particle was coarse grained (set at spawn).
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
 pub struct CoarseGrain {
     /// Coarse-graining ratio α = d_CG / d_original (1 = original particle).
@@ -68,7 +70,7 @@ pub struct CoarseGrain {
     pub original_density: f64,
 }
 
-/// How the fluid sees the particle (written by the scaling stage).
+/// How the fluid sees the particle (set at spawn).
 ///
 /// The fluid force is computed for a sphere of diameter `drag_diameter` and multiplied by
 /// `force_scale`: (d, 1) for every law but `parcel`, (d/α, α³) for `parcel`.
@@ -92,17 +94,12 @@ pub struct StokesFactors {
     pub relax: f64,
 }
 
-/// Marker: the particle left the domain (drained through an outlet or lost); it is
-/// despawned at the end of the step by the outlet stage.
-#[derive(Component, Clone, Copy, Debug, PartialEq)]
-pub struct Removed;
-
 /// Tangential history of a particle's wall contacts: (wall index, history displacement, m).
 /// Present with walls; empty while the particle touches no wall.
 #[derive(Component, Clone, Debug, Default, PartialEq)]
 pub struct WallHistory(pub Vec<(u32, DVec3)>);
 
-/// Marker: spawned but not yet coarse-grained; the scaling stage scales the particle and
-/// removes the marker.
+/// Constant body acceleration of a particle (gravity, reduced by buoyancy), m/s².
+/// Present only when the scene declares gravity.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
-pub struct Unscaled;
+pub struct BodyAcceleration(pub DVec3);

@@ -6,20 +6,20 @@ use bevy_ecs::system::RunSystemOnce;
 use glam::DVec3;
 
 use crate::components::*;
-use crate::drag::DragLaw;
-use crate::effects::contacts::ContactConfig;
-use crate::effects::feeder::FeederSpec;
-use crate::effects::guard::{Health, NonFinite};
-use crate::effects::motion::{BodyAcceleration, Motion, SimClock};
-use crate::effects::outlet::OutletSpec;
-use crate::effects::recording::{RecordingParams, Tally};
-use crate::effects::walls::{WallSet, WallTangential};
-use crate::effects::{contacts, feeder, guard, motion, outlet, recording, scaling, walls};
-use crate::flow::{FlowField, Fluid};
 use crate::frame::{FrameSink, Recorders};
-use crate::integrate::Integrator;
-use crate::scaling::CoarseGrainLaw;
-use crate::step::{Plan, StageTimers, StepBuilder};
+use crate::physics::drag::DragLaw;
+use crate::physics::flow::{FlowField, Fluid};
+use crate::physics::integrate::Integrator;
+use crate::spawn::{ParticleSpec, SpawnRules, spawn_particle};
+use crate::stages::contacts::ContactConfig;
+use crate::stages::feeder::FeederSpec;
+use crate::stages::motion::Motion;
+use crate::stages::outlet::OutletSpec;
+use crate::stages::recording::RecordingParams;
+use crate::stages::walls::{WallSet, WallTangential};
+use crate::stages::{contacts, feeder, guard, motion, outlet, recording, walls};
+use crate::state::{Health, NextParticleId, NonFinite, SimClock, Tally};
+use crate::step::{Plan, StageTimers, StepBuilder, StepSystem};
 
 /// Everything the core needs to build a simulation (the scene crate produces it).
 #[derive(Clone, Debug)]
@@ -59,25 +59,6 @@ pub struct InletOutlet {
     pub seed: u64,
 }
 
-/// An original particle to spawn; the scaling stage coarse-grains it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ParticleSpec {
-    /// Group index.
-    pub group: u32,
-    /// Original diameter, m.
-    pub diameter: f64,
-    /// Original density, kg/m³.
-    pub density: f64,
-    /// Coarse-graining ratio α.
-    pub alpha: f64,
-    /// Coarse-graining law.
-    pub law: CoarseGrainLaw,
-    /// Initial centre, m.
-    pub position: DVec3,
-    /// Initial velocity, m/s.
-    pub velocity: DVec3,
-}
-
 /// Why a run stopped early.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SimError {
@@ -88,93 +69,6 @@ pub enum SimError {
     #[error("recorder failed: {0}")]
     Recorder(String),
 }
-
-/// Which optional per-particle components the scene's effects need.
-#[derive(Resource, Clone, Copy, Debug, PartialEq)]
-pub struct ParticleLayout {
-    /// Wall force/torque accumulators and wall history (walls present).
-    pub forces: bool,
-    /// Angular velocity (walls or particle contacts present).
-    pub spin: bool,
-    /// Body acceleration (gravity present).
-    pub gravity: bool,
-}
-
-/// Spawn one particle with every component its layout needs in a single bundle (no
-/// archetype moves), through a `World` or `Commands` (both have `spawn`).
-macro_rules! spawn_with_layout {
-    ($spawner:expr, $layout:expr, $spec:expr, $id:expr) => {{
-        let base = base_bundle($spec, $id);
-        let walls = (
-            Force::default(),
-            Torque::default(),
-            AngularVelocity::default(),
-            WallHistory::default(),
-        );
-        let spin = AngularVelocity::default();
-        let gravity = BodyAcceleration(DVec3::ZERO);
-        match ($layout.forces, $layout.spin, $layout.gravity) {
-            (true, _, false) => $spawner.spawn((base, walls)).id(),
-            (true, _, true) => $spawner.spawn((base, walls, gravity)).id(),
-            (false, true, false) => $spawner.spawn((base, spin)).id(),
-            (false, true, true) => $spawner.spawn((base, spin, gravity)).id(),
-            (false, false, false) => $spawner.spawn(base).id(),
-            (false, false, true) => $spawner.spawn((base, gravity)).id(),
-        }
-    }};
-}
-
-/// Insert an original particle into `world` with the id `id`; the scaling stage fills in
-/// the simulated quantities on the next step.
-pub fn spawn_particle(world: &mut World, spec: &ParticleSpec, id: u32) -> Entity {
-    let layout = *world.resource::<ParticleLayout>();
-    spawn_with_layout!(world, layout, spec, id)
-}
-
-/// Same as [`spawn_particle`], through `Commands` (for systems such as feeders).
-pub fn spawn_particle_deferred(
-    commands: &mut Commands,
-    layout: ParticleLayout,
-    spec: &ParticleSpec,
-    id: u32,
-) -> Entity {
-    spawn_with_layout!(commands, layout, spec, id)
-}
-
-fn base_bundle(spec: &ParticleSpec, id: u32) -> impl Bundle {
-    (
-        ParticleId(id),
-        GroupId(spec.group),
-        Unscaled,
-        Position(spec.position),
-        Velocity(spec.velocity),
-        CoarseGrain {
-            alpha: spec.alpha,
-            law: spec.law,
-            original_diameter: spec.diameter,
-            original_density: spec.density,
-        },
-        // Placeholders; the scaling stage overwrites them before anything reads them.
-        (
-            Diameter(spec.diameter),
-            Density(spec.density),
-            Mass(0.0),
-            FluidCoupling {
-                drag_diameter: spec.diameter,
-                force_scale: 1.0,
-                tau: f64::INFINITY,
-            },
-            StokesFactors {
-                gain: 0.0,
-                relax: 0.0,
-            },
-        ),
-    )
-}
-
-/// Next free particle id (resource).
-#[derive(Resource, Clone, Copy, Debug, Default, PartialEq)]
-pub struct NextParticleId(pub u32);
 
 /// A ready-to-run simulation.
 pub struct Simulation {
@@ -201,19 +95,6 @@ pub struct ParticleState {
     pub density: f64,
 }
 
-/// Start the compute thread pool with `threads` threads (0 = all cores). Only the first
-/// call in a process has an effect; results do not depend on the thread count.
-pub fn init_threads(threads: usize) {
-    let n = if threads == 0 {
-        std::thread::available_parallelism().map_or(1, |n| n.get())
-    } else {
-        threads
-    };
-    bevy_tasks::ComputeTaskPool::get_or_init(|| {
-        bevy_tasks::TaskPoolBuilder::new().num_threads(n).build()
-    });
-}
-
 impl Simulation {
     /// Build the world and the step schedule from `cfg`, adding only the effects it declares.
     pub fn new(cfg: SimConfig) -> Self {
@@ -222,25 +103,12 @@ impl Simulation {
 
     /// Same as [`Simulation::new`], with feeders and an outlet.
     pub fn with_inlet_outlet(cfg: SimConfig, io: InletOutlet) -> Self {
-        init_threads(
-            std::env::var("SCG_THREADS")
-                .ok()
-                .and_then(|s| s.parse().ok())
-                .unwrap_or(0),
-        );
         let mut world = World::new();
         let motion_res = Motion {
-            dt: cfg.dt,
             integrator: cfg.integrator,
             drag: cfg.drag,
-            gravity: cfg.gravity.unwrap_or(DVec3::ZERO),
-            buoyancy: cfg.buoyancy,
         };
-        world.insert_resource(SimClock {
-            step: 0,
-            dt: cfg.dt,
-            particle_steps: 0,
-        });
+        world.insert_resource(SimClock::new(cfg.dt));
         world.insert_resource(motion_res);
         world.insert_resource(cfg.flow);
         if let Some(f) = cfg.fluid {
@@ -251,25 +119,22 @@ impl Simulation {
         world.insert_resource(NextParticleId::default());
         world.insert_resource(Recorders::default());
         let ng = cfg.groups.len();
-        world.insert_resource(Tally {
-            drained: vec![0; ng],
-            fed: vec![0; ng],
-            collisions: vec![0; ng],
-        });
+        world.insert_resource(Tally::new(ng));
         world.insert_resource(RecordingParams {
             every: cfg.record_every.unwrap_or(u64::MAX).max(1),
             groups: cfg.groups.clone(),
         });
         // Walls accumulate into Force/Torque; particle contacts kick velocities directly.
         let has_forces = cfg.walls.is_some();
-        world.insert_resource(ParticleLayout {
+        world.insert_resource(SpawnRules {
             forces: has_forces,
             spin: has_forces || cfg.contacts.is_some(),
-            gravity: cfg.gravity.is_some(),
+            gravity: cfg.gravity,
+            buoyancy: cfg.buoyancy,
+            fluid: cfg.fluid,
         });
 
         let mut b = StepBuilder::new();
-        scaling::plugin(&mut b);
         let mut rotation = false;
         if let Some(c) = &cfg.contacts {
             // Contacts kick the angular velocity themselves; integrate_rotation is for
@@ -277,23 +142,7 @@ impl Simulation {
             contacts::plugin(&mut world, &mut b, c);
         }
         if let Some(w) = cfg.walls {
-            // Wall contacts use the wall material's friction, and the rolling friction and
-            // stiffness rule of the particle contacts when declared.
-            let law = match &cfg.contacts {
-                Some(c) => crate::contact::TangentialLaw {
-                    friction: w.material.friction,
-                    ..c.tangential()
-                },
-                None => crate::contact::TangentialLaw::new(w.law, w.material.friction, 0.0),
-            };
-            let t = WallTangential {
-                law: crate::contact::TangentialLaw {
-                    damping: crate::contact::tangential::damping_factor(w.law),
-                    ..law
-                },
-                // A wall of the same material: G* = G/(2(2 − ν)).
-                g_eff: w.material.effective_shear_modulus(),
-            };
+            let t = WallTangential::new(&w, cfg.contacts.as_ref().map(|c| c.tangential()));
             rotation |= t.law.active();
             world.insert_resource(w);
             walls::plugin(&mut world, &mut b, Some(t));
@@ -321,24 +170,9 @@ impl Simulation {
         &self.plan
     }
 
-    /// Spawn an original particle (coarse-grained on the next step); returns its id.
+    /// Spawn an original particle (it enters coarse-grained); returns its id.
     pub fn spawn(&mut self, spec: &ParticleSpec) -> u32 {
-        let id = {
-            let mut next = self.world.resource_mut::<NextParticleId>();
-            let id = next.0;
-            next.0 += 1;
-            id
-        };
-        spawn_particle(&mut self.world, spec, id);
-        id
-    }
-
-    /// Apply the scaling stage now (normally the first thing a step does), so the
-    /// simulated quantities can be inspected before the first step.
-    pub fn scale_new_particles(&mut self) {
-        let _ = self
-            .world
-            .run_system_once(scaling::coarse_grain_new_particles);
+        spawn_particle(&mut self.world, spec)
     }
 
     /// Add a recorder.
@@ -368,8 +202,7 @@ impl Simulation {
 
     /// Record the current state now (used for the initial frame).
     pub fn record_now(&mut self) -> Result<(), SimError> {
-        if self.plan.contains("record_frame") {
-            self.scale_new_particles();
+        if self.plan.contains(StepSystem::RecordFrame) {
             let _ = self.world.run_system_once(recording::record_frame);
         }
         self.check()

@@ -2,17 +2,20 @@
 //!
 //! A step runs these system sets, in this order:
 //!
-//! 1. [`StepSet::Scaling`] — coarse-grain newly spawned particles (diameter, density,
-//!    mass, drag factors);
+//! 1. [`StepSet::Scaling`] — coarse graining. Particles enter the world already
+//!    coarse-grained ([`crate::spawn`]: diameter, density, mass, fluid coupling, drag
+//!    factors from the scaling law), so no system runs here per step;
 //! 2. [`StepSet::NeighbourSearch`] — rebuild the Verlet neighbour list when needed;
-//! 3. [`StepSet::Forces`] — clear and accumulate contact forces (particles, walls);
-//! 4. [`StepSet::Integration`] — drag + other forces move the particles; the clock advances;
+//! 3. [`StepSet::Forces`] — contact forces (particle pairs, walls);
+//! 4. [`StepSet::Integration`] — contact kicks, drag and gravity move the particles; the
+//!    clock advances;
 //! 5. [`StepSet::InletOutlet`] — feeders spawn, outlets drain, the non-finite guard checks;
 //! 6. [`StepSet::Recording`] — frames go to the recorders.
 //!
-//! Each effect (see [`crate::effects`]) adds its systems to these sets only when the
-//! scene declares it; [`Plan`] lists what was added and `scg run --plan` prints it.
-//! Every set starts with a timer mark, so [`StageTimers`] gives the wall time per set.
+//! Each stage module (see [`crate::stages`]) adds its systems to these sets only when the
+//! scene declares its effect; [`Plan`] lists what was added, by [`StepSystem`], and
+//! `scg run --plan` prints it. Every set starts with a timer mark, so [`StageTimers`] gives
+//! the wall time per set.
 
 use std::time::{Duration, Instant};
 
@@ -23,7 +26,7 @@ use bevy_ecs::system::ScheduleSystem;
 /// The ordered stages of a step.
 #[derive(SystemSet, Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum StepSet {
-    /// Coarse graining of new particles.
+    /// Coarse graining (done at spawn).
     Scaling,
     /// Neighbour list maintenance.
     NeighbourSearch,
@@ -38,7 +41,7 @@ pub enum StepSet {
 }
 
 impl StepSet {
-    /// All sets in execution order.
+    /// All sets in execution order (the one place the order is written).
     pub const ORDER: [StepSet; 6] = [
         StepSet::Scaling,
         StepSet::NeighbourSearch,
@@ -47,6 +50,9 @@ impl StepSet {
         StepSet::InletOutlet,
         StepSet::Recording,
     ];
+
+    /// Number of sets.
+    pub const COUNT: usize = Self::ORDER.len();
 
     /// Short lower-case name for reports.
     pub fn name(self) -> &'static str {
@@ -60,8 +66,73 @@ impl StepSet {
         }
     }
 
-    fn index(self) -> usize {
+    /// Position in [`StepSet::ORDER`].
+    pub fn index(self) -> usize {
         self as usize
+    }
+}
+
+/// The systems a step can run: the typed handle a [`Plan`] is queried with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum StepSystem {
+    /// Rebuild the Verlet list when needed (contacts).
+    MaintainNeighbourList,
+    /// Particle–particle contact forces (contacts).
+    ParticleContactForces,
+    /// Normal wall forces only (walls without friction).
+    WallNormalForces,
+    /// Normal and tangential wall forces and torques (walls with friction).
+    WallContactForces,
+    /// Contact forces and torques applied as kicks (contacts).
+    ApplyContactKicks,
+    /// No fluid: kick, then the exact drift under gravity.
+    IntegrateBallistic,
+    /// Stokes drag, exponential scheme, precomputed factors.
+    IntegrateStokesExponential,
+    /// Reynolds-dependent drag, exponential scheme.
+    IntegrateDragExponential,
+    /// Any drag law, semi-implicit Euler with sub-steps.
+    IntegrateDragExplicit,
+    /// Angular velocity from the wall torques.
+    IntegrateRotation,
+    /// Advance the step counter.
+    AdvanceClock,
+    /// Remove drained and lost particles.
+    DrainParticles,
+    /// Spawn fed particles.
+    FeedParticles,
+    /// Stop on a non-finite state.
+    CheckFiniteState,
+    /// Hand a frame to the recorders.
+    RecordFrame,
+}
+
+impl StepSystem {
+    /// The system's name, as `scg run --plan` prints it.
+    pub fn name(self) -> &'static str {
+        match self {
+            StepSystem::MaintainNeighbourList => "maintain_neighbour_list",
+            StepSystem::ParticleContactForces => "particle_contact_forces",
+            StepSystem::WallNormalForces => "wall_normal_forces",
+            StepSystem::WallContactForces => "wall_contact_forces",
+            StepSystem::ApplyContactKicks => "apply_contact_kicks",
+            StepSystem::IntegrateBallistic => "integrate_ballistic",
+            StepSystem::IntegrateStokesExponential => "integrate_stokes_exponential",
+            StepSystem::IntegrateDragExponential => "integrate_drag_exponential",
+            StepSystem::IntegrateDragExplicit => "integrate_drag_explicit",
+            StepSystem::IntegrateRotation => "integrate_rotation",
+            StepSystem::AdvanceClock => "advance_clock",
+            StepSystem::DrainParticles => "drain_particles",
+            StepSystem::FeedParticles => "feed_particles",
+            StepSystem::CheckFiniteState => "check_finite_state",
+            StepSystem::RecordFrame => "record_frame",
+        }
+    }
+}
+
+impl std::fmt::Display for StepSystem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
     }
 }
 
@@ -75,10 +146,10 @@ struct Slot(StepSet, usize);
 pub struct PlannedSystem {
     /// The set it runs in.
     pub set: StepSet,
-    /// The effect that added it.
+    /// The effect that added it (`drag:stokes`, `walls`, …).
     pub effect: &'static str,
-    /// The system's name.
-    pub system: &'static str,
+    /// The system.
+    pub system: StepSystem,
 }
 
 /// The systems a scene produced, in execution order (resource).
@@ -89,9 +160,14 @@ pub struct Plan {
 }
 
 impl Plan {
-    /// True when any system of the plan has this name.
-    pub fn contains(&self, system: &str) -> bool {
+    /// True when the plan runs `system`.
+    pub fn contains(&self, system: StepSystem) -> bool {
         self.systems.iter().any(|s| s.system == system)
+    }
+
+    /// Position of `system` in the execution order, if planned.
+    pub fn position(&self, system: StepSystem) -> Option<usize> {
+        self.systems.iter().position(|s| s.system == system)
     }
 
     /// The systems of one set.
@@ -106,10 +182,13 @@ impl Plan {
             let systems: Vec<_> = self.in_set(set).collect();
             out.push_str(&format!("{}. {}\n", set.index() + 1, set.name()));
             if systems.is_empty() {
-                out.push_str("     (nothing)\n");
+                out.push_str(match set {
+                    StepSet::Scaling => "     (at spawn: particles enter coarse-grained)\n",
+                    _ => "     (nothing)\n",
+                });
             }
             for s in systems {
-                out.push_str(&format!("     {:<34} [{}]\n", s.system, s.effect));
+                out.push_str(&format!("     {:<34} [{}]\n", s.system.name(), s.effect));
             }
         }
         out
@@ -120,7 +199,7 @@ impl Plan {
 #[derive(Resource, Clone, Debug, Default)]
 pub struct StageTimers {
     /// Accumulated time per set, indexed like [`StepSet::ORDER`].
-    pub total: [Duration; 6],
+    pub total: [Duration; StepSet::COUNT],
     /// Steps timed.
     pub steps: u64,
     open: Option<(usize, Instant)>,
@@ -152,19 +231,11 @@ impl StageTimers {
     }
 }
 
-fn timer_mark<const I: usize>(mut timers: ResMut<StageTimers>) {
-    timers.mark(Some(I));
-}
-
-fn timer_end(mut timers: ResMut<StageTimers>) {
-    timers.mark(None);
-}
-
 /// Collects the systems of a scene into a [`Schedule`] in the fixed set order.
 pub struct StepBuilder {
     schedule: Schedule,
     plan: Plan,
-    next_slot: [usize; 6],
+    next_slot: [usize; StepSet::COUNT],
 }
 
 impl Default for StepBuilder {
@@ -174,35 +245,28 @@ impl Default for StepBuilder {
 }
 
 impl StepBuilder {
-    /// A schedule with the six sets chained and their timer marks in place.
+    /// A schedule with the sets chained in [`StepSet::ORDER`] and their timer marks in
+    /// place.
     pub fn new() -> Self {
         let mut schedule = Schedule::default();
-        // One thread runs the systems in a fixed order; the systems themselves use both
-        // cores through parallel queries. This keeps results independent of thread count.
+        // One thread runs the systems in a fixed order; the systems themselves use every
+        // core through the team (crate::exec). Results do not depend on the thread count.
         schedule.set_executor(SingleThreadedExecutor::new());
-        schedule.configure_sets(
-            (
-                StepSet::Scaling,
-                StepSet::NeighbourSearch,
-                StepSet::Forces,
-                StepSet::Integration,
-                StepSet::InletOutlet,
-                StepSet::Recording,
-            )
-                .chain(),
-        );
+        for pair in StepSet::ORDER.windows(2) {
+            schedule.configure_sets(pair[1].after(pair[0]));
+        }
         let mut b = StepBuilder {
             schedule,
             plan: Plan::default(),
-            next_slot: [0; 6],
+            next_slot: [0; StepSet::COUNT],
         };
-        b.add_internal(StepSet::Scaling, timer_mark::<0>);
-        b.add_internal(StepSet::NeighbourSearch, timer_mark::<1>);
-        b.add_internal(StepSet::Forces, timer_mark::<2>);
-        b.add_internal(StepSet::Integration, timer_mark::<3>);
-        b.add_internal(StepSet::InletOutlet, timer_mark::<4>);
-        b.add_internal(StepSet::Recording, timer_mark::<5>);
-        b.schedule.add_systems(timer_end.after(StepSet::Recording));
+        for set in StepSet::ORDER {
+            let i = set.index();
+            b.add_internal(set, move |mut t: ResMut<StageTimers>| t.mark(Some(i)));
+        }
+        let last = StepSet::ORDER[StepSet::COUNT - 1];
+        b.schedule
+            .add_systems((|mut t: ResMut<StageTimers>| t.mark(None)).after(last));
         b
     }
 
@@ -223,12 +287,12 @@ impl StepBuilder {
         }
     }
 
-    /// Add `system` (named `name` in the plan) for `effect` at the end of `set`.
+    /// Add `system` (planned as `name`) for `effect` at the end of `set`.
     pub fn add<M>(
         &mut self,
         set: StepSet,
         effect: &'static str,
-        name: &'static str,
+        name: StepSystem,
         system: impl IntoScheduleConfigs<ScheduleSystem, M>,
     ) {
         self.add_internal(set, system);

@@ -3,13 +3,13 @@
 
 use glam::DVec3;
 
-use scg_core::contact::NormalLaw;
-use scg_core::contact::normal::{hertz_contact_time, linear_contact_time};
-use scg_core::drag::{DragLaw, particle_reynolds, stokes_response_time};
-use scg_core::flow::FlowField;
-use scg_core::integrate::Integrator;
-use scg_core::scaling::coarse_grain;
-use scg_core::walls::WallShape;
+use scg_core::physics::contact::NormalLaw;
+use scg_core::physics::contact::normal::{hertz_contact_time, linear_contact_time};
+use scg_core::physics::drag::{DragLaw, particle_reynolds, stokes_response_time};
+use scg_core::physics::flow::FlowField;
+use scg_core::physics::integrate::Integrator;
+use scg_core::physics::scaling::coarse_grain;
+use scg_core::physics::wall_shape::WallShape;
 
 use crate::{Placement, Scene};
 
@@ -232,7 +232,7 @@ fn reference_speed(scene: &Scene, tau: f64, g: &crate::Group) -> f64 {
 
 fn contact_time(scene: &Scene, d: f64, rho: f64, v: f64) -> Option<f64> {
     let mat = scene.material?;
-    let m = scg_core::scaling::sphere_mass(d, rho);
+    let m = scg_core::physics::scaling::sphere_mass(d, rho);
     let e_eff = mat.effective_modulus();
     match scene.normal_law? {
         // Wall contact: R* = d/2, m* = m.
@@ -302,8 +302,8 @@ pub fn particle_contact_time(scene: &Scene) -> Option<f64> {
     let mut tc = f64::INFINITY;
     for (i, a) in gs.iter().enumerate() {
         for b in &gs[i..] {
-            let m = scg_core::contact::normal::effective(a.0, b.0);
-            let r = scg_core::contact::normal::effective(a.1, b.1);
+            let m = scg_core::physics::contact::normal::effective(a.0, b.0);
+            let r = scg_core::physics::contact::normal::effective(a.1, b.1);
             let t = match c.law {
                 NormalLaw::Hertz { .. } => hertz_contact_time(m, r, e_eff, a.2 + b.2),
                 NormalLaw::Linear { stiffness, zeta } => linear_contact_time(m, stiffness, zeta),
@@ -472,7 +472,7 @@ pub fn check(scene: &Scene) -> Report {
                 r.name,
                 scene.dt,
                 0.5 * r.tau,
-                scg_core::integrate::explicit_substeps(r.tau, scene.dt)
+                scg_core::physics::integrate::explicit_substeps(r.tau, scene.dt)
             ));
         }
         if let Some(tc) = r.contact_time

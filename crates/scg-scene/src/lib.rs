@@ -13,19 +13,19 @@ use glam::DVec3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use scg_core::contact::tangential::TangentialStiffness;
-use scg_core::contact::{Material, NormalLaw};
-use scg_core::drag::DragLaw;
-use scg_core::effects::contacts::ContactConfig;
-use scg_core::effects::feeder::FeederSpec;
-use scg_core::effects::outlet::OutletSpec;
-use scg_core::effects::walls::{Wall, WallSet};
-use scg_core::flow::{FlowField, Fluid, Vortex, rpm_to_rad_per_s};
 use scg_core::frame::{GroupMeta, Outline, RunMeta};
-use scg_core::integrate::Integrator;
-use scg_core::scaling::CoarseGrainLaw;
+use scg_core::physics::contact::tangential::TangentialStiffness;
+use scg_core::physics::contact::{Material, NormalLaw};
+use scg_core::physics::drag::DragLaw;
+use scg_core::physics::flow::{FlowField, Fluid, Vortex, rpm_to_rad_per_s};
+use scg_core::physics::integrate::Integrator;
+use scg_core::physics::scaling::CoarseGrainLaw;
+use scg_core::physics::wall_shape::WallShape;
 use scg_core::sim::InletOutlet;
-use scg_core::walls::WallShape;
+use scg_core::stages::contacts::ContactConfig;
+use scg_core::stages::feeder::FeederSpec;
+use scg_core::stages::outlet::OutletSpec;
+use scg_core::stages::walls::{Wall, WallSet};
 use scg_core::{ParticleSpec, SimConfig, Simulation};
 
 pub use error::SceneError;
@@ -559,7 +559,9 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
 fn max_simulated_diameter(groups: &[Group]) -> f64 {
     groups
         .iter()
-        .map(|g| scg_core::scaling::coarse_grain(g.law, g.alpha, g.diameter, g.density).diameter)
+        .map(|g| {
+            scg_core::physics::scaling::coarse_grain(g.law, g.alpha, g.diameter, g.density).diameter
+        })
         .fold(0.0, f64::max)
 }
 
@@ -713,7 +715,8 @@ fn feeder(
         (Some(r), None) => cx.non_negative(&k("rate"), r)?,
         (None, Some(v)) => {
             let v = cx.non_negative(&k("volume_rate"), v)?;
-            let d = scg_core::scaling::coarse_grain(g.law, g.alpha, g.diameter, g.density).diameter;
+            let d = scg_core::physics::scaling::coarse_grain(g.law, g.alpha, g.diameter, g.density)
+                .diameter;
             v / (std::f64::consts::PI / 6.0 * d * d * d)
         }
         (Some(_), Some(_)) => {
@@ -986,7 +989,7 @@ impl Scene {
                         region: f.region.clone(),
                         velocity: f.velocity,
                         spin: self.flow.vortex().filter(|_| f.swirl != 0.0).map(|v| {
-                            scg_core::effects::feeder::Spin {
+                            scg_core::stages::feeder::Spin {
                                 center: v.center,
                                 omega: v.axis * (v.omega * f.swirl),
                             }
@@ -1045,7 +1048,6 @@ impl Scene {
         for p in self.initial_particles() {
             sim.spawn(&p);
         }
-        sim.scale_new_particles();
         sim
     }
 

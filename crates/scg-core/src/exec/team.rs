@@ -8,7 +8,7 @@
 //! in its own core's caches (when any thread took any task, the dense contact bed gained
 //! only 1.3× from the second core, the pair data migrating between cores at every step).
 //! [`Team::run`] returns when every worker has finished the job. Between jobs a worker
-//! spins for the block time (see [`crate::par`]) before it sleeps, so that the many short
+//! spins for the block time ([`super::ExecSettings::block_time`]) before it sleeps, so that the many short
 //! jobs of a step start without a wake-up (an empty job costs about 0.7 µs on two cores).
 //!
 //! The team never decides *what* is computed, only *where*: callers split their work into
@@ -101,7 +101,6 @@ impl Team {
             return serial();
         };
         let s = self.shared;
-        crate::par::end_block_time();
         let job = Job { f, n };
         // SAFETY (lifetime): the job outlives its use, since this function returns only
         // after every worker has reported `pending` done for this epoch, and workers read
@@ -208,16 +207,11 @@ fn worker(s: &'static Shared, me: usize, workers: usize) {
 
 static TEAM: OnceLock<Team> = OnceLock::new();
 
-/// The process-wide team: as many workers as the compute pool has threads
-/// (`SCG_THREADS`, else every core).
+/// The process-wide team, sized by [`super::settings`] when first used.
 pub fn team() -> &'static Team {
     TEAM.get_or_init(|| {
-        let pool = bevy_tasks::ComputeTaskPool::get_or_init(bevy_tasks::TaskPool::default);
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        Team::new(
-            pool.thread_num().clamp(1, cores.max(1)),
-            crate::par::block_time(),
-        )
+        let s = super::settings();
+        Team::new(s.team_size(), s.block_time)
     })
 }
 

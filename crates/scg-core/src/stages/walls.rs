@@ -9,11 +9,14 @@
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 
+use super::table::{bypass, columns_mut};
 use crate::components::*;
-use crate::contact::tangential::{rolling_torque, tangential_force};
-use crate::contact::{Material, NormalLaw, TangentialLaw};
-use crate::step::{StepBuilder, StepSet};
-use crate::walls::WallShape;
+use crate::exec::par::for_each_piece;
+use crate::physics::contact::tangential::{rolling_torque, tangential_force};
+use crate::physics::contact::{Material, NormalLaw, TangentialLaw};
+use crate::physics::wall_shape::WallShape;
+use crate::state::SimClock;
+use crate::step::{StepBuilder, StepSet, StepSystem};
 
 /// A named wall.
 #[derive(Clone, Debug, PartialEq)]
@@ -44,6 +47,27 @@ pub struct WallTangential {
     pub g_eff: f64,
 }
 
+impl WallTangential {
+    /// The tangential law of wall contacts: the wall material's friction, with the rolling
+    /// friction and stiffness rule of the particle contacts' law when the scene declares
+    /// contacts (`particles`), and the wall's own damping factor.
+    pub fn new(walls: &WallSet, particles: Option<TangentialLaw>) -> Self {
+        let friction = walls.material.friction;
+        let law = match particles {
+            Some(p) => TangentialLaw { friction, ..p },
+            None => TangentialLaw::new(walls.law, friction, 0.0),
+        };
+        WallTangential {
+            law: TangentialLaw {
+                damping: crate::physics::contact::tangential::damping_factor(walls.law),
+                ..law
+            },
+            // A wall of the same material: G* = G/(2(2 − ν)).
+            g_eff: walls.material.effective_shear_modulus(),
+        }
+    }
+}
+
 /// Add the wall systems: normal forces only, or with the tangential law when given.
 pub fn plugin(world: &mut World, b: &mut StepBuilder, tangential: Option<WallTangential>) {
     match tangential {
@@ -52,14 +76,14 @@ pub fn plugin(world: &mut World, b: &mut StepBuilder, tangential: Option<WallTan
             b.add(
                 StepSet::Forces,
                 "walls",
-                "wall_contact_forces",
+                StepSystem::WallContactForces,
                 wall_contact_forces,
             );
         }
         _ => b.add(
             StepSet::Forces,
             "walls",
-            "wall_normal_forces",
+            StepSystem::WallNormalForces,
             wall_normal_forces,
         ),
     }
@@ -72,19 +96,23 @@ pub fn wall_normal_forces(
 ) {
     let walls = &*walls;
     let e_eff = walls.material.effective_modulus();
-    crate::par::for_each_mut(&mut q, |(x, v, d, m, mut f)| {
-        let r = 0.5 * d.0;
-        let mut sum = glam::DVec3::ZERO;
-        for w in &walls.walls {
-            if let Some(t) = w.shape.touch(x.0, r) {
-                let vn = v.0.dot(t.normal);
-                let (fn_, _) = walls.law.force(t.overlap, vn, e_eff, r, m.0);
-                sum += fn_ * t.normal;
+    let Some((xs, vs, ds, ms, fs)) = columns_mut(&mut q) else {
+        return;
+    };
+    for_each_piece((xs, vs, ds, ms, bypass(fs)), |(xs, vs, ds, ms, fs)| {
+        for i in 0..xs.len() {
+            let (x, v, r) = (xs[i].0, vs[i].0, 0.5 * ds[i].0);
+            let mut sum = DVec3::ZERO;
+            for w in &walls.walls {
+                if let Some(t) = w.shape.touch(x, r) {
+                    let vn = v.dot(t.normal);
+                    let (fn_, _) = walls.law.force(t.overlap, vn, e_eff, r, ms[i].0);
+                    sum += fn_ * t.normal;
+                }
             }
-        }
-        // The walls are the only writer of Force: set, not accumulate (no clearing pass).
-        if sum != f.0 {
-            f.0 = sum;
+            // The walls are the only writer of Force: set, not accumulate (no clearing
+            // pass).
+            fs[i].0 = sum;
         }
     });
 }
@@ -108,13 +136,13 @@ type WallQuery<'w, 's> = Query<
 pub fn wall_contact_forces(
     walls: Res<WallSet>,
     tangential: Res<WallTangential>,
-    motion: Res<crate::effects::motion::Motion>,
+    clock: Res<SimClock>,
     mut q: WallQuery,
 ) {
     let walls = &*walls;
     let tl = tangential.law;
     let g_eff = tangential.g_eff;
-    let dt = motion.dt;
+    let dt = clock.dt;
     let e_eff = walls.material.effective_modulus();
     // One particle: its wall forces and torque, its history updated in place.
     let one = move |x: DVec3,
@@ -163,35 +191,15 @@ pub fn wall_contact_forces(
         }
         (fsum, tsum)
     };
-    type Item<'a> = (
-        &'a [Position],
-        &'a [Velocity],
-        &'a [AngularVelocity],
-        &'a [Diameter],
-        &'a [Mass],
-        bevy_ecs::change_detection::ContiguousMut<'a, Force>,
-        bevy_ecs::change_detection::ContiguousMut<'a, Torque>,
-        bevy_ecs::change_detection::ContiguousMut<'a, WallHistory>,
-    );
     // The walls are the only writer of Force and Torque: they are set, not accumulated
     // (no clearing pass). A particle whose history is empty touched no wall last step (a
     // touch always leaves an entry), so its force and torque are zero: when it is clear of
     // every wall now it is not written at all.
-    type Parts<'a> = (
-        &'a [Position],
-        &'a [Velocity],
-        &'a [AngularVelocity],
-        &'a [Diameter],
-        &'a [Mass],
-        &'a mut [Force],
-        &'a mut [Torque],
-        &'a mut [WallHistory],
-    );
-    fn parts<'a>((xs, vs, ws, ds, ms, fs, ts, hs): Item<'a>) -> Parts<'a> {
-        use crate::par::bypass;
-        (xs, vs, ws, ds, ms, bypass(fs), bypass(ts), bypass(hs))
-    }
-    let chunk = move |(xs, vs, ws, ds, ms, fs, ts, hs): Parts| {
+    let Some((xs, vs, ws, ds, ms, fs, ts, hs)) = columns_mut(&mut q) else {
+        return;
+    };
+    let columns = (xs, vs, ws, ds, ms, bypass(fs), bypass(ts), bypass(hs));
+    for_each_piece(columns, |(xs, vs, ws, ds, ms, fs, ts, hs)| {
         for i in 0..xs.len() {
             let r = 0.5 * ds[i].0;
             if hs[i].0.is_empty() && walls.walls.iter().all(|w| w.shape.surely_clear(xs[i].0, r)) {
@@ -201,17 +209,5 @@ pub fn wall_contact_forces(
             fs[i].0 = f;
             ts[i].0 = t;
         }
-    };
-    let contiguous = crate::par::for_each_split(&mut q, parts, chunk);
-    if !contiguous {
-        crate::par::for_each_mut(&mut q, |(x, v, w, d, m, mut f, mut torque, mut hist)| {
-            let (fsum, tsum) = one(x.0, v.0, w.0, d.0, m.0, &mut hist.0);
-            if fsum != f.0 {
-                f.0 = fsum;
-            }
-            if tsum != torque.0 {
-                torque.0 = tsum;
-            }
-        });
-    }
+    });
 }

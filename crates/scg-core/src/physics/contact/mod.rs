@@ -1,5 +1,7 @@
-//! Contact mechanics: pure kernels (normal, tangential) and the contact material.
+//! Contact mechanics: pure kernels (normal, tangential, the pair kernel) and the contact
+//! material.
 pub mod normal;
+pub mod pair;
 pub mod tangential;
 
 pub use normal::NormalLaw;

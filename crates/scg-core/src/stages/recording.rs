@@ -4,9 +4,10 @@
 use bevy_ecs::prelude::*;
 
 use crate::components::*;
-use crate::effects::motion::SimClock;
 use crate::frame::{Frame, Recorders};
-use crate::step::{StepBuilder, StepSet};
+use crate::state::{SimClock, Tally};
+use crate::stats::Stat;
+use crate::step::{StepBuilder, StepSet, StepSystem};
 
 /// Recording parameters (resource).
 #[derive(Resource, Clone, Debug, PartialEq)]
@@ -17,23 +18,12 @@ pub struct RecordingParams {
     pub groups: Vec<String>,
 }
 
-/// Per-group counters kept by the outlet and contact stages (resource).
-#[derive(Resource, Clone, Debug, Default, PartialEq)]
-pub struct Tally {
-    /// Particles drained through an outlet, per group.
-    pub drained: Vec<u64>,
-    /// Particles fed, per group.
-    pub fed: Vec<u64>,
-    /// Contacts that started, per group (a particle–particle contact counts for both).
-    pub collisions: Vec<u64>,
-}
-
 /// Add the recording system.
 pub fn plugin(b: &mut StepBuilder) {
     b.add(
         StepSet::Recording,
         "recording",
-        "record_frame",
+        StepSystem::RecordFrame,
         record_frame,
     );
 }
@@ -90,18 +80,16 @@ pub fn build_frame(
         ke += 0.5 * m.0 * v.0.length_squared();
     }
     for (i, name) in params.groups.iter().enumerate() {
-        fr.stats.push((format!("count/{name}"), count[i] as f64));
+        fr.stats.push((Stat::Count(name).key(), count[i] as f64));
         let drained = tally.drained.get(i).copied().unwrap_or(0);
-        fr.stats.push((format!("drained/{name}"), drained as f64));
+        fr.stats.push((Stat::Drained(name).key(), drained as f64));
         if let Some(c) = tally.collisions.get(i) {
-            fr.stats.push((format!("collisions/{name}"), *c as f64));
+            fr.stats.push((Stat::Collisions(name).key(), *c as f64));
         }
     }
-    fr.stats.push((
-        "mean_speed".into(),
-        if n > 0 { speed_sum / n as f64 } else { 0.0 },
-    ));
-    fr.stats.push(("kinetic_energy".into(), ke));
+    let mean_speed = if n > 0 { speed_sum / n as f64 } else { 0.0 };
+    fr.stats.push((Stat::MeanSpeed.key(), mean_speed));
+    fr.stats.push((Stat::KineticEnergy.key(), ke));
     fr
 }
 

@@ -120,7 +120,7 @@ mod tests {
     #[test]
     fn response_time_matches_rho_d2_over_18_mu() {
         let (d, rho, mu) = (1e-5, 1000.0, 1.8e-5);
-        let m = crate::scaling::sphere_mass(d, rho);
+        let m = crate::physics::scaling::sphere_mass(d, rho);
         let tau = stokes_response_time(m, mu, d, 1.0);
         let expect = rho * d * d / (18.0 * mu);
         assert!(((tau - expect) / expect).abs() < 1e-14);

@@ -159,7 +159,8 @@ impl NeighbourList {
             return false;
         }
         self.checks += 1;
-        let d2 = crate::par::par_max_zip(pos, &self.reference, |x, r| (*x - *r).length_squared());
+        let d2 =
+            crate::exec::par::par_max_zip(pos, &self.reference, |x, r| (*x - *r).length_squared());
         // A NaN displacement (non-finite state) also rebuilds.
         if d2.is_nan() || d2 > half * half {
             return true;
@@ -460,7 +461,7 @@ fn in_blocks(n: usize, pairs_of: impl Fn(usize, usize) -> Vec<[u32; 2]> + Sync) 
         return pairs_of(0, n);
     }
     let mut blocks: Vec<Vec<[u32; 2]>> = vec![Vec::new(); n.div_ceil(BLOCK)];
-    crate::team::for_each_item(&mut blocks, |k, out| {
+    crate::exec::team::for_each_item(&mut blocks, |k, out| {
         *out = pairs_of(k * BLOCK, ((k + 1) * BLOCK).min(n));
     });
     let mut out = Vec::with_capacity(blocks.iter().map(Vec::len).sum());

@@ -312,8 +312,8 @@ mod tests {
         assert!((g - g1 / (2.0 * 1.7)).abs() < 1e-3);
         assert!((mindlin_stiffness(g, 1e-3, 1e-6) - 8.0 * g * 1e-9_f64.sqrt()).abs() < 1e-6);
         // Ratio k_t/k_n for Hertz: 8G*√(Rδ) / (2E*√(Rδ)) = 4G*/E* = 2(1−ν)/(2−ν).
-        let e = crate::contact::normal::effective_modulus(1e9, 0.3, 1e9, 0.3);
-        let kn = 1.5 * crate::contact::normal::hertz_stiffness(e, 1e-3) * 1e-3;
+        let e = crate::physics::contact::normal::effective_modulus(1e9, 0.3, 1e9, 0.3);
+        let kn = 1.5 * crate::physics::contact::normal::hertz_stiffness(e, 1e-3) * 1e-3;
         let kt = mindlin_stiffness(g, 1e-3, 1e-6);
         assert!((kt / kn - 2.0 * 0.7 / 1.7).abs() < 1e-12);
     }
@@ -345,7 +345,7 @@ mod tests {
 
     #[test]
     fn hertz_mindlin_matches_the_separate_laws() {
-        use crate::contact::NormalLaw;
+        use crate::physics::contact::NormalLaw;
         let (e, g): (f64, f64) = (
             1.0e8 / (2.0 * (1.0 - 0.09)),
             1.0e8 / (2.0 * 2.6) / (2.0 * 1.7),

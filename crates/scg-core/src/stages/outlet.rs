@@ -6,9 +6,8 @@ use bevy_ecs::prelude::*;
 use glam::DVec3;
 
 use crate::components::*;
-use crate::effects::motion::SimClock;
-use crate::effects::recording::Tally;
-use crate::step::{StepBuilder, StepSet};
+use crate::state::{SimClock, Tally};
+use crate::step::{StepBuilder, StepSet, StepSystem};
 
 /// Outlet geometry: a disc of radius `nozzle_radius` about the axis at axial coordinate
 /// `plane` (from `center` along `axis`), crossed toward +axis; and the domain, a cylinder
@@ -87,7 +86,7 @@ pub fn plugin(world: &mut World, b: &mut StepBuilder, spec: OutletSpec, groups: 
     b.add(
         StepSet::InletOutlet,
         "outlet",
-        "drain_particles",
+        StepSystem::DrainParticles,
         drain_particles,
     );
 }

@@ -11,14 +11,11 @@ use glam::DVec3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::effects::motion::SimClock;
-use crate::effects::recording::Tally;
-use crate::effects::scaling::derive;
-use crate::flow::Fluid;
+use crate::physics::scaling::CoarseGrainLaw;
 use crate::region::Region;
-use crate::scaling::CoarseGrainLaw;
-use crate::sim::{NextParticleId, ParticleLayout, ParticleSpec, spawn_particle_deferred};
-use crate::step::{StepBuilder, StepSet};
+use crate::spawn::{ParticleSpec, SpawnRules, spawn_particle_deferred};
+use crate::state::{NextParticleId, SimClock, Tally};
+use crate::step::{StepBuilder, StepSet, StepSystem};
 
 /// One feeder as the scene declares it.
 #[derive(Clone, Debug, PartialEq)]
@@ -127,25 +124,22 @@ pub fn plugin(world: &mut World, b: &mut StepBuilder, specs: &[FeederSpec], seed
     b.add(
         StepSet::InletOutlet,
         "feeders",
-        "feed_particles",
+        StepSystem::FeedParticles,
         feed_particles,
     );
 }
 
-/// Spawn the particles due at the end of this step (already coarse grained, so the frame
+/// Spawn the particles due at the end of this step (coarse-grained at spawn, so the frame
 /// recorded this step shows their simulated diameter and density).
-#[allow(clippy::too_many_arguments)]
 pub fn feed_particles(
     mut commands: Commands,
     clock: Res<SimClock>,
-    layout: Res<ParticleLayout>,
-    fluid: Option<Res<Fluid>>,
+    rules: Res<SpawnRules>,
     mut feeders: ResMut<Feeders>,
     mut next: ResMut<NextParticleId>,
     mut tally: ResMut<Tally>,
 ) {
     let t = clock.time();
-    let fluid = fluid.as_deref();
     for f in feeders.list.iter_mut() {
         if !clock.step.is_multiple_of(f.spec.every.max(1)) {
             continue;
@@ -164,16 +158,8 @@ pub fn feed_particles(
                 position,
                 velocity,
             };
-            let id = next.0;
-            next.0 += 1;
-            let e = spawn_particle_deferred(&mut commands, *layout, &spec, id);
-            let cg = crate::components::CoarseGrain {
-                alpha: spec.alpha,
-                law: spec.law,
-                original_diameter: spec.diameter,
-                original_density: spec.density,
-            };
-            commands.entity(e).insert(derive(&cg, fluid, clock.dt));
+            let id = next.take();
+            spawn_particle_deferred(&mut commands, &rules, &spec, id, clock.dt);
             f.fed += 1;
             if let Some(c) = tally.fed.get_mut(f.spec.group as usize) {
                 *c += 1;

@@ -1,0 +1,17 @@
+//! Pure physics: laws and kernels as functions of their inputs, with units and equations
+//! in their docs, unit-tested without a World.
+//!
+//! * [`scaling`] — coarse-graining laws (SCG, none, mass-equivalent, parcel);
+//! * [`drag`] — drag laws (Stokes, Schiller–Naumann) and response times;
+//! * [`flow`] — the prescribed fluid flow fields;
+//! * [`integrate`] — the exponential and explicit schemes, kicks;
+//! * [`contact`] — normal, tangential and rolling laws, and the pair kernel;
+//! * [`wall_shape`] — wall geometry (planes, cylinders) and touch tests;
+//! * [`neighbour`] — the Verlet neighbour list.
+pub mod contact;
+pub mod drag;
+pub mod flow;
+pub mod integrate;
+pub mod neighbour;
+pub mod scaling;
+pub mod wall_shape;

@@ -1,0 +1,150 @@
+//! Spawning: particles enter the world already coarse-grained, with every component the
+//! scene's layout needs, in one bundle, so that all particles share one storage table
+//! ([`crate::stages::table`]) and nothing moves them between tables later.
+
+use bevy_ecs::prelude::*;
+use glam::DVec3;
+
+use crate::components::*;
+use crate::physics::drag::stokes_response_time;
+use crate::physics::flow::Fluid;
+use crate::physics::integrate::exponential_factors;
+use crate::physics::scaling::{CoarseGrainLaw, coarse_grain};
+use crate::state::{NextParticleId, SimClock};
+
+/// An original particle to spawn; it enters coarse-grained by `law` with ratio `alpha`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParticleSpec {
+    /// Group index.
+    pub group: u32,
+    /// Original diameter, m.
+    pub diameter: f64,
+    /// Original density, kg/m³.
+    pub density: f64,
+    /// Coarse-graining ratio α.
+    pub alpha: f64,
+    /// Coarse-graining law.
+    pub law: CoarseGrainLaw,
+    /// Initial centre, m.
+    pub position: DVec3,
+    /// Initial velocity, m/s.
+    pub velocity: DVec3,
+}
+
+/// What every particle of a scene gets besides its own spec (resource).
+#[derive(Resource, Clone, Copy, Debug, PartialEq)]
+pub struct SpawnRules {
+    /// Wall force/torque accumulators, angular velocity and wall history (walls present).
+    pub forces: bool,
+    /// Angular velocity (walls or particle contacts present).
+    pub spin: bool,
+    /// Gravity, m/s², when the scene declares it (then every particle has a
+    /// [`BodyAcceleration`]).
+    pub gravity: Option<DVec3>,
+    /// Reduce gravity by the buoyancy of the fluid: a = g·(1 − ρ_f/ρ_p).
+    pub buoyancy: bool,
+    /// The fluid, if any (drag response time, buoyancy).
+    pub fluid: Option<Fluid>,
+}
+
+/// The simulated quantities of an original particle coarse-grained by `law` with ratio
+/// `alpha`, for time step `dt`: diameter, density, mass, fluid coupling, Stokes factors.
+pub fn coarse_grained(
+    cg: &CoarseGrain,
+    fluid: Option<&Fluid>,
+    dt: f64,
+) -> (Diameter, Density, Mass, FluidCoupling, StokesFactors) {
+    let s = coarse_grain(cg.law, cg.alpha, cg.original_diameter, cg.original_density);
+    let mass = s.mass();
+    let tau = match fluid {
+        Some(f) if f.viscosity > 0.0 => {
+            stokes_response_time(mass, f.viscosity, s.drag_diameter, s.force_scale)
+        }
+        _ => f64::INFINITY,
+    };
+    let (gain, relax) = exponential_factors(tau, dt);
+    (
+        Diameter(s.diameter),
+        Density(s.density),
+        Mass(mass),
+        FluidCoupling {
+            drag_diameter: s.drag_diameter,
+            force_scale: s.force_scale,
+            tau,
+        },
+        StokesFactors { gain, relax },
+    )
+}
+
+impl SpawnRules {
+    /// Body acceleration of a particle of simulated density `density` (kg/m³), m/s².
+    pub fn body_acceleration(&self, density: f64) -> DVec3 {
+        let reduce = match self.fluid {
+            Some(f) if self.buoyancy => 1.0 - f.density / density,
+            _ => 1.0,
+        };
+        self.gravity.unwrap_or(DVec3::ZERO) * reduce
+    }
+}
+
+/// Spawn one particle with every component of the layout in a single bundle (no
+/// archetype moves), through a `World` or `Commands` (both have `spawn`).
+macro_rules! spawn_bundle {
+    ($spawner:expr, $rules:expr, $spec:expr, $id:expr, $dt:expr) => {{
+        let rules: &SpawnRules = $rules;
+        let spec: &ParticleSpec = $spec;
+        let cg = CoarseGrain {
+            alpha: spec.alpha,
+            law: spec.law,
+            original_diameter: spec.diameter,
+            original_density: spec.density,
+        };
+        let scaled = coarse_grained(&cg, rules.fluid.as_ref(), $dt);
+        let gravity = BodyAcceleration(rules.body_acceleration(scaled.1.0));
+        let base = (
+            ParticleId($id),
+            GroupId(spec.group),
+            Position(spec.position),
+            Velocity(spec.velocity),
+            cg,
+            scaled,
+        );
+        let walls = (
+            Force::default(),
+            Torque::default(),
+            AngularVelocity::default(),
+            WallHistory::default(),
+        );
+        let spin = AngularVelocity::default();
+        match (rules.forces, rules.spin, rules.gravity.is_some()) {
+            (true, _, false) => $spawner.spawn((base, walls)).id(),
+            (true, _, true) => $spawner.spawn((base, walls, gravity)).id(),
+            (false, true, false) => $spawner.spawn((base, spin)).id(),
+            (false, true, true) => $spawner.spawn((base, spin, gravity)).id(),
+            (false, false, false) => $spawner.spawn(base).id(),
+            (false, false, true) => $spawner.spawn((base, gravity)).id(),
+        }
+    }};
+}
+
+/// Spawn an original particle into `world` coarse-grained, with the next free id;
+/// returns the id.
+pub fn spawn_particle(world: &mut World, spec: &ParticleSpec) -> u32 {
+    let rules = *world.resource::<SpawnRules>();
+    let dt = world.resource::<SimClock>().dt;
+    let id = world.resource_mut::<NextParticleId>().take();
+    spawn_bundle!(world, &rules, spec, id, dt);
+    id
+}
+
+/// Same as [`spawn_particle`] through `Commands` (for systems such as feeders), with the
+/// id `id` and time step `dt` (s).
+pub fn spawn_particle_deferred(
+    commands: &mut Commands,
+    rules: &SpawnRules,
+    spec: &ParticleSpec,
+    id: u32,
+    dt: f64,
+) -> Entity {
+    spawn_bundle!(commands, rules, spec, id, dt)
+}

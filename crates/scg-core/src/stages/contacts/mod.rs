@@ -1,0 +1,177 @@
+//! Particle–particle contacts: neighbour-list upkeep ([`list`]), forces summed in fixed
+//! slots ([`slots`]) and kicks ([`kicks`]).
+//!
+//! * [`list::maintain_neighbour_list`] (StepSet::NeighbourSearch) checks that the particle
+//!   table still holds the particles the arrays index and rebuilds the Verlet list when
+//!   needed, carrying each touching pair's history over by ids;
+//! * [`slots::particle_contact_forces`] (StepSet::Forces) computes each pair's force once
+//!   with [`crate::physics::contact::pair::pair_kernel`] and adds it to its two particles
+//!   (+F on i, −F exactly on j) in the slot of the pair;
+//! * [`kicks::apply_contact_kicks`] (first of StepSet::Integration) adds the slots' sums
+//!   per particle in slot order and kicks v and ω.
+//!
+//! The result is bit-identical whatever the thread count.
+
+pub mod kicks;
+pub mod list;
+pub mod slots;
+
+use bevy_ecs::prelude::*;
+use glam::DVec3;
+
+use crate::physics::contact::pair::{PairParams, PairState};
+use crate::physics::contact::tangential::TangentialStiffness;
+use crate::physics::contact::{Material, NormalLaw, TangentialLaw};
+use crate::physics::neighbour::{NeighbourList, PeriodicBox};
+use crate::state::StepDisplacement;
+use crate::step::{StepBuilder, StepSet, StepSystem};
+use slots::{Slot, slot_sum};
+
+/// Particle–particle contact settings (part of [`crate::SimConfig`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactConfig {
+    /// Normal law.
+    pub law: NormalLaw,
+    /// Particle material (E, ν, e, μ_s).
+    pub material: Material,
+    /// Verlet skin, m.
+    pub skin: f64,
+    /// Orthogonal periodic box lengths, m (`None` = open).
+    pub periodic: Option<DVec3>,
+    /// Rolling friction coefficient μ_r (0 = off).
+    pub rolling_friction: f64,
+    /// Tangential stiffness rule.
+    pub tangential_stiffness: TangentialStiffness,
+}
+
+impl ContactConfig {
+    /// The tangential law these settings give.
+    pub fn tangential(&self) -> TangentialLaw {
+        TangentialLaw {
+            stiffness: self.tangential_stiffness,
+            ..TangentialLaw::new(self.law, self.material.friction, self.rolling_friction)
+        }
+    }
+
+    /// The constants of the pair law.
+    pub fn pair_params(&self) -> PairParams {
+        let (e_eff, g_eff) = (
+            self.material.effective_modulus(),
+            self.material.effective_shear_modulus(),
+        );
+        PairParams {
+            law: self.law,
+            tangential: self.tangential(),
+            e_eff,
+            g_eff,
+            periodic: self.periodic.map(PeriodicBox::new),
+            mindlin_c: (6.0 * g_eff / e_eff).sqrt(),
+        }
+    }
+}
+
+/// The contact arrays indexed by the particle table's rows, the neighbour list and the
+/// pair states (resource).
+#[derive(Resource, Debug)]
+pub struct ContactState {
+    /// The pair law.
+    pub params: PairParams,
+    /// Particle ids, by row (the key of every per-particle array here).
+    pub ids: Vec<u32>,
+    /// Groups, by row.
+    pub group: Vec<u32>,
+    /// Radii, m, by row.
+    pub radius: Vec<f64>,
+    /// Masses, kg, by row.
+    pub mass: Vec<f64>,
+    /// dt/m by row ([`crate::physics::integrate::linear_kick_factor`]), s/kg.
+    kick_v: Vec<f64>,
+    /// dt/I by row ([`crate::physics::integrate::angular_kick_factor`]), s/(kg·m²).
+    kick_w: Vec<f64>,
+    /// Verlet list.
+    pub list: NeighbourList,
+    /// Pair states aligned with `list.pairs`.
+    pub pairs: Vec<PairState>,
+    /// Force accumulation slots over the pair list (laid out at each rebuild).
+    slots: Vec<Slot>,
+    /// Whether this step's slots record the particles they touch (few contacts) or
+    /// every particle is summed (dense packings).
+    sparse: bool,
+    /// Scratch of the sparse kick: rows already kicked this step.
+    marked: Vec<bool>,
+    /// Particle–particle contacts in touch after the last step.
+    pub active: usize,
+}
+
+impl ContactState {
+    /// Empty arrays for the contact settings `cfg`.
+    pub fn new(cfg: &ContactConfig) -> Self {
+        let params = cfg.pair_params();
+        ContactState {
+            list: NeighbourList::new(cfg.skin, params.periodic),
+            params,
+            ids: Vec::new(),
+            group: Vec::new(),
+            radius: Vec::new(),
+            mass: Vec::new(),
+            kick_v: Vec::new(),
+            kick_w: Vec::new(),
+            pairs: Vec::new(),
+            slots: Vec::new(),
+            sparse: false,
+            marked: Vec::new(),
+            active: 0,
+        }
+    }
+
+    /// The summed contact force (N) and torque (N·m) on the particle at row `k`
+    /// (`ids[k]`) from this step's force stage.
+    pub fn contact_force(&self, k: usize) -> (DVec3, DVec3) {
+        slot_sum(&self.slots, k)
+    }
+
+    /// One line on the neighbour list for run reports: builds (and their time), exact
+    /// displacement checks, candidate pairs and pairs in contact.
+    pub fn summary(&self) -> String {
+        format!(
+            "{} builds ({:.3} s), {} exact displacement checks, {} candidate pairs in {} force slots, {} in contact",
+            self.list.builds,
+            self.list.build_time.as_secs_f64(),
+            self.list.checks,
+            self.list.pairs.len(),
+            self.slots.len(),
+            self.active
+        )
+    }
+
+    /// Number of force accumulation slots (fixed by the pair list, not the threads).
+    pub fn slot_count(&self) -> usize {
+        self.slots.len()
+    }
+}
+
+/// Insert the contact resources and add the systems (called only when the scene declares
+/// contacts).
+pub fn plugin(world: &mut World, b: &mut StepBuilder, cfg: &ContactConfig) {
+    world.insert_resource(StepDisplacement::default());
+    world.insert_resource(ContactState::new(cfg));
+    use StepSystem::*;
+    b.add(
+        StepSet::NeighbourSearch,
+        "contacts",
+        MaintainNeighbourList,
+        list::maintain_neighbour_list,
+    );
+    b.add(
+        StepSet::Forces,
+        "contacts",
+        ParticleContactForces,
+        slots::particle_contact_forces,
+    );
+    b.add(
+        StepSet::Integration,
+        "contacts",
+        ApplyContactKicks,
+        kicks::apply_contact_kicks,
+    );
+}

@@ -1,0 +1,12 @@
+//! The systems of the step, one module per effect. Each module's `plugin` adds its
+//! systems to the step ([`crate::step`]) only when the scene declares the effect; the
+//! systems stay thin and call the pure laws of [`crate::physics`]. They reach the
+//! particles' columns through [`table`], which keeps every particle in one storage table.
+pub mod contacts;
+pub mod feeder;
+pub mod guard;
+pub mod motion;
+pub mod outlet;
+pub mod recording;
+pub mod table;
+pub mod walls;

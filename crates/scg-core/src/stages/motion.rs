@@ -1,0 +1,408 @@
+//! Drag and motion: the integration stage.
+//!
+//! Which system moves the particles depends on the scene: the exponential scheme with
+//! precomputed Stokes factors (the fast path), the exponential scheme with a
+//! Reynolds-dependent drag law, the explicit scheme, or plain ballistic motion when the
+//! scene has no fluid. Wall forces enter as a kick before the drift (particle contacts
+//! kick the velocities themselves, see [`super::contacts`]); gravity and buoyancy as a
+//! constant acceleration inside it. Every system reads the particle table's columns in
+//! place ([`super::table`]) and cuts them into pieces for the team.
+
+use bevy_ecs::prelude::*;
+use glam::DVec3;
+
+use super::table::{bypass, columns_mut};
+use crate::components::*;
+use crate::exec::par::for_each_piece;
+use crate::physics::drag::{DragLaw, particle_reynolds};
+use crate::physics::flow::{FlowField, Fluid};
+use crate::physics::integrate::{
+    Integrator, angular_kick, explicit_euler, explicit_substeps, exponential_drift,
+    exponential_factors, linear_kick,
+};
+use crate::state::{Health, SimClock, StepDisplacement};
+use crate::step::{StepBuilder, StepSet, StepSystem};
+
+/// How particles move (resource); see [`crate::sim::SimConfig`] for the meaning.
+#[derive(Resource, Clone, Copy, Debug, PartialEq)]
+pub struct Motion {
+    /// Integrator.
+    pub integrator: Integrator,
+    /// Drag law, `None` without fluid drag.
+    pub drag: Option<DragLaw>,
+}
+
+/// Add the motion systems the scene needs (with `rotation`, the angular velocity is
+/// integrated from the wall torques), and the clock.
+pub fn plugin(b: &mut StepBuilder, motion: &Motion, rotation: bool) {
+    use StepSystem::*;
+    let set = StepSet::Integration;
+    match (motion.drag, motion.integrator) {
+        (None, _) => b.add(set, "motion", IntegrateBallistic, integrate_ballistic),
+        (Some(DragLaw::Stokes), Integrator::Exponential) => b.add(
+            set,
+            "drag:stokes",
+            IntegrateStokesExponential,
+            integrate_stokes_exponential,
+        ),
+        (Some(law), Integrator::Exponential) => b.add(
+            set,
+            drag_effect_name(law),
+            IntegrateDragExponential,
+            integrate_drag_exponential,
+        ),
+        (Some(law), Integrator::Explicit) => b.add(
+            set,
+            drag_effect_name(law),
+            IntegrateDragExplicit,
+            integrate_drag_explicit,
+        ),
+    }
+    if rotation {
+        b.add(set, "walls", IntegrateRotation, integrate_rotation);
+    }
+    b.add(set, "clock", AdvanceClock, advance_clock);
+}
+
+fn drag_effect_name(law: DragLaw) -> &'static str {
+    match law {
+        DragLaw::Stokes => "drag:stokes",
+        DragLaw::SchillerNaumann => "drag:schiller_naumann",
+    }
+}
+
+/// Angular velocity from the wall torque (paper eq. 3): ω += T·dt/I with the solid
+/// sphere's I = m·d²/10.
+pub fn integrate_rotation(
+    clock: Res<SimClock>,
+    mut q: Query<(&mut AngularVelocity, &Torque, &Mass, &Diameter)>,
+) {
+    let dt = clock.dt;
+    let Some((ws, ts, ms, ds)) = columns_mut(&mut q) else {
+        return;
+    };
+    for_each_piece((bypass(ws), ts, ms, ds), |(ws, ts, ms, ds)| {
+        for i in 0..ws.len() {
+            // Most particles touch no wall: skip the division for a zero torque.
+            if ts[i].0 != DVec3::ZERO {
+                ws[i].0 = angular_kick(ws[i].0, ts[i].0, ms[i].0, ds[i].0, dt);
+            }
+        }
+    });
+}
+
+/// Advance the step counter (the last system of the integration stage).
+pub fn advance_clock(mut clock: ResMut<SimClock>, q: Query<(), With<ParticleId>>) {
+    clock.step += 1;
+    clock.particle_steps += q.iter().len() as u64;
+}
+
+/// Velocity after the wall kick: v + F/m·dt (unchanged without walls).
+#[inline]
+fn kick(v: DVec3, f: Option<&Force>, m: f64, dt: f64) -> DVec3 {
+    match f {
+        Some(f) => linear_kick(v, f.0, m, dt),
+        None => v,
+    }
+}
+
+/// One exponential-midpoint step for response time `tau` with factors for dt.
+///
+/// The fluid velocity is frozen at the predicted mid-step position x + v·dt/2 (one flow
+/// evaluation per step); in a uniform flow the result is exact whatever the predictor.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn exponential_midpoint(
+    flow: &FlowField,
+    x: DVec3,
+    v: DVec3,
+    a: DVec3,
+    tau: f64,
+    gain: f64,
+    relax: f64,
+    dt: f64,
+) -> (DVec3, DVec3) {
+    let u = flow.velocity(x + v * (0.5 * dt));
+    exponential_drift(x, v, u, a, tau, gain, relax, dt)
+}
+
+type MoveQuery<'w, 's, T> = Query<
+    'w,
+    's,
+    (
+        &'static mut Position,
+        &'static mut Velocity,
+        T,
+        &'static Mass,
+        Option<&'static Force>,
+        Option<&'static BodyAcceleration>,
+    ),
+>;
+
+/// The drag-only loop of the fast path (no forces, no body acceleration): returns the sum
+/// of all new positions and velocities (non-finite iff one of them is) and, with `TRACK`,
+/// the largest squared step displacement, m².
+#[inline(always)]
+fn drag_only_loop<const TRACK: bool, U: Fn(DVec3) -> DVec3>(
+    xs: &mut [Position],
+    vs: &mut [Velocity],
+    sfs: &[StokesFactors],
+    dt: f64,
+    flow: U,
+) -> (DVec3, f64) {
+    let mut sum = DVec3::ZERO;
+    let mut d2max = 0.0_f64;
+    for ((x, v), sf) in xs.iter_mut().zip(vs.iter_mut()).zip(sfs) {
+        // exponential_drift with a = 0: w = u.
+        let (x0, v0) = (x.0, v.0);
+        let u = flow(x0 + v0 * (0.5 * dt));
+        let dv = v0 - u;
+        let dx = u * dt + dv * sf.relax;
+        let (x1, v1) = (x0 + dx, v0 - dv * sf.gain);
+        sum += x1 + v1;
+        if TRACK {
+            let d2 = dx.length_squared();
+            if d2 > d2max {
+                d2max = d2;
+            }
+        }
+        x.0 = x1;
+        v.0 = v1;
+    }
+    (sum, d2max)
+}
+
+/// Stokes drag, exponential scheme, precomputed factors: the fast path. One tight loop
+/// per piece of the particle table, on every core, with the flow in affine form where it
+/// has one.
+pub fn integrate_stokes_exponential(
+    clock: Res<SimClock>,
+    flow: Res<FlowField>,
+    health: Res<Health>,
+    disp: Option<Res<StepDisplacement>>,
+    q: MoveQuery<(&'static StokesFactors, &'static FluidCoupling)>,
+) {
+    let flow = *flow;
+    let disp = disp.as_deref();
+    let dt = clock.dt;
+    match flow.affine() {
+        // A flow in the x–y plane that does not depend on z (e.g. a vortex about z): 2×2.
+        Some(aff) if aff.is_planar_z() => {
+            let (m00, m01, m10, m11) = (
+                aff.m.x_axis.x,
+                aff.m.y_axis.x,
+                aff.m.x_axis.y,
+                aff.m.y_axis.y,
+            );
+            let (b0, b1) = (aff.b.x, aff.b.y);
+            stokes_kernel(q, dt, &health, disp, move |x: DVec3| {
+                DVec3::new(m00 * x.x + m01 * x.y + b0, m10 * x.x + m11 * x.y + b1, 0.0)
+            })
+        }
+        Some(aff) => stokes_kernel(q, dt, &health, disp, move |x| aff.velocity(x)),
+        None => stokes_kernel(q, dt, &health, disp, move |x| flow.velocity(x)),
+    }
+}
+
+/// The fast-path loop for a flow given as a function of position.
+fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
+    mut q: MoveQuery<(&'static StokesFactors, &'static FluidCoupling)>,
+    dt: f64,
+    health: &Health,
+    disp: Option<&StepDisplacement>,
+    flow: U,
+) {
+    let Some((xs, vs, (sfs, fcs), ms, fs, gs)) = columns_mut(&mut q) else {
+        return;
+    };
+    let columns = (bypass(xs), bypass(vs), sfs, fcs, ms, fs, gs);
+    for_each_piece(columns, |(xs, vs, sfs, fcs, ms, fs, gs)| {
+        // Local copies: the loop then keeps the flow and dt in registers instead of
+        // reloading them through the closure on every particle.
+        let (dt, flow) = (dt, flow);
+        let n = xs.len();
+        if fs.is_none() && gs.is_none() {
+            // Drag only: the common case, kept free of per-particle branches.
+            // Any NaN or infinity makes the running sum non-finite: one test per piece.
+            let (sum, d2max) = match disp {
+                Some(_) => drag_only_loop::<true, U>(xs, vs, sfs, dt, flow),
+                None => drag_only_loop::<false, U>(xs, vs, sfs, dt, flow),
+            };
+            if !sum.is_finite() {
+                health.raise();
+            }
+            if let Some(d) = disp {
+                d.record(d2max);
+            }
+            return;
+        }
+        let mut d2max = 0.0_f64;
+        for i in 0..n {
+            let (x, v) = (xs[i].0, vs[i].0);
+            let vk = kick(v, fs.map(|f| &f[i]), ms[i].0, dt);
+            let a = gs.map_or(DVec3::ZERO, |g| g[i].0);
+            let u = flow(x + vk * (0.5 * dt));
+            let sf = &sfs[i];
+            let (x1, v1) = exponential_drift(x, vk, u, a, fcs[i].tau, sf.gain, sf.relax, dt);
+            // One test catches any NaN or infinity among the six numbers.
+            if !(x1 + v1).element_sum().is_finite() {
+                health.raise();
+            }
+            d2max = d2max.max((x1 - x).length_squared());
+            xs[i].0 = x1;
+            vs[i].0 = v1;
+        }
+        if let Some(d) = disp {
+            d.record(d2max);
+        }
+    });
+    if let Some(d) = disp {
+        d.mark_reported();
+    }
+}
+
+/// Response time under `law` for the current slip, s.
+#[inline]
+fn effective_tau(law: DragLaw, tau: f64, fc: &FluidCoupling, fluid: &Fluid, slip: f64) -> f64 {
+    let re = particle_reynolds(fc.drag_diameter, slip, fluid.density, fluid.viscosity);
+    tau / law.correction(re)
+}
+
+/// Reynolds-dependent drag (e.g. Schiller–Naumann), exponential scheme: τ is evaluated
+/// from the slip at the start of the step and held over it.
+pub fn integrate_drag_exponential(
+    clock: Res<SimClock>,
+    motion: Res<Motion>,
+    flow: Res<FlowField>,
+    fluid: Res<Fluid>,
+    health: Res<Health>,
+    disp: Option<Res<StepDisplacement>>,
+    mut q: MoveQuery<&'static FluidCoupling>,
+) {
+    let disp = disp.as_deref();
+    let (dt, law) = (clock.dt, motion.drag.unwrap_or_default());
+    let (flow, fluid) = (*flow, *fluid);
+    let health = &*health;
+    let Some((xs, vs, fcs, ms, fs, gs)) = columns_mut(&mut q) else {
+        return;
+    };
+    let columns = (bypass(xs), bypass(vs), fcs, ms, fs, gs);
+    for_each_piece(columns, |(xs, vs, fcs, ms, fs, gs)| {
+        let mut d2max = 0.0_f64;
+        for i in 0..xs.len() {
+            let (x, fc) = (xs[i].0, &fcs[i]);
+            let a = gs.map_or(DVec3::ZERO, |g| g[i].0);
+            let vk = kick(vs[i].0, fs.map(|f| &f[i]), ms[i].0, dt);
+            let slip = (flow.velocity(x) - vk).length();
+            let tau = effective_tau(law, fc.tau, fc, &fluid, slip);
+            let (gain, relax) = exponential_factors(tau, dt);
+            let (x1, v1) = exponential_midpoint(&flow, x, vk, a, tau, gain, relax, dt);
+            if !(x1.is_finite() && v1.is_finite()) {
+                health.raise();
+            }
+            d2max = d2max.max((x1 - x).length_squared());
+            xs[i].0 = x1;
+            vs[i].0 = v1;
+        }
+        if let Some(d) = disp {
+            d.record(d2max);
+        }
+    });
+    if let Some(d) = disp {
+        d.mark_reported();
+    }
+}
+
+/// Any drag law, semi-implicit Euler; sub-stepped so that every sub-step has dt ≤ τ/2.
+pub fn integrate_drag_explicit(
+    clock: Res<SimClock>,
+    motion: Res<Motion>,
+    flow: Res<FlowField>,
+    fluid: Res<Fluid>,
+    health: Res<Health>,
+    disp: Option<Res<StepDisplacement>>,
+    mut q: MoveQuery<&'static FluidCoupling>,
+) {
+    let disp = disp.as_deref();
+    let (dt, law) = (clock.dt, motion.drag.unwrap_or_default());
+    let (flow, fluid) = (*flow, *fluid);
+    let health = &*health;
+    let Some((xs, vs, fcs, ms, fs, gs)) = columns_mut(&mut q) else {
+        return;
+    };
+    let columns = (bypass(xs), bypass(vs), fcs, ms, fs, gs);
+    for_each_piece(columns, |(xs, vs, fcs, ms, fs, gs)| {
+        let mut d2max = 0.0_f64;
+        for i in 0..xs.len() {
+            let fc = &fcs[i];
+            let mut a = gs.map_or(DVec3::ZERO, |g| g[i].0);
+            if let Some(fs) = fs {
+                a += fs[i].0 / ms[i].0;
+            }
+            let (x0, mut xi, mut vi) = (xs[i].0, xs[i].0, vs[i].0);
+            let slip0 = (flow.velocity(xi) - vi).length();
+            let n = explicit_substeps(effective_tau(law, fc.tau, fc, &fluid, slip0), dt);
+            let h = dt / n as f64;
+            for _ in 0..n {
+                let u = flow.velocity(xi);
+                let tau = effective_tau(law, fc.tau, fc, &fluid, (u - vi).length());
+                (xi, vi) = explicit_euler(xi, vi, u, a, tau, h);
+            }
+            if !(xi.is_finite() && vi.is_finite()) {
+                health.raise();
+            }
+            d2max = d2max.max((xi - x0).length_squared());
+            xs[i].0 = xi;
+            vs[i].0 = vi;
+        }
+        if let Some(d) = disp {
+            d.record(d2max);
+        }
+    });
+    if let Some(d) = disp {
+        d.mark_reported();
+    }
+}
+
+/// No fluid: wall kick, then the exact drift under gravity (free fall is exact; with
+/// contacts alone this is symplectic Euler).
+pub fn integrate_ballistic(
+    clock: Res<SimClock>,
+    health: Res<Health>,
+    disp: Option<Res<StepDisplacement>>,
+    mut q: MoveQuery<()>,
+) {
+    let dt = clock.dt;
+    let health = &*health;
+    let disp = disp.as_deref();
+    let Some((xs, vs, (), ms, fs, gs)) = columns_mut(&mut q) else {
+        return;
+    };
+    for_each_piece(
+        (bypass(xs), bypass(vs), ms, fs, gs),
+        |(xs, vs, ms, fs, gs)| {
+            let mut d2max = 0.0_f64;
+            for i in 0..xs.len() {
+                let (x, a) = (xs[i].0, gs.map_or(DVec3::ZERO, |g| g[i].0));
+                let vk = kick(vs[i].0, fs.map(|f| &f[i]), ms[i].0, dt);
+                let x1 = x + vk * dt + 0.5 * a * dt * dt;
+                let v1 = vk + a * dt;
+                if !(x1 + v1).element_sum().is_finite() {
+                    health.raise();
+                }
+                let d2 = (x1 - x).length_squared();
+                if d2 > d2max {
+                    d2max = d2;
+                }
+                xs[i].0 = x1;
+                vs[i].0 = v1;
+            }
+            if let Some(d) = disp {
+                d.record(d2max);
+            }
+        },
+    );
+    if let Some(d) = disp {
+        d.mark_reported();
+    }
+}

@@ -1,0 +1,149 @@
+//! Resources shared by several stages: the clock (the only `dt`), the run's health, the
+//! per-group tally, the next particle id, and the largest step displacement.
+
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+use bevy_ecs::prelude::*;
+
+/// Simulation clock (resource): t = step·dt, never the wall clock. `dt` lives here and
+/// nowhere else; every stage reads it from the clock.
+#[derive(Resource, Clone, Copy, Debug, PartialEq)]
+pub struct SimClock {
+    /// Steps completed.
+    pub step: u64,
+    /// Time step, s.
+    pub dt: f64,
+    /// Particle-steps done so far (Σ over steps of the particles moved).
+    pub particle_steps: u64,
+}
+
+impl SimClock {
+    /// A clock at step 0.
+    pub fn new(dt: f64) -> Self {
+        SimClock {
+            step: 0,
+            dt,
+            particle_steps: 0,
+        }
+    }
+
+    /// Simulation time, s.
+    pub fn time(&self) -> f64 {
+        self.step as f64 * self.dt
+    }
+}
+
+/// A non-finite value found by the guard.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NonFinite {
+    /// Step at which it appeared.
+    pub step: u64,
+    /// Particle id.
+    pub particle: u32,
+    /// Field name (`position`, `velocity`).
+    pub field: &'static str,
+    /// The value.
+    pub value: [f64; 3],
+}
+
+impl std::fmt::Display for NonFinite {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "non-finite {} {:?} of particle {} at step {}",
+            self.field, self.value, self.particle, self.step
+        )
+    }
+}
+
+/// Health of the run (resource). Integration kernels raise `suspect` cheaply; the guard
+/// then scans and records the first offending particle (lowest id) in `failure`.
+#[derive(Resource, Default)]
+pub struct Health {
+    suspect: AtomicBool,
+    /// The failure that stops the run, if any.
+    pub failure: Option<NonFinite>,
+}
+
+impl Health {
+    /// Called by kernels when they produce a non-finite value.
+    #[inline]
+    pub fn raise(&self) {
+        self.suspect.store(true, Ordering::Relaxed);
+    }
+
+    /// Whether a kernel raised the flag since the last call (clears it).
+    pub fn take_suspect(&self) -> bool {
+        self.suspect.swap(false, Ordering::Relaxed)
+    }
+}
+
+/// Per-group counters kept by the feeder, outlet and contact stages (resource).
+#[derive(Resource, Clone, Debug, Default, PartialEq)]
+pub struct Tally {
+    /// Particles drained through an outlet, per group.
+    pub drained: Vec<u64>,
+    /// Particles fed, per group.
+    pub fed: Vec<u64>,
+    /// Contacts that started, per group (a particle–particle contact counts for both).
+    pub collisions: Vec<u64>,
+}
+
+impl Tally {
+    /// Zero counters for `groups` groups.
+    pub fn new(groups: usize) -> Self {
+        Tally {
+            drained: vec![0; groups],
+            fed: vec![0; groups],
+            collisions: vec![0; groups],
+        }
+    }
+}
+
+/// Next free particle id (resource): ids are unique over a run and never reused.
+#[derive(Resource, Clone, Copy, Debug, Default, PartialEq)]
+pub struct NextParticleId(pub u32);
+
+impl NextParticleId {
+    /// Take the next id.
+    pub fn take(&mut self) -> u32 {
+        let id = self.0;
+        self.0 += 1;
+        id
+    }
+}
+
+/// The largest distance any particle moved in the last integration step (resource,
+/// present when the scene has contacts). Every integrator records into it; the neighbour
+/// stage takes it to bound displacements without a pass over all particles.
+#[derive(Resource, Debug, Default)]
+pub struct StepDisplacement {
+    /// Bits of the largest squared step displacement, m² (non-negative floats order
+    /// like their bits).
+    max2_bits: AtomicU64,
+    /// Set by an integrator that recorded every particle this step.
+    reported: AtomicBool,
+}
+
+impl StepDisplacement {
+    /// Record a squared displacement, m².
+    #[inline]
+    pub fn record(&self, d2: f64) {
+        let b = d2.to_bits();
+        if b > self.max2_bits.load(Ordering::Relaxed) {
+            self.max2_bits.fetch_max(b, Ordering::Relaxed);
+        }
+    }
+
+    /// Mark the step as fully recorded.
+    pub fn mark_reported(&self) {
+        self.reported.store(true, Ordering::Relaxed);
+    }
+
+    /// The largest displacement of the step, m, if an integrator reported one; resets.
+    pub fn take(&self) -> Option<f64> {
+        let reported = self.reported.swap(false, Ordering::Relaxed);
+        let bits = self.max2_bits.swap(0, Ordering::Relaxed);
+        reported.then(|| f64::from_bits(bits).sqrt())
+    }
+}
