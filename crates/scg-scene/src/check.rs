@@ -13,6 +13,9 @@ use scg_core::physics::wall_shape::WallShape;
 
 use crate::{Placement, Scene};
 
+mod render;
+pub use render::render;
+
 /// Derived quantities of one group.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GroupReport {
@@ -552,52 +555,4 @@ pub fn check(scene: &Scene) -> Report {
         steps: scene.steps(),
         findings,
     }
-}
-
-/// Render the report as text.
-pub fn render(scene: &Scene, r: &Report) -> String {
-    let mut s = format!(
-        "scene `{}` ({}): {} steps of dt = {:.4e} s ({}), duration {} s, integrator {}\n",
-        scene.name,
-        scene.file,
-        r.steps,
-        r.dt,
-        match scene.dt_choice {
-            crate::DtChoice::Auto => "auto",
-            crate::DtChoice::Fixed => "fixed",
-        },
-        scene.duration,
-        scene.integrator.name()
-    );
-    s.push_str(&format!(
-        "{:<16} {:>6} {:>4} {:>8} {:>11} {:>11} {:>11} {:>10} {:>10} {:>10}\n",
-        "group", "law", "α", "count", "d [m]", "ρ [kg/m³]", "τ [s]", "slip[m/s]", "Re_p", "ρ/ρ_f"
-    ));
-    for g in &r.groups {
-        s.push_str(&format!(
-            "{:<16} {:>6} {:>4} {:>8} {:>11.4e} {:>11.5} {:>11.4e} {:>10.3e} {:>10.3e} {:>10.4}\n",
-            g.name,
-            g.law,
-            g.alpha,
-            g.count,
-            g.diameter,
-            g.density,
-            g.tau,
-            g.slip,
-            g.reynolds,
-            g.density_ratio
-        ));
-    }
-    s.push_str(&format!(
-        "Stokes number (paper eq. 1): {:.4e}\n",
-        r.stokes_number
-    ));
-    if r.findings.is_empty() {
-        s.push_str("no warnings\n");
-    }
-    for m in r.messages() {
-        s.push_str(&m);
-        s.push('\n');
-    }
-    s
 }

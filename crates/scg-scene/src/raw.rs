@@ -1,7 +1,17 @@
 //! The scene file as written (serde structs, every key documented in docs/scenes.md).
+//!
+//! Names given as strings (laws, kinds, models) deserialize into the enums at the end of
+//! this file; an unknown name is a parse error that names the key, its line and the
+//! accepted values.
 #![allow(missing_docs)]
 
-use serde::Deserialize;
+use serde::de::IntoDeserializer;
+use serde::de::value::StringDeserializer;
+use serde::{Deserialize, Deserializer};
+
+use scg_core::physics::drag::DragLaw;
+use scg_core::physics::integrate::Integrator;
+use scg_core::physics::scaling::CoarseGrainLaw;
 
 #[derive(Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
@@ -12,7 +22,8 @@ pub struct RawScene {
     pub dt: RawDt,
     pub record_every: Option<i64>,
     pub seed: Option<i64>,
-    pub integrator: Option<String>,
+    #[serde(default, deserialize_with = "some_name")]
+    pub integrator: Option<RawIntegrator>,
     pub fluid: Option<RawFluid>,
     pub flow: Option<RawFlow>,
     pub drag: Option<RawDrag>,
@@ -34,7 +45,8 @@ pub struct RawScene {
 #[serde(deny_unknown_fields)]
 pub struct RawCoarseGrain {
     pub alpha: Option<f64>,
-    pub law: Option<String>,
+    #[serde(default, deserialize_with = "some_name")]
+    pub law: Option<RawLaw>,
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -80,7 +92,8 @@ pub struct RawFluid {
 #[derive(Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct RawFlow {
-    pub kind: String,
+    #[serde(deserialize_with = "name")]
+    pub kind: RawFlowKind,
     pub velocity: Option<[f64; 3]>,
     pub center: Option<[f64; 3]>,
     pub axis: Option<[f64; 3]>,
@@ -93,7 +106,8 @@ pub struct RawFlow {
 #[derive(Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct RawDrag {
-    pub law: String,
+    #[serde(deserialize_with = "name")]
+    pub law: RawDragLaw,
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -112,7 +126,8 @@ pub struct RawMaterial {
     pub restitution: f64,
     #[serde(default)]
     pub friction: f64,
-    pub normal_model: Option<String>,
+    #[serde(default, deserialize_with = "some_name")]
+    pub normal_model: Option<RawNormalModel>,
     pub linear_stiffness: Option<f64>,
 }
 
@@ -120,7 +135,8 @@ pub struct RawMaterial {
 #[serde(deny_unknown_fields)]
 pub struct RawWall {
     pub name: Option<String>,
-    pub kind: String,
+    #[serde(deserialize_with = "name")]
+    pub kind: RawWallKind,
     pub point: Option<[f64; 3]>,
     pub normal: Option<[f64; 3]>,
     pub center: Option<[f64; 3]>,
@@ -136,7 +152,8 @@ pub struct RawGroup {
     pub diameter: f64,
     pub density: f64,
     pub alpha: Option<f64>,
-    pub law: Option<String>,
+    #[serde(default, deserialize_with = "some_name")]
+    pub law: Option<RawLaw>,
     pub color: Option<[i64; 3]>,
     pub positions: Option<Vec<[f64; 3]>>,
     pub velocities: Option<Vec<[f64; 3]>>,
@@ -148,7 +165,8 @@ pub struct RawGroup {
 #[derive(Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct RawRegion {
-    pub kind: String,
+    #[serde(deserialize_with = "name")]
+    pub kind: RawRegionKind,
     pub min: Option<[f64; 3]>,
     pub max: Option<[f64; 3]>,
     pub center: Option<[f64; 3]>,
@@ -166,4 +184,108 @@ pub struct RawContacts {
     pub rolling_friction: f64,
     pub periodic: Option<[f64; 3]>,
     pub tangential_stiffness_ratio: Option<f64>,
+}
+
+// ── names ───────────────────────────────────────────────────────────────────────────────
+
+/// A name: a string (anything else is "invalid type: …, expected a string"), then one of
+/// the enum's variants ("unknown variant `x`, expected one of …" lists the accepted names).
+fn name<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<T, D::Error> {
+    let s: StringDeserializer<D::Error> = String::deserialize(d)?.into_deserializer();
+    T::deserialize(s)
+}
+
+/// An optional name (with `#[serde(default)]`: absent is `None`).
+fn some_name<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<Option<T>, D::Error> {
+    name(d).map(Some)
+}
+
+/// `integrator`.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum RawIntegrator {
+    Exponential,
+    Explicit,
+}
+
+impl From<RawIntegrator> for Integrator {
+    fn from(i: RawIntegrator) -> Self {
+        match i {
+            RawIntegrator::Exponential => Integrator::Exponential,
+            RawIntegrator::Explicit => Integrator::Explicit,
+        }
+    }
+}
+
+/// `drag.law`.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum RawDragLaw {
+    Stokes,
+    SchillerNaumann,
+}
+
+impl From<RawDragLaw> for DragLaw {
+    fn from(l: RawDragLaw) -> Self {
+        match l {
+            RawDragLaw::Stokes => DragLaw::Stokes,
+            RawDragLaw::SchillerNaumann => DragLaw::SchillerNaumann,
+        }
+    }
+}
+
+/// `groups[i].law`, `coarse_grain.law` (the names of [`CoarseGrainLaw::name`]).
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum RawLaw {
+    Scg,
+    None,
+    Mass,
+    Parcel,
+}
+
+impl From<RawLaw> for CoarseGrainLaw {
+    fn from(l: RawLaw) -> Self {
+        match l {
+            RawLaw::Scg => CoarseGrainLaw::Scg,
+            RawLaw::None => CoarseGrainLaw::None,
+            RawLaw::Mass => CoarseGrainLaw::Mass,
+            RawLaw::Parcel => CoarseGrainLaw::Parcel,
+        }
+    }
+}
+
+/// `material.normal_model` (the law itself needs the material, see `validate`).
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum RawNormalModel {
+    Hertz,
+    Linear,
+}
+
+/// `flow.kind`.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum RawFlowKind {
+    Still,
+    Uniform,
+    Vortex,
+    Classifier,
+}
+
+/// `walls[i].kind`.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum RawWallKind {
+    Plane,
+    CylinderInside,
+    CylinderOutside,
+}
+
+/// `region.kind` (groups and feeders).
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum RawRegionKind {
+    Box,
+    Cylinder,
 }

@@ -1,0 +1,162 @@
+//! The validated scene: what a scene file says, in SI units, checked and resolved (names
+//! mapped to the core's laws, defaults filled in, `dt = "auto"` chosen). Times stay in
+//! seconds; numbers of steps are derived from `dt` when the simulation is built
+//! (see [`crate::build`]), so editing `dt` after loading keeps them consistent.
+
+use glam::DVec3;
+
+use scg_core::physics::contact::{Material, NormalLaw};
+use scg_core::physics::drag::DragLaw;
+use scg_core::physics::flow::{FlowField, Fluid};
+use scg_core::physics::integrate::Integrator;
+use scg_core::physics::scaling::CoarseGrainLaw;
+pub use scg_core::region::Region;
+use scg_core::stages::contacts::ContactConfig;
+use scg_core::stages::walls::Wall;
+
+/// Where the particles of a group start.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Placement {
+    /// Listed positions and velocities.
+    Explicit {
+        /// Centres, m.
+        positions: Vec<DVec3>,
+        /// Velocities, m/s (same length as `positions`).
+        velocities: Vec<DVec3>,
+    },
+    /// `count` particles at uniformly random positions in a region, all with `velocity`.
+    Random {
+        /// Number of particles.
+        count: usize,
+        /// Region.
+        region: Region,
+        /// Initial velocity, m/s.
+        velocity: DVec3,
+    },
+}
+
+/// A particle group (one size class, one coarse-graining law).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Group {
+    /// Name.
+    pub name: String,
+    /// Original diameter, m.
+    pub diameter: f64,
+    /// Original density, kg/m³.
+    pub density: f64,
+    /// Coarse-graining ratio α.
+    pub alpha: f64,
+    /// Coarse-graining law.
+    pub law: CoarseGrainLaw,
+    /// Display colour.
+    pub color: [u8; 3],
+    /// Initial placement.
+    pub placement: Placement,
+}
+
+impl Group {
+    /// Number of particles at the start.
+    pub fn count(&self) -> usize {
+        match &self.placement {
+            Placement::Explicit { positions, .. } => positions.len(),
+            Placement::Random { count, .. } => *count,
+        }
+    }
+}
+
+/// How the time step was chosen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DtChoice {
+    /// Given in the scene.
+    Fixed,
+    /// `auto` (see [`crate::check::auto_dt`]).
+    Auto,
+}
+
+/// A validated scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Scene name (file stem unless `name` is set).
+    pub name: String,
+    /// Where it came from (path, `<embedded>`…).
+    pub file: String,
+    /// The TOML text (after `--set` overrides).
+    pub source: String,
+    /// Free text.
+    pub description: String,
+    /// Simulated duration, s.
+    pub duration: f64,
+    /// Time step, s (resolved when `auto`).
+    pub dt: f64,
+    /// Whether dt was given or chosen.
+    pub dt_choice: DtChoice,
+    /// Steps between recorded frames.
+    pub record_every: u64,
+    /// Random seed.
+    pub seed: u64,
+    /// Integrator.
+    pub integrator: Integrator,
+    /// Fluid, if any.
+    pub fluid: Option<Fluid>,
+    /// Flow field.
+    pub flow: FlowField,
+    /// Drag law, if the drag effect is declared.
+    pub drag: Option<DragLaw>,
+    /// Gravity, if declared, m/s².
+    pub gravity: Option<DVec3>,
+    /// Buoyancy with gravity.
+    pub buoyancy: bool,
+    /// Contact material (required with walls).
+    pub material: Option<Material>,
+    /// Normal contact law derived from the material.
+    pub normal_law: Option<NormalLaw>,
+    /// Walls.
+    pub walls: Vec<Wall>,
+    /// Particle–particle contacts (`[contacts]`), if declared.
+    pub contacts: Option<ContactConfig>,
+    /// Groups.
+    pub groups: Vec<Group>,
+    /// Feeders (`[[feeders]]`), in file order.
+    pub feeders: Vec<Feeder>,
+    /// The outlet (`[outlet]`), if declared.
+    pub outlet: Option<Outlet>,
+}
+
+/// A feeder: particles of one group enter at a constant rate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Feeder {
+    /// Index of the group fed.
+    pub group: usize,
+    /// Simulated particles per second (from `rate`, or `volume_rate` / simulated volume).
+    pub rate: f64,
+    /// Where particles appear.
+    pub region: Region,
+    /// Their velocity, m/s.
+    pub velocity: DVec3,
+    /// Added co-rotation with the flow's vortex, as a fraction of its local speed ω·r
+    /// (dimensionless; 0 = none, 1 = entering co-rotating with the vortex).
+    pub swirl: f64,
+    /// Start and stop time, s.
+    pub window: (f64, f64),
+    /// Time between releases, s (0 = every step).
+    pub interval: f64,
+}
+
+/// The outlet: removes particles that drain through the nozzle or leave the domain.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Outlet {
+    /// A point on the axis, m.
+    pub center: DVec3,
+    /// Unit axis; particles drain moving along +axis.
+    pub axis: DVec3,
+    /// Nozzle radius, m.
+    pub nozzle_radius: f64,
+    /// Axial coordinate of the outlet plane, m.
+    pub plane: f64,
+    /// Domain radius, m.
+    pub domain_radius: f64,
+    /// Axial range of the domain, m.
+    pub domain_height: (f64, f64),
+    /// Time between checks, s (0 = every step).
+    pub interval: f64,
+}

@@ -1,0 +1,348 @@
+//! Scene text → validated [`Scene`]: `--set` overrides, TOML → the raw model (`raw`), then
+//! every value checked and resolved. Each rejection is a [`SceneError`] naming the
+//! file, the key and (when the key is in the file) its line.
+
+mod particles;
+mod physics;
+
+use std::path::Path;
+
+use glam::DVec3;
+
+use scg_core::physics::drag::DragLaw;
+use scg_core::physics::flow::{FlowField, Fluid};
+use scg_core::physics::integrate::Integrator;
+
+use crate::check;
+use crate::error::{self, SceneError};
+use crate::model::{DtChoice, Group, Scene};
+use crate::overrides::apply_overrides;
+use crate::raw::{RawDt, RawScene};
+use particles::{feeder, group};
+use physics::{contacts, flow_field, material, outlet, wall};
+
+/// The embedded default scene (the paper's vortex case), run by `scg run` with no file.
+pub const DEFAULT_SCENE: &str = include_str!("../../../cases/vortex.toml");
+
+/// Read a scene file.
+pub fn load(path: &Path, overrides: &[String]) -> Result<Scene, SceneError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+        file: file.clone(),
+        key: None,
+        line: None,
+        message: format!("cannot read scene file: {e}"),
+    })?;
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    parse(&text, &file, &stem, overrides)
+}
+
+/// Parse and validate scene text. `file` names it in errors, `stem` is the default name.
+pub fn parse(
+    text: &str,
+    file: &str,
+    stem: &str,
+    overrides: &[String],
+) -> Result<Scene, SceneError> {
+    let text = apply_overrides(text, file, overrides)?;
+    let raw: RawScene = toml::from_str(&text).map_err(|e| {
+        let pos = e.span().map(|s| s.start);
+        SceneError {
+            file: file.to_string(),
+            key: pos.and_then(|p| error::key_at(&text, p)),
+            line: pos.map(|p| error::line_of(&text, p)),
+            message: e.message().trim().to_string(),
+        }
+    })?;
+    let cx = Ctx { file, text: &text };
+    validate(raw, &cx, stem)
+}
+
+impl Scene {
+    /// Parse the embedded default scene.
+    pub fn embedded(overrides: &[String]) -> Result<Scene, SceneError> {
+        parse(DEFAULT_SCENE, "<embedded vortex.toml>", "vortex", overrides)
+    }
+}
+
+fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
+    let duration = cx.positive("duration", raw.duration)?;
+    let integrator = raw
+        .integrator
+        .map_or(Integrator::Exponential, Integrator::from);
+    let seed = match raw.seed {
+        None => 0,
+        Some(s) if s >= 0 => s as u64,
+        Some(s) => return Err(cx.err("seed", format!("must be ≥ 0, got {s}"))),
+    };
+    let fluid = match &raw.fluid {
+        Some(f) => Some(Fluid {
+            density: cx.non_negative("fluid.density", f.density)?,
+            viscosity: cx.positive("fluid.viscosity", f.viscosity)?,
+        }),
+        None => None,
+    };
+    let flow = match &raw.flow {
+        None => FlowField::Still,
+        Some(f) => flow_field(f, cx)?,
+    };
+    let drag = match &raw.drag {
+        None => None,
+        Some(d) => {
+            if fluid.is_none() {
+                return Err(cx.err("drag", "the drag effect needs a [fluid] table"));
+            }
+            Some(DragLaw::from(d.law))
+        }
+    };
+    let (gravity, buoyancy) = match &raw.gravity {
+        None => (None, false),
+        Some(g) => {
+            if g.buoyancy && fluid.is_none() {
+                return Err(cx.err("gravity.buoyancy", "buoyancy needs a [fluid] table"));
+            }
+            (
+                Some(cx.vec3("gravity.acceleration", g.acceleration)?),
+                g.buoyancy,
+            )
+        }
+    };
+    let (material, normal_law) = match &raw.material {
+        None => (None, None),
+        Some(m) => {
+            let (mat, law) = material(m, cx)?;
+            (Some(mat), Some(law))
+        }
+    };
+    let mut walls = Vec::new();
+    for (i, w) in raw.walls.iter().enumerate() {
+        walls.push(wall(w, i, cx)?);
+    }
+    if !walls.is_empty() && material.is_none() {
+        return Err(cx.err("walls", "walls need a [material] table (contact law)"));
+    }
+    let contacts_raw = raw.contacts.clone();
+    if contacts_raw.is_some() && material.is_none() {
+        return Err(cx.err(
+            "contacts",
+            "particle contacts need a [material] table (contact law)",
+        ));
+    }
+    if raw.groups.is_empty() {
+        return Err(cx.err("groups", "a scene needs at least one [[groups]] entry"));
+    }
+    let mut groups = Vec::new();
+    let fed: Vec<&str> = raw.feeders.iter().map(|f| f.group.as_str()).collect();
+    for (i, g) in raw.groups.iter().enumerate() {
+        let mut grp = group(g, i, cx, fed.contains(&g.name.as_str()))?;
+        if let Some(c) = &raw.coarse_grain {
+            if let Some(a) = c.alpha {
+                grp.alpha = cx.positive("coarse_grain.alpha", a)?;
+            }
+            if let Some(l) = c.law {
+                grp.law = l.into();
+            }
+        }
+        if groups.iter().any(|o: &Group| o.name == grp.name) {
+            return Err(cx.err(
+                &format!("groups[{i}].name"),
+                format!("duplicate group name `{}`", grp.name),
+            ));
+        }
+        groups.push(grp);
+    }
+    let feed_scale = cx.non_negative("feed_scale", raw.feed_scale.unwrap_or(1.0))?;
+    let mut feeders = Vec::new();
+    for (i, f) in raw.feeders.iter().enumerate() {
+        let mut fd = feeder(f, i, &groups, duration, cx)?;
+        if fd.swirl != 0.0 && flow.vortex().is_none() {
+            return Err(cx.err(
+                &format!("feeders[{i}].swirl"),
+                "needs a rotating flow (flow.kind = \"vortex\" or \"classifier\")",
+            ));
+        }
+        fd.rate *= feed_scale;
+        feeders.push(fd);
+    }
+    let outlet = match &raw.outlet {
+        None => None,
+        Some(o) => Some(outlet(o, cx)?),
+    };
+    let mut scene = Scene {
+        name: raw.name.clone().unwrap_or_else(|| stem.to_string()),
+        file: cx.file.to_string(),
+        source: cx.text.to_string(),
+        description: raw.description.clone().unwrap_or_default(),
+        duration,
+        dt: 0.0,
+        dt_choice: DtChoice::Fixed,
+        record_every: 1,
+        seed,
+        integrator,
+        fluid,
+        flow,
+        drag,
+        gravity,
+        buoyancy,
+        material,
+        normal_law,
+        walls,
+        contacts: None,
+        groups,
+        feeders,
+        outlet,
+    };
+    if let (Some(c), Some(mat), Some(law)) = (&contacts_raw, material, normal_law) {
+        scene.contacts = Some(contacts(c, mat, law, &scene.groups, cx)?);
+    }
+    if scene.name.is_empty() || scene.name.contains(['/', '\\']) {
+        return Err(cx.err("name", "must be a non-empty name without path separators"));
+    }
+    match &raw.dt {
+        RawDt::Fixed(dt) => {
+            scene.dt = cx.positive("dt", *dt)?;
+            if scene.dt > duration {
+                return Err(cx.err(
+                    "dt",
+                    format!("dt = {} s exceeds the duration {duration} s", scene.dt),
+                ));
+            }
+        }
+        RawDt::Word(w) if w == "auto" => {
+            scene.dt = check::auto_dt(&scene);
+            scene.dt_choice = DtChoice::Auto;
+        }
+        RawDt::Word(w) => {
+            return Err(cx.err(
+                "dt",
+                format!("expected a number of seconds or \"auto\", got \"{w}\""),
+            ));
+        }
+    }
+    let steps = scene.steps();
+    if steps > 10_000_000_000 {
+        return Err(cx.err("dt", format!("{steps} steps is more than scg will run")));
+    }
+    scene.record_every = match raw.record_every {
+        None => (steps / 200).max(1),
+        Some(n) if n >= 1 => n as u64,
+        Some(n) => return Err(cx.err("record_every", format!("must be ≥ 1, got {n}"))),
+    };
+    Ok(scene)
+}
+
+/// Where errors point: the file's name and its text (after `--set`).
+struct Ctx<'a> {
+    file: &'a str,
+    text: &'a str,
+}
+
+impl Ctx<'_> {
+    fn err(&self, key: &str, message: impl Into<String>) -> SceneError {
+        SceneError {
+            file: self.file.to_string(),
+            key: Some(key.to_string()),
+            line: error::locate(self.text, key),
+            message: message.into(),
+        }
+    }
+    fn finite(&self, key: &str, x: f64) -> Result<f64, SceneError> {
+        if x.is_finite() {
+            Ok(x)
+        } else {
+            Err(self.err(key, format!("must be a finite number, got {x}")))
+        }
+    }
+    fn positive(&self, key: &str, x: f64) -> Result<f64, SceneError> {
+        if x.is_finite() && x > 0.0 {
+            Ok(x)
+        } else {
+            Err(self.err(key, format!("must be a finite number > 0, got {x}")))
+        }
+    }
+    fn non_negative(&self, key: &str, x: f64) -> Result<f64, SceneError> {
+        if x.is_finite() && x >= 0.0 {
+            Ok(x)
+        } else {
+            Err(self.err(key, format!("must be a finite number ≥ 0, got {x}")))
+        }
+    }
+    fn vec3(&self, key: &str, v: [f64; 3]) -> Result<DVec3, SceneError> {
+        if v.iter().all(|c| c.is_finite()) {
+            Ok(DVec3::from_array(v))
+        } else {
+            Err(self.err(key, format!("must hold finite numbers, got {v:?}")))
+        }
+    }
+    fn unit(&self, key: &str, v: [f64; 3]) -> Result<DVec3, SceneError> {
+        let d = self.vec3(key, v)?;
+        let l = d.length();
+        if l > 0.0 && l.is_finite() {
+            Ok(d / l)
+        } else {
+            Err(self.err(key, "must be a non-zero direction"))
+        }
+    }
+    fn need<T: Clone>(&self, key: &str, v: &Option<T>) -> Result<T, SceneError> {
+        v.clone()
+            .ok_or_else(|| self.err(key, "is required here".to_string()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SCENE: &str = "duration = 1.0\ndt = 0.1\n[flow]\nkind = \"swirl\"\n[[groups]]\nname = \"a\"\ndiameter = 1e-3\ndensity = 1e3\npositions = [[0.0, 0.0, 0.0]]\n";
+
+    #[test]
+    fn unknown_names_give_key_line_and_the_accepted_names() {
+        let e = parse(SCENE, "s.toml", "s", &[]).unwrap_err();
+        assert_eq!(e.key.as_deref(), Some("flow.kind"));
+        assert_eq!(e.line, Some(4));
+        for name in ["swirl", "still", "uniform", "vortex", "classifier"] {
+            assert!(e.message.contains(&format!("`{name}`")), "{e}");
+        }
+        let e = parse(SCENE, "s.toml", "s", &["flow.kind=3".into()]).unwrap_err();
+        assert_eq!(e.key.as_deref(), Some("flow.kind"));
+        assert!(e.message.contains("expected a string"), "{e}");
+        for (set, key) in [
+            ("integrator=\"rk4\"", "integrator"),
+            ("groups.0.law=\"x\"", "groups[0].law"),
+            ("coarse_grain.law=\"x\"", "coarse_grain.law"),
+        ] {
+            let sets = ["flow.kind=\"still\"".to_string(), set.to_string()];
+            let e = parse(SCENE, "s.toml", "s", &sets).unwrap_err();
+            assert_eq!(e.key.as_deref(), Some(key), "{e}");
+            assert!(
+                e.line.is_some() && e.message.contains("unknown variant"),
+                "{e}"
+            );
+        }
+    }
+
+    #[test]
+    fn names_map_to_the_core() {
+        let s = parse(
+            SCENE,
+            "s.toml",
+            "s",
+            &[
+                "flow.kind=\"uniform\"".into(),
+                "flow.velocity=[1.0, 0.0, 0.0]".into(),
+                "integrator=\"explicit\"".into(),
+                "groups.0.law=\"parcel\"".into(),
+            ],
+        )
+        .unwrap();
+        assert_eq!(s.integrator, Integrator::Explicit);
+        assert_eq!(
+            s.groups[0].law,
+            scg_core::physics::scaling::CoarseGrainLaw::Parcel
+        );
+        assert!(matches!(s.flow, FlowField::Uniform(_)));
+    }
+}

@@ -1,0 +1,214 @@
+//! The particles: `[[groups]]` (placements and their regions) and `[[feeders]]`.
+
+use scg_core::physics::scaling::CoarseGrainLaw;
+
+use super::Ctx;
+use crate::error::SceneError;
+use crate::model::{Feeder, Group, Placement, Region};
+use crate::raw::{RawFeeder, RawGroup, RawRegion, RawRegionKind};
+
+/// Default group colours, by group index.
+const PALETTE: [[u8; 3]; 10] = [
+    [31, 119, 180],
+    [255, 127, 14],
+    [44, 160, 44],
+    [214, 39, 40],
+    [148, 103, 189],
+    [140, 86, 75],
+    [227, 119, 194],
+    [127, 127, 127],
+    [188, 189, 34],
+    [23, 190, 207],
+];
+
+/// `groups[i]`; `fed`: a feeder feeds it (then it may start empty).
+pub(super) fn group(g: &RawGroup, i: usize, cx: &Ctx, fed: bool) -> Result<Group, SceneError> {
+    let k = |s: &str| format!("groups[{i}].{s}");
+    if g.name.is_empty()
+        || !g
+            .name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "_-".contains(c))
+    {
+        return Err(cx.err(
+            &k("name"),
+            "must be non-empty and use only letters, digits, `_` and `-`",
+        ));
+    }
+    let diameter = cx.positive(&k("diameter"), g.diameter)?;
+    let density = cx.positive(&k("density"), g.density)?;
+    let alpha = cx.positive(&k("alpha"), g.alpha.unwrap_or(1.0))?;
+    let law = g.law.map_or(CoarseGrainLaw::Scg, CoarseGrainLaw::from);
+    let color = match g.color {
+        None => PALETTE[i % PALETTE.len()],
+        Some(c) => {
+            if c.iter().any(|v| !(0..=255).contains(v)) {
+                return Err(cx.err(&k("color"), "components must lie in 0..=255"));
+            }
+            [c[0] as u8, c[1] as u8, c[2] as u8]
+        }
+    };
+    let velocity = cx.vec3(&k("velocity"), g.velocity.unwrap_or([0.0; 3]))?;
+    let placement = match (&g.positions, &g.region) {
+        (Some(_), Some(_)) => {
+            return Err(cx.err(
+                &k("region"),
+                "give either `positions` or `count` + `region`, not both",
+            ));
+        }
+        (Some(ps), None) => {
+            if g.count.is_some() {
+                return Err(cx.err(
+                    &k("count"),
+                    "`count` goes with `region`, not with `positions`",
+                ));
+            }
+            if ps.is_empty() {
+                return Err(cx.err(&k("positions"), "must list at least one position"));
+            }
+            let positions = ps
+                .iter()
+                .map(|p| cx.vec3(&k("positions"), *p))
+                .collect::<Result<Vec<_>, _>>()?;
+            let velocities = match &g.velocities {
+                None => vec![velocity; positions.len()],
+                Some(vs) => {
+                    if vs.len() != positions.len() {
+                        return Err(cx.err(
+                            &k("velocities"),
+                            format!("has {} entries for {} positions", vs.len(), positions.len()),
+                        ));
+                    }
+                    vs.iter()
+                        .map(|v| cx.vec3(&k("velocities"), *v))
+                        .collect::<Result<Vec<_>, _>>()?
+                }
+            };
+            Placement::Explicit {
+                positions,
+                velocities,
+            }
+        }
+        (None, Some(r)) => {
+            let count = cx.need(&k("count"), &g.count)?;
+            if !(0..=50_000_000).contains(&count) {
+                return Err(cx.err(
+                    &k("count"),
+                    format!("must lie in 0..=50000000, got {count}"),
+                ));
+            }
+            Placement::Random {
+                count: count as usize,
+                region: region(r, &k("region"), cx)?,
+                velocity,
+            }
+        }
+        // A group that a feeder feeds may start empty.
+        (None, None) if fed && g.count.is_none() => Placement::Explicit {
+            positions: Vec::new(),
+            velocities: Vec::new(),
+        },
+        (None, None) => {
+            return Err(cx.err(
+                &k("positions"),
+                "a group needs `positions` or `count` + `region` (or a feeder)",
+            ));
+        }
+    };
+    Ok(Group {
+        name: g.name.clone(),
+        diameter,
+        density,
+        alpha,
+        law,
+        color,
+        placement,
+    })
+}
+
+/// A region at `key` (a group's or a feeder's).
+fn region(r: &RawRegion, key: &str, cx: &Ctx) -> Result<Region, SceneError> {
+    let k = |s: &str| format!("{key}.{s}");
+    match r.kind {
+        RawRegionKind::Box => {
+            let min = cx.vec3(&k("min"), cx.need(&k("min"), &r.min)?)?;
+            let max = cx.vec3(&k("max"), cx.need(&k("max"), &r.max)?)?;
+            if !(min.cmple(max).all()) {
+                return Err(cx.err(&k("max"), "every component of max must be ≥ min"));
+            }
+            Ok(Region::Box { min, max })
+        }
+        RawRegionKind::Cylinder => {
+            let radius_min = cx.non_negative(&k("radius_min"), r.radius_min.unwrap_or(0.0))?;
+            let radius_max =
+                cx.positive(&k("radius_max"), cx.need(&k("radius_max"), &r.radius_max)?)?;
+            if radius_min > radius_max {
+                return Err(cx.err(&k("radius_min"), "must be ≤ radius_max"));
+            }
+            let [h0, h1] = r.height.unwrap_or([0.0, 0.0]);
+            let (h0, h1) = (cx.finite(&k("height"), h0)?, cx.finite(&k("height"), h1)?);
+            if h0 > h1 {
+                return Err(cx.err(&k("height"), "must be [from, to] with from ≤ to"));
+            }
+            Ok(Region::Cylinder {
+                center: cx.vec3(&k("center"), r.center.unwrap_or([0.0; 3]))?,
+                axis: cx.unit(&k("axis"), r.axis.unwrap_or([0.0, 0.0, 1.0]))?,
+                radius_min,
+                radius_max,
+                height: (h0, h1),
+            })
+        }
+    }
+}
+
+/// `feeders[i]`, feeding one of `groups` over a run of `duration` s.
+pub(super) fn feeder(
+    f: &RawFeeder,
+    i: usize,
+    groups: &[Group],
+    duration: f64,
+    cx: &Ctx,
+) -> Result<Feeder, SceneError> {
+    let k = |s: &str| format!("feeders[{i}].{s}");
+    let group = groups
+        .iter()
+        .position(|g| g.name == f.group)
+        .ok_or_else(|| cx.err(&k("group"), format!("no group named `{}`", f.group)))?;
+    let g = &groups[group];
+    let rate = match (f.rate, f.volume_rate) {
+        (Some(r), None) => cx.non_negative(&k("rate"), r)?,
+        (None, Some(v)) => {
+            let v = cx.non_negative(&k("volume_rate"), v)?;
+            let d = scg_core::physics::scaling::coarse_grain(g.law, g.alpha, g.diameter, g.density)
+                .diameter;
+            v / (std::f64::consts::PI / 6.0 * d * d * d)
+        }
+        (Some(_), Some(_)) => {
+            return Err(cx.err(&k("volume_rate"), "give `rate` or `volume_rate`, not both"));
+        }
+        (None, None) => return Err(cx.err(&k("rate"), "a feeder needs `rate` or `volume_rate`")),
+    };
+    if rate * duration > 5.0e7 {
+        return Err(cx.err(
+            &k("rate"),
+            format!(
+                "{:.3e} particles over the run is more than scg will feed",
+                rate * duration
+            ),
+        ));
+    }
+    let start = cx.non_negative(&k("start"), f.start.unwrap_or(0.0))?;
+    let stop = cx.finite(&k("stop"), f.stop.unwrap_or(f64::MAX))?;
+    if stop < start {
+        return Err(cx.err(&k("stop"), "must be ≥ start"));
+    }
+    Ok(Feeder {
+        group,
+        rate,
+        region: region(&f.region, &k("region"), cx)?,
+        velocity: cx.vec3(&k("velocity"), f.velocity.unwrap_or([0.0; 3]))?,
+        swirl: cx.finite(&k("swirl"), f.swirl.unwrap_or(0.0))?,
+        window: (start, stop),
+        interval: cx.non_negative(&k("interval"), f.interval.unwrap_or(0.0))?,
+    })
+}

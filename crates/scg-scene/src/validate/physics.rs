@@ -1,0 +1,210 @@
+//! The vessel and the physics: `[material]`, `[contacts]`, `[flow]`, `[[walls]]`,
+//! `[outlet]`.
+
+use glam::DVec3;
+
+use scg_core::physics::contact::tangential::TangentialStiffness;
+use scg_core::physics::contact::{Material, NormalLaw};
+use scg_core::physics::flow::{FlowField, Vortex, rpm_to_rad_per_s};
+use scg_core::physics::wall_shape::WallShape;
+use scg_core::stages::contacts::ContactConfig;
+use scg_core::stages::walls::Wall;
+
+use super::Ctx;
+use crate::error::SceneError;
+use crate::model::{Group, Outlet};
+use crate::raw::{
+    RawContacts, RawFlow, RawFlowKind, RawMaterial, RawNormalModel, RawOutlet, RawWall, RawWallKind,
+};
+
+/// `[material]`: the contact material and the normal law it gives.
+pub(super) fn material(m: &RawMaterial, cx: &Ctx) -> Result<(Material, NormalLaw), SceneError> {
+    let mat = Material {
+        youngs_modulus: cx.positive("material.youngs_modulus", m.youngs_modulus)?,
+        poisson_ratio: cx.finite("material.poisson_ratio", m.poisson_ratio)?,
+        restitution: cx.positive("material.restitution", m.restitution)?,
+        friction: cx.non_negative("material.friction", m.friction)?,
+    };
+    if !(-1.0 < mat.poisson_ratio && mat.poisson_ratio < 0.5) {
+        return Err(cx.err("material.poisson_ratio", "must lie in (−1, 0.5)"));
+    }
+    if mat.restitution > 1.0 {
+        return Err(cx.err("material.restitution", "must lie in (0, 1]"));
+    }
+    let law = match m.normal_model {
+        None | Some(RawNormalModel::Hertz) => NormalLaw::hertz(mat.restitution),
+        Some(RawNormalModel::Linear) => {
+            let k = cx.need("material.linear_stiffness", &m.linear_stiffness)?;
+            NormalLaw::linear(
+                cx.positive("material.linear_stiffness", k)?,
+                mat.restitution,
+            )
+        }
+    };
+    Ok((mat, law))
+}
+
+/// Largest simulated (coarse-grained) diameter over the groups, m.
+fn max_simulated_diameter(groups: &[Group]) -> f64 {
+    groups
+        .iter()
+        .map(|g| {
+            scg_core::physics::scaling::coarse_grain(g.law, g.alpha, g.diameter, g.density).diameter
+        })
+        .fold(0.0, f64::max)
+}
+
+/// `[contacts]`, with the material's contact law.
+pub(super) fn contacts(
+    c: &RawContacts,
+    mat: Material,
+    law: NormalLaw,
+    groups: &[Group],
+    cx: &Ctx,
+) -> Result<ContactConfig, SceneError> {
+    let dmax = max_simulated_diameter(groups);
+    let skin = match c.skin {
+        Some(s) => cx.positive("contacts.skin", s)?,
+        None => 0.1 * dmax,
+    };
+    let rolling_friction = cx.non_negative("contacts.rolling_friction", c.rolling_friction)?;
+    let periodic = match c.periodic {
+        None => None,
+        Some(l) => {
+            for (a, x) in l.iter().enumerate() {
+                cx.positive("contacts.periodic", *x)?;
+                // Minimum image needs every cut-off below half the box.
+                if *x < 2.0 * (dmax + skin) {
+                    return Err(cx.err(
+                        "contacts.periodic",
+                        format!(
+                            "box length {x} m along axis {a} is below 2·(d_max + skin) = {:.4e} m",
+                            2.0 * (dmax + skin)
+                        ),
+                    ));
+                }
+            }
+            Some(DVec3::from_array(l))
+        }
+    };
+    let tangential_stiffness = match c.tangential_stiffness_ratio {
+        None => TangentialStiffness::Mindlin,
+        Some(r) => {
+            TangentialStiffness::Ratio(cx.positive("contacts.tangential_stiffness_ratio", r)?)
+        }
+    };
+    Ok(ContactConfig {
+        law,
+        material: mat,
+        skin,
+        periodic,
+        rolling_friction,
+        tangential_stiffness,
+    })
+}
+
+/// `[flow]`.
+pub(super) fn flow_field(f: &RawFlow, cx: &Ctx) -> Result<FlowField, SceneError> {
+    let vortex = |cx: &Ctx| -> Result<Vortex, SceneError> {
+        Ok(Vortex {
+            center: cx.vec3("flow.center", f.center.unwrap_or([0.0; 3]))?,
+            axis: cx.unit("flow.axis", f.axis.unwrap_or([0.0, 0.0, 1.0]))?,
+            omega: rpm_to_rad_per_s(cx.finite("flow.rpm", cx.need("flow.rpm", &f.rpm)?)?),
+            inflow_ratio: cx.finite("flow.inflow_ratio", f.inflow_ratio.unwrap_or(0.0))?,
+        })
+    };
+    Ok(match f.kind {
+        RawFlowKind::Still => FlowField::Still,
+        RawFlowKind::Uniform => {
+            FlowField::Uniform(cx.vec3("flow.velocity", cx.need("flow.velocity", &f.velocity)?)?)
+        }
+        RawFlowKind::Vortex => FlowField::Vortex(vortex(cx)?),
+        RawFlowKind::Classifier => FlowField::Classifier {
+            vortex: vortex(cx)?,
+            nozzle_radius: cx.positive(
+                "flow.nozzle_radius",
+                cx.need("flow.nozzle_radius", &f.nozzle_radius)?,
+            )?,
+            axial_speed: cx.finite(
+                "flow.axial_speed",
+                cx.need("flow.axial_speed", &f.axial_speed)?,
+            )?,
+        },
+    })
+}
+
+/// `walls[i]`.
+pub(super) fn wall(w: &RawWall, i: usize, cx: &Ctx) -> Result<Wall, SceneError> {
+    let k = |s: &str| format!("walls[{i}].{s}");
+    let extent = match w.extent {
+        None => None,
+        Some([a, b]) => {
+            let (a, b) = (cx.finite(&k("extent"), a)?, cx.finite(&k("extent"), b)?);
+            if a >= b {
+                return Err(cx.err(&k("extent"), "must be [from, to] with from < to"));
+            }
+            Some((a, b))
+        }
+    };
+    let shape = match w.kind {
+        RawWallKind::Plane => WallShape::Plane {
+            point: cx.vec3(&k("point"), cx.need(&k("point"), &w.point)?)?,
+            normal: cx.unit(&k("normal"), cx.need(&k("normal"), &w.normal)?)?,
+        },
+        RawWallKind::CylinderInside | RawWallKind::CylinderOutside => {
+            let center = cx.vec3(&k("center"), w.center.unwrap_or([0.0; 3]))?;
+            let axis = cx.unit(&k("axis"), w.axis.unwrap_or([0.0, 0.0, 1.0]))?;
+            let radius = cx.positive(&k("radius"), cx.need(&k("radius"), &w.radius)?)?;
+            if w.kind == RawWallKind::CylinderInside {
+                WallShape::CylinderInside {
+                    center,
+                    axis,
+                    radius,
+                    extent,
+                }
+            } else {
+                WallShape::CylinderOutside {
+                    center,
+                    axis,
+                    radius,
+                    extent,
+                }
+            }
+        }
+    };
+    Ok(Wall {
+        name: w.name.clone().unwrap_or_else(|| format!("wall{i}")),
+        shape,
+    })
+}
+
+/// `[outlet]` (its interval stays in seconds).
+pub(super) fn outlet(o: &RawOutlet, cx: &Ctx) -> Result<Outlet, SceneError> {
+    let interval = cx.non_negative("outlet.interval", o.interval.unwrap_or(0.0))?;
+    let nozzle_radius = cx.positive("outlet.nozzle_radius", o.nozzle_radius)?;
+    let domain_radius = cx.positive("outlet.domain_radius", o.domain_radius)?;
+    let [h0, h1] = o.domain_height;
+    let (h0, h1) = (
+        cx.finite("outlet.domain_height", h0)?,
+        cx.finite("outlet.domain_height", h1)?,
+    );
+    if h0 >= h1 {
+        return Err(cx.err("outlet.domain_height", "must be [from, to] with from < to"));
+    }
+    let plane = cx.finite("outlet.plane", o.plane)?;
+    if !(h0..=h1).contains(&plane) {
+        return Err(cx.err("outlet.plane", "must lie inside domain_height"));
+    }
+    if nozzle_radius > domain_radius {
+        return Err(cx.err("outlet.nozzle_radius", "must be ≤ domain_radius"));
+    }
+    Ok(Outlet {
+        center: cx.vec3("outlet.center", o.center.unwrap_or([0.0; 3]))?,
+        axis: cx.unit("outlet.axis", o.axis.unwrap_or([0.0, 0.0, 1.0]))?,
+        nozzle_radius,
+        plane,
+        domain_radius,
+        domain_height: (h0, h1),
+        interval,
+    })
+}
