@@ -413,7 +413,7 @@ fn stored_energy(sim: &mut Simulation) -> f64 {
     let mut u = 0.0;
     for p in &st.pairs {
         let (i, j) = (p.i as usize, p.j as usize);
-        let d = scg_core::physics::neighbour::separation(pos[i], pos[j], st.list.periodic.as_ref());
+        let d = scg_core::physics::periodic::separation(pos[i], pos[j], st.list.periodic.as_ref());
         let delta = st.radius[i] + st.radius[j] - d.length();
         if delta > 0.0 {
             let k = hertz_stiffness(ee, effective(st.radius[i], st.radius[j]));

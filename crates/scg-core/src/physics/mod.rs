@@ -7,11 +7,13 @@
 //! * [`integrate`] — the exponential and explicit schemes, kicks;
 //! * [`contact`] — normal, tangential and rolling laws, and the pair kernel;
 //! * [`wall_shape`] — wall geometry (planes, cylinders) and touch tests;
-//! * [`neighbour`] — the Verlet neighbour list.
+//! * [`neighbour`] — the Verlet neighbour list;
+//! * [`periodic`] — orthogonal periodic boxes (minimum image).
 pub mod contact;
 pub mod drag;
 pub mod flow;
 pub mod integrate;
 pub mod neighbour;
+pub mod periodic;
 pub mod scaling;
 pub mod wall_shape;

@@ -11,7 +11,7 @@ use super::tangential::{
     HertzPair, TangentialStiffness, hertz_mindlin_pair, rolling_torque, tangential_force,
 };
 use super::{NormalLaw, TangentialLaw};
-use crate::physics::neighbour::PeriodicBox;
+use crate::physics::periodic::PeriodicBox;
 
 /// The constants of the pair law, derived once from the scene's contact settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
