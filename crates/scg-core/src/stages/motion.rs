@@ -274,35 +274,41 @@ fn effective_tau(law: DragLaw, tau: f64, fc: &FluidCoupling, fluid: &Fluid, slip
     tau / law.correction(re)
 }
 
-/// Reynolds-dependent drag (e.g. Schiller–Naumann), exponential scheme: τ is evaluated
-/// from the slip at the start of the step and held over it.
-pub fn integrate_drag_exponential(
-    clock: Res<SimClock>,
-    motion: Res<Motion>,
-    flow: Res<FlowField>,
-    fluid: Res<Fluid>,
-    health: Res<Health>,
-    disp: Option<Res<StepDisplacement>>,
-    mut q: MoveQuery<&'static FluidCoupling>,
+/// Inputs of one particle's move: position (m), velocity (m/s), mass (kg), wall force of
+/// the step (N, when the scene has walls) and body acceleration (m/s²).
+struct Mover {
+    x: DVec3,
+    v: DVec3,
+    m: f64,
+    force: Option<DVec3>,
+    a: DVec3,
+}
+
+/// The per-particle pass of the drag laws with a response time evaluated per step:
+/// `advance` gives each particle's new position and velocity; the pass writes them, raises
+/// the guard on a non-finite result and records the largest displacement.
+fn drag_pass(
+    q: &mut MoveQuery<&'static FluidCoupling>,
+    health: &Health,
+    disp: Option<&StepDisplacement>,
+    advance: impl Fn(Mover, &FluidCoupling) -> (DVec3, DVec3) + Sync,
 ) {
-    let disp = disp.as_deref();
-    let (dt, law) = (clock.dt, motion.drag.unwrap_or_default());
-    let (flow, fluid) = (*flow, *fluid);
-    let health = &*health;
-    let Some((xs, vs, fcs, ms, fs, gs)) = columns_mut(&mut q) else {
+    let Some((xs, vs, fcs, ms, fs, gs)) = columns_mut(q) else {
         return;
     };
     let columns = (bypass(xs), bypass(vs), fcs, ms, fs, gs);
     for_each_piece(columns, |(xs, vs, fcs, ms, fs, gs)| {
         let mut d2max = 0.0_f64;
         for i in 0..xs.len() {
-            let (x, fc) = (xs[i].0, &fcs[i]);
-            let a = gs.map_or(DVec3::ZERO, |g| g[i].0);
-            let vk = kick(vs[i].0, fs.map(|f| &f[i]), ms[i].0, dt);
-            let slip = (flow.velocity(x) - vk).length();
-            let tau = effective_tau(law, fc.tau, fc, &fluid, slip);
-            let (gain, relax) = exponential_factors(tau, dt);
-            let (x1, v1) = exponential_midpoint(&flow, x, vk, a, tau, gain, relax, dt);
+            let x = xs[i].0;
+            let mover = Mover {
+                x,
+                v: vs[i].0,
+                m: ms[i].0,
+                force: fs.map(|f| f[i].0),
+                a: gs.map_or(DVec3::ZERO, |g| g[i].0),
+            };
+            let (x1, v1) = advance(mover, &fcs[i]);
             if !(x1.is_finite() && v1.is_finite()) {
                 health.raise();
             }
@@ -319,6 +325,31 @@ pub fn integrate_drag_exponential(
     }
 }
 
+/// Reynolds-dependent drag (e.g. Schiller–Naumann), exponential scheme: τ is evaluated
+/// from the slip at the start of the step and held over it.
+pub fn integrate_drag_exponential(
+    clock: Res<SimClock>,
+    motion: Res<Motion>,
+    flow: Res<FlowField>,
+    fluid: Res<Fluid>,
+    health: Res<Health>,
+    disp: Option<Res<StepDisplacement>>,
+    mut q: MoveQuery<&'static FluidCoupling>,
+) {
+    let (dt, law) = (clock.dt, motion.drag.unwrap_or_default());
+    let (flow, fluid) = (*flow, *fluid);
+    drag_pass(&mut q, &health, disp.as_deref(), |p, fc| {
+        let vk = match p.force {
+            Some(f) => linear_kick(p.v, f, p.m, dt),
+            None => p.v,
+        };
+        let slip = (flow.velocity(p.x) - vk).length();
+        let tau = effective_tau(law, fc.tau, fc, &fluid, slip);
+        let (gain, relax) = exponential_factors(tau, dt);
+        exponential_midpoint(&flow, p.x, vk, p.a, tau, gain, relax, dt)
+    });
+}
+
 /// Any drag law, semi-implicit Euler; sub-stepped so that every sub-step has dt ≤ τ/2.
 pub fn integrate_drag_explicit(
     clock: Res<SimClock>,
@@ -329,45 +360,24 @@ pub fn integrate_drag_explicit(
     disp: Option<Res<StepDisplacement>>,
     mut q: MoveQuery<&'static FluidCoupling>,
 ) {
-    let disp = disp.as_deref();
     let (dt, law) = (clock.dt, motion.drag.unwrap_or_default());
     let (flow, fluid) = (*flow, *fluid);
-    let health = &*health;
-    let Some((xs, vs, fcs, ms, fs, gs)) = columns_mut(&mut q) else {
-        return;
-    };
-    let columns = (bypass(xs), bypass(vs), fcs, ms, fs, gs);
-    for_each_piece(columns, |(xs, vs, fcs, ms, fs, gs)| {
-        let mut d2max = 0.0_f64;
-        for i in 0..xs.len() {
-            let fc = &fcs[i];
-            let mut a = gs.map_or(DVec3::ZERO, |g| g[i].0);
-            if let Some(fs) = fs {
-                a += fs[i].0 / ms[i].0;
-            }
-            let (x0, mut xi, mut vi) = (xs[i].0, xs[i].0, vs[i].0);
-            let slip0 = (flow.velocity(xi) - vi).length();
-            let n = explicit_substeps(effective_tau(law, fc.tau, fc, &fluid, slip0), dt);
-            let h = dt / n as f64;
-            for _ in 0..n {
-                let u = flow.velocity(xi);
-                let tau = effective_tau(law, fc.tau, fc, &fluid, (u - vi).length());
-                (xi, vi) = explicit_euler(xi, vi, u, a, tau, h);
-            }
-            if !(xi.is_finite() && vi.is_finite()) {
-                health.raise();
-            }
-            d2max = d2max.max((xi - x0).length_squared());
-            xs[i].0 = xi;
-            vs[i].0 = vi;
+    drag_pass(&mut q, &health, disp.as_deref(), |p, fc| {
+        let mut a = p.a;
+        if let Some(f) = p.force {
+            a += f / p.m;
         }
-        if let Some(d) = disp {
-            d.record(d2max);
+        let (mut xi, mut vi) = (p.x, p.v);
+        let slip0 = (flow.velocity(xi) - vi).length();
+        let n = explicit_substeps(effective_tau(law, fc.tau, fc, &fluid, slip0), dt);
+        let h = dt / n as f64;
+        for _ in 0..n {
+            let u = flow.velocity(xi);
+            let tau = effective_tau(law, fc.tau, fc, &fluid, (u - vi).length());
+            (xi, vi) = explicit_euler(xi, vi, u, a, tau, h);
         }
+        (xi, vi)
     });
-    if let Some(d) = disp {
-        d.mark_reported();
-    }
 }
 
 /// No fluid: wall kick, then the exact drift under gravity (free fall is exact; with
