@@ -349,7 +349,7 @@ pub fn vessel_radius(scene: &scg_scene::Scene) -> f64 {
             return radius;
         }
     }
-    scene.outlet.map_or(1.0, |o| o.domain_radius)
+    scene.outlet.map_or(1.0, |o| o.geometry.domain_radius)
 }
 
 /// Analyse a whole recording.

@@ -645,7 +645,7 @@ pub fn study(a: StudyArgs) -> i32 {
             }
         }
         if let Ok(s) = scg_scene::parse(spec.scene, "<study>", spec.name, &[]) {
-            nozzle = s.outlet.map_or(0.0, |o| o.nozzle_radius);
+            nozzle = s.outlet.map_or(0.0, |o| o.geometry.nozzle_radius);
         }
     }
     print!("{}", report(&runs));

@@ -58,12 +58,7 @@ impl Scene {
     /// The core's view of the outlet.
     fn outlet_spec(&self, o: &Outlet) -> OutletSpec {
         OutletSpec {
-            center: o.center,
-            axis: o.axis,
-            nozzle_radius: o.nozzle_radius,
-            plane: o.plane,
-            domain_radius: o.domain_radius,
-            domain_height: o.domain_height,
+            geometry: o.geometry,
             every: self.interval_steps(o.interval),
         }
     }

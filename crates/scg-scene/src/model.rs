@@ -12,6 +12,7 @@ use scg_core::physics::integrate::Integrator;
 use scg_core::physics::scaling::CoarseGrainLaw;
 pub use scg_core::region::Region;
 use scg_core::stages::contacts::ContactConfig;
+use scg_core::stages::outlet::OutletGeometry;
 use scg_core::stages::walls::Wall;
 
 /// Where the particles of a group start.
@@ -145,18 +146,8 @@ pub struct Feeder {
 /// The outlet: removes particles that drain through the nozzle or leave the domain.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Outlet {
-    /// A point on the axis, m.
-    pub center: DVec3,
-    /// Unit axis; particles drain moving along +axis.
-    pub axis: DVec3,
-    /// Nozzle radius, m.
-    pub nozzle_radius: f64,
-    /// Axial coordinate of the outlet plane, m.
-    pub plane: f64,
-    /// Domain radius, m.
-    pub domain_radius: f64,
-    /// Axial range of the domain, m.
-    pub domain_height: (f64, f64),
+    /// Where particles drain or are lost.
+    pub geometry: OutletGeometry,
     /// Time between checks, s (0 = every step).
     pub interval: f64,
 }

@@ -13,7 +13,7 @@ use crate::step::{StepBuilder, StepSet, StepSystem};
 /// `plane` (from `center` along `axis`), crossed toward +axis; and the domain, a cylinder
 /// of radius `domain_radius` between the axial coordinates `domain_height`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct OutletSpec {
+pub struct OutletGeometry {
     /// A point on the axis, m.
     pub center: DVec3,
     /// Unit axis; particles drain moving along +axis.
@@ -26,6 +26,13 @@ pub struct OutletSpec {
     pub domain_radius: f64,
     /// Axial range of the domain, m.
     pub domain_height: (f64, f64),
+}
+
+/// The outlet as the step runs it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OutletSpec {
+    /// Where particles drain or are lost.
+    pub geometry: OutletGeometry,
     /// Steps between checks (≥ 1).
     pub every: u64,
 }
@@ -41,7 +48,7 @@ pub enum Fate {
     Lost,
 }
 
-impl OutletSpec {
+impl OutletGeometry {
     /// The fate of a particle centred at `x`.
     pub fn fate(&self, x: DVec3) -> Fate {
         let rel = x - self.center;
@@ -106,7 +113,7 @@ pub fn drain_particles(
     let t = clock.time();
     let mut gone: Vec<(u32, u32, Entity, Fate)> = q
         .iter()
-        .filter_map(|(e, id, g, x)| match outlet.0.fate(x.0) {
+        .filter_map(|(e, id, g, x)| match outlet.0.geometry.fate(x.0) {
             Fate::Inside => None,
             f => Some((id.0, g.0, e, f)),
         })
@@ -139,14 +146,13 @@ mod tests {
 
     #[test]
     fn fates() {
-        let o = OutletSpec {
+        let o = OutletGeometry {
             center: DVec3::ZERO,
             axis: DVec3::Z,
             nozzle_radius: 0.01,
             plane: 0.05,
             domain_radius: 0.03,
             domain_height: (-0.001, 0.061),
-            every: 1,
         };
         assert_eq!(o.fate(DVec3::new(0.005, 0.0, 0.051)), Fate::Drained);
         assert_eq!(o.fate(DVec3::new(0.005, 0.0, 0.049)), Fate::Inside);

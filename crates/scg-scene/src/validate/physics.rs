@@ -8,6 +8,7 @@ use scg_core::physics::contact::{Material, NormalLaw};
 use scg_core::physics::flow::{FlowField, Vortex, rpm_to_rad_per_s};
 use scg_core::physics::wall_shape::WallShape;
 use scg_core::stages::contacts::ContactConfig;
+use scg_core::stages::outlet::OutletGeometry;
 use scg_core::stages::walls::Wall;
 
 use super::Ctx;
@@ -199,12 +200,14 @@ pub(super) fn outlet(o: &RawOutlet, cx: &Ctx) -> Result<Outlet, SceneError> {
         return Err(cx.err("outlet.nozzle_radius", "must be ≤ domain_radius"));
     }
     Ok(Outlet {
-        center: cx.vec3("outlet.center", o.center.unwrap_or([0.0; 3]))?,
-        axis: cx.unit("outlet.axis", o.axis.unwrap_or([0.0, 0.0, 1.0]))?,
-        nozzle_radius,
-        plane,
-        domain_radius,
-        domain_height: (h0, h1),
+        geometry: OutletGeometry {
+            center: cx.vec3("outlet.center", o.center.unwrap_or([0.0; 3]))?,
+            axis: cx.unit("outlet.axis", o.axis.unwrap_or([0.0, 0.0, 1.0]))?,
+            nozzle_radius,
+            plane,
+            domain_radius,
+            domain_height: (h0, h1),
+        },
         interval,
     })
 }
