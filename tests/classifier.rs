@@ -4,7 +4,7 @@
 
 mod common;
 
-use scg::cli::classify;
+use scg::cli::analysis as classify;
 use scg::cli::study::{self, VARIANTS};
 
 const WINDOW: (f64, f64) = (0.1, 0.15);

@@ -1,7 +1,8 @@
 //! The `scg` command line: run, check, bench, replay.
 
+pub mod analysis;
 mod bench;
-pub mod classify;
+mod chart;
 pub mod cost;
 pub mod replay;
 mod run;

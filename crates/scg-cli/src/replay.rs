@@ -4,13 +4,12 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 use clap::Args;
-use glam::DVec3;
 
 use scg_core::frame::{Frame, FrameSink};
-use scg_core::physics::flow::FlowField;
 use scg_record::{Recording, read_mcap, write_rrd};
 
 use crate::EXIT_BAD_INPUT;
+use crate::analysis::{self, recording_scene};
 
 /// Arguments of `scg replay`.
 #[derive(Args, Debug)]
@@ -75,7 +74,7 @@ pub fn replay(a: ReplayArgs) -> i32 {
             .csv
             .clone()
             .unwrap_or_else(|| a.recording.with_extension("analysis.csv"));
-        match analyze(&rec, a.from, a.to) {
+        match analysis::group_stats(&rec, a.from, a.to) {
             Ok((text, table)) => {
                 print!("{text}");
                 if let Err(e) = std::fs::write(&csv, table) {
@@ -119,20 +118,19 @@ pub fn replay(a: ReplayArgs) -> i32 {
 /// drained fractions and histogram of `scg study`, written to `<stem>.radial.csv` (the same
 /// text as the study's `radial-<variant>.csv` for the same window).
 fn classify_recording(rec: &Recording, a: &ReplayArgs) -> Result<(), i32> {
-    let Ok(scene) = scg_scene::parse(&rec.meta.scene_toml, "<recording>", &rec.meta.case, &[])
-    else {
-        return Ok(()); // `analyze` already reported it
+    let Ok(scene) = recording_scene(rec) else {
+        return Ok(()); // `group_stats` already reported it
     };
     if scene.outlet.is_none() {
         return Ok(());
     }
     let last = rec.frames.last().map_or(0.0, |f| f.time);
-    let r = crate::classify::analyze_recording(rec, a.from, a.to.min(last)).map_err(|e| {
+    let r = analysis::analyze_recording(rec, a.from, a.to.min(last)).map_err(|e| {
         eprintln!("error: {e}");
         EXIT_BAD_INPUT
     })?;
     let path = a.recording.with_extension("radial.csv");
-    std::fs::write(&path, crate::classify::radial_csv(&r)).map_err(|e| {
+    std::fs::write(&path, analysis::radial_csv(&r)).map_err(|e| {
         eprintln!("error: cannot write {}: {e}", path.display());
         1
     })?;
@@ -151,118 +149,6 @@ fn classify_recording(rec: &Recording, a: &ReplayArgs) -> Result<(), i32> {
     }
     eprintln!("wrote {}", path.display());
     Ok(())
-}
-
-fn axis_distance(flow: &FlowField, p: [f64; 3]) -> f64 {
-    let x = DVec3::from_array(p);
-    match flow {
-        FlowField::Vortex(v) | FlowField::Classifier { vortex: v, .. } => v.radial(x).length(),
-        _ => DVec3::new(x.x, x.y, 0.0).length(),
-    }
-}
-
-fn percentile(sorted: &[f64], q: f64) -> f64 {
-    if sorted.is_empty() {
-        return f64::NAN;
-    }
-    let i = ((sorted.len() - 1) as f64 * q).round() as usize;
-    sorted[i]
-}
-
-/// Statistics per group over the frames in [from, to]: text report and CSV.
-pub fn analyze(rec: &Recording, from: f64, to: f64) -> Result<(String, String), String> {
-    let scene = scg_scene::parse(&rec.meta.scene_toml, "<recording>", &rec.meta.case, &[])
-        .map_err(|e| format!("the recording's scene: {e}"))?;
-    let frames: Vec<&Frame> = rec
-        .frames
-        .iter()
-        .filter(|f| f.time >= from && f.time <= to)
-        .collect();
-    if frames.is_empty() {
-        return Err(format!("no frame between {from} s and {to} s"));
-    }
-    let ng = rec.meta.groups.len();
-    let mut r: Vec<Vec<f64>> = vec![Vec::new(); ng];
-    for f in &frames {
-        for (i, g) in f.group.iter().enumerate() {
-            if let Some(v) = r.get_mut(*g as usize) {
-                v.push(axis_distance(&scene.flow, f.position[i]));
-            }
-        }
-    }
-    let last = frames[frames.len() - 1];
-    let stat = |name: &str| {
-        last.stats
-            .iter()
-            .find(|(k, _)| k == name)
-            .map_or(0.0, |(_, v)| *v)
-    };
-    let rmax = r.iter().flatten().copied().fold(0.0, f64::max).max(1e-300);
-    let bins = 20;
-    let mut text = format!(
-        "window {:.6}–{:.6} s, {} frames; radial distance from the flow axis, m\n{:<16} {:>8} {:>8} {:>12} {:>12} {:>12} {:>12}\n",
-        frames[0].time,
-        last.time,
-        frames.len(),
-        "group",
-        "count",
-        "drained",
-        "mean",
-        "p10",
-        "p50",
-        "p90"
-    );
-    let mut csv = String::from("group,count,drained,samples,mean_r_m,p10_m,p50_m,p90_m");
-    for b in 0..bins {
-        csv.push_str(&format!(",bin{b}"));
-    }
-    csv.push('\n');
-    for (gi, g) in rec.meta.groups.iter().enumerate() {
-        let v = &mut r[gi];
-        v.sort_by(f64::total_cmp);
-        let mean = if v.is_empty() {
-            f64::NAN
-        } else {
-            v.iter().sum::<f64>() / v.len() as f64
-        };
-        let (count, drained) = (
-            stat(&format!("count/{}", g.name)),
-            stat(&format!("drained/{}", g.name)),
-        );
-        text.push_str(&format!(
-            "{:<16} {:>8} {:>8} {:>12.5e} {:>12.5e} {:>12.5e} {:>12.5e}\n",
-            g.name,
-            count,
-            drained,
-            mean,
-            percentile(v, 0.1),
-            percentile(v, 0.5),
-            percentile(v, 0.9)
-        ));
-        let mut hist = vec![0u64; bins];
-        for x in v.iter() {
-            hist[((x / rmax * bins as f64) as usize).min(bins - 1)] += 1;
-        }
-        csv.push_str(&format!(
-            "{},{},{},{},{:e},{:e},{:e},{:e}",
-            g.name,
-            count,
-            drained,
-            v.len(),
-            mean,
-            percentile(v, 0.1),
-            percentile(v, 0.5),
-            percentile(v, 0.9)
-        ));
-        for h in hist {
-            csv.push_str(&format!(",{h}"));
-        }
-        csv.push('\n');
-    }
-    text.push_str(&format!(
-        "histogram: {bins} bins over 0–{rmax:e} m (in the CSV)\n"
-    ));
-    Ok((text, csv))
 }
 
 /// Compares regenerated frames with recorded ones.
@@ -324,8 +210,7 @@ impl FrameSink for VerifySink {
 
 /// Re-run the recording's scene and compare every frame; returns the frames checked.
 pub fn verify(rec: &Recording) -> Result<usize, String> {
-    let scene = scg_scene::parse(&rec.meta.scene_toml, "<recording>", &rec.meta.case, &[])
-        .map_err(|e| format!("the recording's scene: {e}"))?;
+    let scene = recording_scene(rec)?;
     let Some(last) = rec.frames.last() else {
         return Err("the recording holds no frame".into());
     };

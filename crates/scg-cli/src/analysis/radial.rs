@@ -1,16 +1,21 @@
-//! Classifier analysis (paper Section 5, Figs 8–10): radial-distance distributions per
-//! size class over a time window, a top-view snapshot, drained fractions, the partition
-//! (Tromp) curve with its cut size d50, and the 1-Wasserstein distance between
-//! distributions.
+//! Radial-distance distributions per size class over a time window, a top-view snapshot
+//! and drained fractions, accumulated frame by frame.
 //!
 //! Everything is computed from recorded [`Frame`]s, fed one at a time to [`Analysis`], so a
-//! live run (frames from a recorder) and `scg replay --analyze` (frames read back from the
-//! MCAP) give the same numbers to the last digit.
+//! live run (frames through [`SharedAnalysis`]) and `scg replay --analyze` (frames read
+//! back from the MCAP) give the same numbers to the last digit.
+
+use std::sync::{Arc, Mutex};
 
 use glam::DVec3;
 
-use scg_core::frame::{Frame, RunMeta};
+use scg_core::Simulation;
+use scg_core::frame::{Frame, FrameSink, RunMeta};
 use scg_core::physics::flow::FlowField;
+use scg_scene::Scene;
+
+use super::axis::FlowAxis;
+use super::stats::{histogram, mean, percentile};
 
 /// Time windows of the analysis.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,6 +48,11 @@ impl Params {
             bins: 30,
         }
     }
+
+    /// [`Params::for_window`] with the vessel radius of `scene`.
+    pub fn for_scene(scene: &Scene, from: f64, to: f64) -> Self {
+        Params::for_window(from, to, vessel_radius(scene))
+    }
 }
 
 /// Tolerance on frame times (frames sit at step·dt, never exactly at decimal times).
@@ -63,8 +73,7 @@ pub struct SnapPoint {
 #[derive(Clone, Debug)]
 pub struct Analysis {
     params: Params,
-    center: DVec3,
-    axis: DVec3,
+    axis: FlowAxis,
     basis: (DVec3, DVec3),
     groups: Vec<String>,
     diameters: Vec<f64>,
@@ -116,16 +125,12 @@ pub struct Result {
 impl Analysis {
     /// An empty analysis for a run described by `meta` with flow `flow`.
     pub fn new(meta: &RunMeta, flow: &FlowField, params: Params) -> Self {
-        let (center, axis) = match flow {
-            FlowField::Vortex(v) | FlowField::Classifier { vortex: v, .. } => (v.center, v.axis),
-            _ => (DVec3::ZERO, DVec3::Z),
-        };
+        let axis = FlowAxis::of(flow);
         let ng = meta.groups.len();
         Analysis {
             params,
-            center,
             axis,
-            basis: axis.any_orthonormal_pair(),
+            basis: axis.basis(),
             groups: meta.groups.iter().map(|g| g.name.clone()).collect(),
             diameters: meta.groups.iter().map(|g| g.original_diameter).collect(),
             samples: vec![Vec::new(); ng],
@@ -137,18 +142,13 @@ impl Analysis {
         }
     }
 
-    fn radial(&self, p: [f64; 3]) -> DVec3 {
-        let rel = DVec3::from_array(p) - self.center;
-        rel - rel.dot(self.axis) * self.axis
-    }
-
     /// Take one frame (frames must come in time order).
     pub fn observe(&mut self, f: &Frame) {
         let p = self.params;
         if f.time >= p.from - T_EPS && f.time <= p.to + T_EPS {
             self.frames_in_window += 1;
             for (i, g) in f.group.iter().enumerate() {
-                let r = self.radial(f.position[i]).length();
+                let r = self.axis.distance(f.position[i]);
                 if let Some(v) = self.samples.get_mut(*g as usize) {
                     v.push(r);
                 }
@@ -172,7 +172,7 @@ impl Analysis {
         if better {
             let pts = (0..f.len())
                 .map(|i| {
-                    let r = self.radial(f.position[i]);
+                    let r = self.axis.radial(f.position[i]);
                     SnapPoint {
                         xy: [r.dot(self.basis.0), r.dot(self.basis.1)],
                         group: f.group[i],
@@ -209,11 +209,7 @@ impl Analysis {
             .map(|gi| {
                 let mut radii = self.samples[gi].clone();
                 radii.sort_by(f64::total_cmp);
-                let mean_r = if radii.is_empty() {
-                    f64::NAN
-                } else {
-                    radii.iter().sum::<f64>() / radii.len() as f64
-                };
+                let mean_r = mean(&radii);
                 let drained = cohort[gi] - remaining[gi];
                 ClassResult {
                     name: self.groups[gi].clone(),
@@ -241,65 +237,6 @@ impl Analysis {
     }
 }
 
-/// Fraction of `sorted` samples per bin of [0, radius] (the last bin takes everything
-/// beyond); empty samples give zeros.
-pub fn histogram(sorted: &[f64], radius: f64, bins: usize) -> Vec<f64> {
-    let mut h = vec![0.0; bins];
-    if sorted.is_empty() || bins == 0 {
-        return h;
-    }
-    for x in sorted {
-        let b = ((x / radius * bins as f64).floor().max(0.0) as usize).min(bins - 1);
-        h[b] += 1.0;
-    }
-    let n = sorted.len() as f64;
-    h.iter_mut().for_each(|v| *v /= n);
-    h
-}
-
-/// 1-Wasserstein distance between the empirical distributions of two sorted samples:
-/// ∫ |F_a(x) − F_b(x)| dx. NaN when either is empty.
-pub fn wasserstein1(a: &[f64], b: &[f64]) -> f64 {
-    if a.is_empty() || b.is_empty() {
-        return f64::NAN;
-    }
-    let (na, nb) = (a.len() as f64, b.len() as f64);
-    let (mut i, mut j) = (0usize, 0usize);
-    let mut x = a[0].min(b[0]);
-    let mut w = 0.0;
-    while i < a.len() || j < b.len() {
-        let next = match (a.get(i), b.get(j)) {
-            (Some(&p), Some(&q)) => p.min(q),
-            (Some(&p), None) => p,
-            (None, Some(&q)) => q,
-            (None, None) => break,
-        };
-        w += (i as f64 / na - j as f64 / nb).abs() * (next - x);
-        x = next;
-        while i < a.len() && a[i] <= x {
-            i += 1;
-        }
-        while j < b.len() && b[j] <= x {
-            j += 1;
-        }
-    }
-    w
-}
-
-/// Cut size from a partition curve: `points` are (diameter, fraction drained to the fines)
-/// in increasing diameter; d50 is where the curve first falls through 0.5, interpolated
-/// linearly in diameter. `None` when it never crosses 0.5.
-pub fn d50(points: &[(f64, f64)]) -> Option<f64> {
-    let pts: Vec<(f64, f64)> = points.iter().copied().filter(|p| p.1.is_finite()).collect();
-    for w in pts.windows(2) {
-        let ((d0, f0), (d1, f1)) = (w[0], w[1]);
-        if f0 >= 0.5 && f1 < 0.5 {
-            return Some(d0 + (f0 - 0.5) / (f0 - f1) * (d1 - d0));
-        }
-    }
-    None
-}
-
 /// The radial-distance table of one run as CSV: per class, the sample count, mean,
 /// quantiles, cohort and drained counts, then the histogram (shortest round-trip floats,
 /// so equal results give equal text).
@@ -313,13 +250,7 @@ pub fn radial_csv(r: &Result) -> String {
     }
     s.push('\n');
     for c in &r.classes {
-        let q = |p: f64| {
-            if c.radii.is_empty() {
-                f64::NAN
-            } else {
-                c.radii[((c.radii.len() - 1) as f64 * p).round() as usize]
-            }
-        };
+        let q = |p: f64| percentile(&c.radii, p);
         s.push_str(&format!(
             "{},{:e},{},{:e},{:e},{:e},{:e},{},{},{:e}",
             c.name,
@@ -343,7 +274,7 @@ pub fn radial_csv(r: &Result) -> String {
 
 /// Vessel radius of a scene: its inner cylinder wall, else the outlet's domain, else the
 /// largest radial sample.
-pub fn vessel_radius(scene: &scg_scene::Scene) -> f64 {
+pub fn vessel_radius(scene: &Scene) -> f64 {
     for w in &scene.walls {
         if let scg_core::physics::wall_shape::WallShape::CylinderInside { radius, .. } = w.shape {
             return radius;
@@ -358,62 +289,39 @@ pub fn analyze_recording(
     from: f64,
     to: f64,
 ) -> std::result::Result<Result, String> {
-    let scene = scg_scene::parse(&rec.meta.scene_toml, "<recording>", &rec.meta.case, &[])
-        .map_err(|e| format!("the recording's scene: {e}"))?;
-    let mut a = Analysis::new(
-        &rec.meta,
-        &scene.flow,
-        Params::for_window(from, to, vessel_radius(&scene)),
-    );
+    let scene = super::recording_scene(rec)?;
+    let mut a = Analysis::new(&rec.meta, &scene.flow, Params::for_scene(&scene, from, to));
     for f in &rec.frames {
         a.observe(f);
     }
     Ok(a.result())
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+/// An [`Analysis`] fed live by a simulation: attached as a recorder, every recorded frame
+/// goes straight in.
+#[derive(Clone, Debug)]
+pub struct SharedAnalysis(Arc<Mutex<Analysis>>);
 
-    #[test]
-    fn w1_of_shifted_samples_is_the_shift() {
-        let a = [0.0, 1.0, 2.0, 3.0];
-        let b: Vec<f64> = a.iter().map(|x| x + 0.25).collect();
-        assert!((wasserstein1(&a, &b) - 0.25).abs() < 1e-15);
-        assert_eq!(wasserstein1(&a, &a), 0.0);
-        // Point masses: |x − y|.
-        assert!((wasserstein1(&[1.0], &[4.0]) - 3.0).abs() < 1e-15);
-        // Different sample sizes: {0, 1} vs {0, 0, 1, 1} are the same distribution.
-        assert!(wasserstein1(&[0.0, 1.0], &[0.0, 0.0, 1.0, 1.0]).abs() < 1e-15);
-        // {0} vs {0, 1}: half the mass moves by 1.
-        assert!((wasserstein1(&[0.0], &[0.0, 1.0]) - 0.5).abs() < 1e-15);
-        assert!(wasserstein1(&[], &[1.0]).is_nan());
+impl SharedAnalysis {
+    /// Attach `analysis` to `sim` (after the recorders already there).
+    pub fn attach(sim: &mut Simulation, analysis: Analysis) -> Self {
+        let shared = SharedAnalysis(Arc::new(Mutex::new(analysis)));
+        sim.add_recorder(Box::new(shared.clone()));
+        shared
     }
 
-    #[test]
-    fn w1_is_symmetric() {
-        let a = [0.1, 0.4, 0.4, 0.9];
-        let b = [0.0, 0.2, 0.7];
-        assert!((wasserstein1(&a, &b) - wasserstein1(&b, &a)).abs() < 1e-15);
+    /// The result so far.
+    pub fn result(&self) -> std::result::Result<Result, String> {
+        Ok(self.0.lock().map_err(|e| e.to_string())?.result())
     }
+}
 
-    #[test]
-    fn d50_interpolates_the_crossing() {
-        let pts = [(100e-6, 0.9), (160e-6, 0.7), (220e-6, 0.1), (280e-6, 0.0)];
-        let d = d50(&pts).unwrap();
-        // 0.7 → 0.1 over 60 µm: 0.5 is 1/3 of the way.
-        assert!((d - 180e-6).abs() < 1e-12, "{d}");
-        assert_eq!(d50(&[(1.0, 0.2), (2.0, 0.1)]), None);
-        assert_eq!(d50(&[(1.0, 0.9), (2.0, 0.6)]), None);
-        assert_eq!(d50(&[(1.0, 0.5), (2.0, 0.0)]), Some(1.0));
-        // NaN classes (empty cohorts) are skipped.
-        assert_eq!(d50(&[(1.0, 1.0), (2.0, f64::NAN), (3.0, 0.0)]), Some(2.0));
+impl FrameSink for SharedAnalysis {
+    fn write_frame(&mut self, frame: &Frame) -> std::result::Result<(), String> {
+        self.0.lock().map_err(|e| e.to_string())?.observe(frame);
+        Ok(())
     }
-
-    #[test]
-    fn histogram_sums_to_one() {
-        let h = histogram(&[0.0, 0.1, 0.5, 0.99, 2.0], 1.0, 10);
-        assert!((h.iter().sum::<f64>() - 1.0).abs() < 1e-15);
-        assert_eq!(h[9], 0.4);
+    fn finish(&mut self) -> std::result::Result<(), String> {
+        Ok(())
     }
 }

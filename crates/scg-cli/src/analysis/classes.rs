@@ -1,0 +1,62 @@
+//! What the classes of a [`Result`] say together: the partition (Tromp) curve of drained
+//! fractions, its cut size d50, and the W1 distances to a reference run.
+
+use super::radial::Result;
+use super::stats::wasserstein1;
+
+/// The partition curve (original diameter, drained fraction) of a run, in class order.
+pub fn partition(r: &Result) -> Vec<(f64, f64)> {
+    r.classes
+        .iter()
+        .map(|c| (c.diameter, c.drained_fraction))
+        .collect()
+}
+
+/// Cut size from a partition curve: `points` are (diameter, fraction drained to the fines)
+/// in increasing diameter; d50 is where the curve first falls through 0.5, interpolated
+/// linearly in diameter. `None` when it never crosses 0.5.
+pub fn d50(points: &[(f64, f64)]) -> Option<f64> {
+    let pts: Vec<(f64, f64)> = points.iter().copied().filter(|p| p.1.is_finite()).collect();
+    for w in pts.windows(2) {
+        let ((d0, f0), (d1, f1)) = (w[0], w[1]);
+        if f0 >= 0.5 && f1 < 0.5 {
+            return Some(d0 + (f0 - 0.5) / (f0 - f1) * (d1 - d0));
+        }
+    }
+    None
+}
+
+/// The cut size d50 of a run's [`partition`] curve, m.
+pub fn cut_size(r: &Result) -> Option<f64> {
+    d50(&partition(r))
+}
+
+/// Normalised W1 (/ the reference's radius) of each class of `v` to the same class of
+/// `reference`.
+pub fn w1_to(reference: &Result, v: &Result) -> Vec<f64> {
+    let r = reference.params.radius;
+    reference
+        .classes
+        .iter()
+        .zip(&v.classes)
+        .map(|(a, b)| wasserstein1(&a.radii, &b.radii) / r)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn d50_interpolates_the_crossing() {
+        let pts = [(100e-6, 0.9), (160e-6, 0.7), (220e-6, 0.1), (280e-6, 0.0)];
+        let d = d50(&pts).unwrap();
+        // 0.7 → 0.1 over 60 µm: 0.5 is 1/3 of the way.
+        assert!((d - 180e-6).abs() < 1e-12, "{d}");
+        assert_eq!(d50(&[(1.0, 0.2), (2.0, 0.1)]), None);
+        assert_eq!(d50(&[(1.0, 0.9), (2.0, 0.6)]), None);
+        assert_eq!(d50(&[(1.0, 0.5), (2.0, 0.0)]), Some(1.0));
+        // NaN classes (empty cohorts) are skipped.
+        assert_eq!(d50(&[(1.0, 1.0), (2.0, f64::NAN), (3.0, 0.0)]), Some(2.0));
+    }
+}

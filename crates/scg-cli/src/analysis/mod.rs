@@ -1,0 +1,34 @@
+//! Analysis shared by `scg study`, `scg cost` and `scg replay` (paper Section 5, Figs
+//! 8–10): radial-distance distributions per size class over a time window, a top-view
+//! snapshot, drained fractions, the partition (Tromp) curve with its cut size d50, and the
+//! 1-Wasserstein distance between distributions; per-group statistics of any recording.
+//!
+//! * `stats.rs`: mean, percentiles, histograms, W1;
+//! * `axis.rs`: the flow axis radial distances are measured from;
+//! * `radial.rs`: the per-class analysis fed frame by frame ([`Analysis`]), its CSV;
+//! * `classes.rs`: partition curve, d50, W1 of every class to a reference;
+//! * `groups.rs`: per-group statistics of a recording (`scg replay --analyze`).
+
+mod axis;
+mod classes;
+mod groups;
+mod radial;
+mod stats;
+
+pub use axis::FlowAxis;
+pub use classes::{cut_size, d50, partition, w1_to};
+pub use groups::group_stats;
+pub use radial::{
+    Analysis, ClassResult, Params, Result, SharedAnalysis, SnapPoint, analyze_recording,
+    radial_csv, vessel_radius,
+};
+pub use stats::{histogram, histogram_counts, mean, percentile, wasserstein1};
+
+use scg_record::Recording;
+use scg_scene::Scene;
+
+/// The scene embedded in a recording.
+pub fn recording_scene(rec: &Recording) -> std::result::Result<Scene, String> {
+    scg_scene::parse(&rec.meta.scene_toml, "<recording>", &rec.meta.case, &[])
+        .map_err(|e| format!("the recording's scene: {e}"))
+}

@@ -1,0 +1,175 @@
+//! `scg cost`: what accuracy costs in time.
+//!
+//! A sweep over the knobs that trade accuracy for speed — coarse-grain ratio α, the
+//! coarse-graining law, a time-step multiplier, the drag integrator and (with wall or
+//! particle contacts) a Young's-modulus reduction factor — on one scene. Every point is
+//! run to the end and timed; its error is measured against a reference run.
+//!
+//! # The original particle and the points
+//!
+//! * **Single-particle mode** (the scene's original group holds exactly one particle, as in
+//!   `cases/uniform.toml` and `cases/vortex.toml`): the *original* is the scene's first
+//!   group with α = 1 (the first group when none has α = 1). Every point runs a scene that
+//!   holds only that particle, with the point's α and law, at the original's start
+//!   position. The other groups of the file (which only show the paper's CG variants side
+//!   by side) are dropped.
+//! * **Population mode** (any other scene): every group is given the point's α and law and
+//!   its random particle count is divided by α³ (a CG particle stands for α³ originals).
+//!   No error is computed there yet (see [`population_error_note`]).
+//!
+//! The points are not the full factorial product: for every (law, α) pair the *base point*
+//! uses the first value of each of `--dt-mult`, `--integrators` and `--stiffness`, and each
+//! further value of one knob is run with the other knobs at their base value (one knob at
+//! a time). α = 1 is the same for every law and runs once, under the law name `original`.
+//!
+//! # Error
+//!
+//! The reference is α = 1 with the smallest dt multiplier, the exponential integrator and
+//! the largest stiffness factor. The trajectory error of a point is the RMS over common
+//! sample times t_k of `|(x(t_k) − x(0)) − (x_ref(t_k) − x_ref(0))| / L`, each particle
+//! measured from its own start, with `L` the reference particle's largest displacement
+//! from its start. (The maximum over t_k saturates once a particle sits on a wall, which
+//! hides how much earlier it got there; the RMS does not.) Errors below [`ERROR_FLOOR`] are clamped to it in the
+//! plot (log axes cannot show 0); the CSV keeps the measured value.
+//!
+//! # Timing
+//!
+//! Points run one after another on the simulator's thread pool (never in parallel), so
+//! that each wall time is not distorted by another run. A single-particle run measures the
+//! cost per particle-step; the speed-up column estimates what the same change saves on a
+//! system of N originals: `(wall_ref / wall) · n_ref / n` with n = α³ originals represented
+//! per CG particle (laws `scg`, `none`, `parcel`; 1 for `mass`, whose particles keep the
+//! original's mass and so stand for one original each).
+//!
+//! # Files
+//!
+//! `sweep.rs` designs the points, `run.rs` runs and measures them, `report.rs` writes the
+//! CSV and Markdown tables, `plot.rs` the SVG.
+
+mod plot;
+mod report;
+mod run;
+mod sweep;
+
+use std::path::PathBuf;
+
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::EXIT_BAD_INPUT;
+
+pub use plot::plot;
+pub use report::{csv, markdown};
+pub use run::{
+    ClassErrors, Outcome, PlanSets, SetTimes, Sweep, pareto, population_error_note, speedup, sweep,
+};
+pub use sweep::{
+    Point, design, is_classifier, original_group, point_scene, points, single_particle,
+};
+
+/// Smallest error shown on the log–log plot.
+pub const ERROR_FLOOR: f64 = 1e-16;
+
+/// Arguments of `scg cost`.
+#[derive(Args, Debug, Clone)]
+pub struct CostArgs {
+    /// Scene file.
+    pub case: PathBuf,
+    /// Output folder for cost.md, cost.csv and cost.svg.
+    #[arg(long, default_value = "cost")]
+    pub out: PathBuf,
+    /// Reduced sweep for CI: a tenth of the duration (at most 0.3 s of simulated time),
+    /// laws scg,none,mass, dt multipliers 1,2, the first integrator and stiffness only.
+    #[arg(long)]
+    pub quick: bool,
+    /// Coarse-grain ratios α.
+    #[arg(long, value_delimiter = ',', default_value = "1,2,4,8")]
+    pub alphas: Vec<f64>,
+    /// Coarse-graining laws.
+    #[arg(long, value_delimiter = ',', default_value = "scg,none,mass,parcel")]
+    pub laws: Vec<String>,
+    /// Time-step multipliers (positive integers) applied to the scene's dt.
+    #[arg(long = "dt-mult", value_delimiter = ',', default_value = "1,2,4")]
+    pub dt_mult: Vec<u32>,
+    /// Drag integrators.
+    #[arg(long, value_delimiter = ',', default_value = "exponential,explicit")]
+    pub integrators: Vec<String>,
+    /// Young's-modulus factors (only with walls or contacts).
+    #[arg(long, value_delimiter = ',', default_value = "1,0.1")]
+    pub stiffness: Vec<f64>,
+    /// Override a scene key before the sweep (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+}
+
+/// Run `scg cost`; returns the exit status.
+pub fn cost(a: CostArgs) -> i32 {
+    let mut base = match scg_scene::load(&a.case, &a.set) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_BAD_INPUT;
+        }
+    };
+    let bad = |m: String| {
+        eprintln!("error: {m}");
+        EXIT_BAD_INPUT
+    };
+    let (pts, reference) = match design(&a, &mut base) {
+        Ok(d) => d,
+        Err(m) => return bad(m),
+    };
+    if let Err(e) = crate::run::ensure_writable(&a.out) {
+        return bad(e);
+    }
+    let n = 1 + pts.iter().filter(|p| **p != reference).count();
+    eprintln!(
+        "scg cost `{}`: {} points of {} s simulated each, run sequentially for honest timings{}",
+        base.name,
+        n,
+        base.duration,
+        if single_particle(&base) {
+            " (single-particle mode: the original particle alone)"
+        } else {
+            " (population mode)"
+        }
+    );
+    let bar = ProgressBar::new(n as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} points  {elapsed_precise} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let s = sweep(&base, &pts, reference, |o| {
+        bar.set_message(format!(
+            "{} α={} {:.1e}s {}",
+            o.point.law_name(),
+            o.point.alpha,
+            o.dt,
+            report::fmt_err(o.error)
+        ));
+        bar.inc(1);
+    });
+    bar.finish_and_clear();
+    let md = markdown(&s);
+    let files = [
+        (a.out.join("cost.md"), md.clone()),
+        (a.out.join("cost.csv"), csv(&s)),
+    ];
+    for (p, text) in &files {
+        if let Err(e) = std::fs::write(p, text) {
+            eprintln!("error: cannot write {}: {e}", p.display());
+            return 1;
+        }
+    }
+    let svg = a.out.join("cost.svg");
+    if let Err(e) = plot(&s, &svg) {
+        eprintln!("error: cannot draw {}: {e}", svg.display());
+        return 1;
+    }
+    print!("{md}");
+    for (p, _) in &files {
+        eprintln!("wrote {}", p.display());
+    }
+    eprintln!("wrote {}", svg.display());
+    0
+}

@@ -1,0 +1,405 @@
+//! Running the sweep: each point timed on its own, the reference first, and the error of
+//! every point against it (trajectory error, or per-class W1 and d50 on classifier scenes);
+//! the speed-up and Pareto front derived from the measurements.
+
+use std::time::Instant;
+
+use glam::DVec3;
+
+use scg_core::Simulation;
+use scg_core::physics::scaling::CoarseGrainLaw;
+use scg_core::step::StepSet;
+use scg_scene::Scene;
+
+use crate::analysis::{self, Analysis, Params, SharedAnalysis, cut_size, w1_to};
+
+use super::ERROR_FLOOR;
+use super::sweep::{Point, classifier_overrides, is_classifier, point_scene, single_particle};
+
+/// Wall time per step set, s, indexed like [`StepSet::ORDER`].
+pub type SetTimes = [f64; StepSet::ORDER.len()];
+
+/// The measured result of one point.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// The point.
+    pub point: Point,
+    /// Time step, s.
+    pub dt: f64,
+    /// Wall time of the run, s.
+    pub wall_s: f64,
+    /// Particle-steps.
+    pub particle_steps: u64,
+    /// Error against the reference (NaN when not computed).
+    pub error: f64,
+    /// Wall time per step set, s (indexed like [`StepSet::ORDER`]).
+    pub sets: SetTimes,
+    /// Why the run stopped early, if it did.
+    pub failure: Option<String>,
+    /// Classifier scenes: per-class errors.
+    pub classes: Option<ClassErrors>,
+}
+
+impl Outcome {
+    /// A point that measured nothing (yet): no wall time, no particle-steps, no error.
+    fn unmeasured(point: Point, dt: f64, failure: Option<String>) -> Self {
+        Outcome {
+            point,
+            dt,
+            wall_s: 0.0,
+            particle_steps: 0,
+            error: f64::NAN,
+            sets: [0.0; StepSet::ORDER.len()],
+            failure,
+            classes: None,
+        }
+    }
+
+    /// What `sim` measured after running `point` for `wall_s` (the error comes later).
+    fn measured(
+        point: Point,
+        sim: &Simulation,
+        dt: f64,
+        wall_s: f64,
+        failure: Option<String>,
+    ) -> Self {
+        Outcome {
+            wall_s,
+            particle_steps: sim.particle_steps(),
+            sets: set_times(sim),
+            ..Outcome::unmeasured(point, dt, failure)
+        }
+    }
+
+    /// Particle-steps per second of wall time.
+    pub fn particle_steps_per_s(&self) -> f64 {
+        self.particle_steps as f64 / self.wall_s.max(1e-12)
+    }
+}
+
+/// Wall time per step set of a simulation's run so far.
+fn set_times(sim: &Simulation) -> SetTimes {
+    let mut sets = [0.0; StepSet::ORDER.len()];
+    for (t, (_, d)) in sets.iter_mut().zip(sim.timers().by_set()) {
+        *t = d.as_secs_f64();
+    }
+    sets
+}
+
+/// Classifier errors of one point against the reference.
+#[derive(Clone, Debug, Default)]
+pub struct ClassErrors {
+    /// Class names.
+    pub names: Vec<String>,
+    /// W1 of each class's radial distribution to the reference's, / vessel radius.
+    pub w1: Vec<f64>,
+    /// Cut size d50, m (None when the partition curve never crosses 0.5).
+    pub d50: Option<f64>,
+    /// |d50 − d50_ref| / d50_ref (NaN when either is missing).
+    pub d50_error: f64,
+}
+
+/// A finished sweep.
+#[derive(Clone, Debug)]
+pub struct Sweep {
+    /// Scene name.
+    pub scene: String,
+    /// Simulated duration of every point, s.
+    pub duration: f64,
+    /// Single-particle mode (trajectory error) or population mode.
+    pub single: bool,
+    /// The plan of the reference run, rendered.
+    pub plan: String,
+    /// Systems per set in the reference run.
+    pub plan_sets: PlanSets,
+    /// Reference point.
+    pub reference: Point,
+    /// Reference length L, m.
+    pub length: f64,
+    /// Results, in run order (the reference first).
+    pub outcomes: Vec<Outcome>,
+    /// Notes for the report.
+    pub notes: Vec<String>,
+}
+
+/// Run one point: wall time, particle-steps, per-set times and the sampled displacement of
+/// particle 0 from its start every `sample_base_steps · base_dt` seconds.
+fn run_point(
+    base: &Scene,
+    p: &Point,
+    steps_base: u64,
+    sample_base_steps: u64,
+) -> (Outcome, Vec<DVec3>, String, PlanSets) {
+    let scene = point_scene(base, p);
+    let mut sim = scene.build(false);
+    let plan = sim.plan().render();
+    let plan_sets = plan_sets(&sim);
+    let m = p.dt_mult as u64;
+    let chunk = (sample_base_steps / m).max(1);
+    let total = steps_base / m;
+    let x0 = sim.particles().first().map_or(DVec3::ZERO, |q| q.position);
+    let mut samples = vec![DVec3::ZERO];
+    let mut done = 0;
+    let mut wall = 0.0;
+    let mut failure = None;
+    while done + chunk <= total {
+        let t0 = Instant::now();
+        let r = sim.run(chunk, |_| true);
+        wall += t0.elapsed().as_secs_f64();
+        if let Err(e) = r {
+            failure = Some(e.to_string());
+            break;
+        }
+        done += chunk;
+        let x = sim.particles().first().map_or(DVec3::NAN, |q| q.position);
+        samples.push(x - x0);
+    }
+    if failure.is_none() && done < total {
+        let t0 = Instant::now();
+        if let Err(e) = sim.run(total - done, |_| true) {
+            failure = Some(e.to_string());
+        }
+        wall += t0.elapsed().as_secs_f64();
+    }
+    (
+        Outcome::measured(*p, &sim, scene.dt, wall, failure),
+        samples,
+        plan,
+        plan_sets,
+    )
+}
+
+/// Run one classifier point with the analysis attached (its frames cost a little time,
+/// the same for every point).
+fn run_classifier_point(
+    base: &Scene,
+    p: &Point,
+) -> (Outcome, Option<analysis::Result>, String, PlanSets) {
+    let scene = match scg_scene::parse(
+        &base.source,
+        &base.file,
+        &base.name,
+        &classifier_overrides(base, p),
+    ) {
+        Ok(s) => s,
+        Err(e) => {
+            let dt = base.dt * p.dt_mult as f64;
+            let fail = Outcome::unmeasured(*p, dt, Some(e.to_string()));
+            return (fail, None, String::new(), Vec::new());
+        }
+    };
+    let params = Params::for_scene(&scene, 0.5 * scene.duration, scene.duration);
+    let mut sim = scene.build(true);
+    let plan = sim.plan().render();
+    let plan_sets = plan_sets(&sim);
+    let meta = scene.run_meta(Vec::new());
+    let analysis = SharedAnalysis::attach(&mut sim, Analysis::new(&meta, &scene.flow, params));
+    let t0 = Instant::now();
+    let r = sim
+        .record_now()
+        .and_then(|_| sim.run(scene.steps(), |_| true));
+    let wall = t0.elapsed().as_secs_f64();
+    let _ = sim.finish_recorders();
+    let result = analysis.result().ok();
+    let failure = r.err().map(|e| e.to_string());
+    (
+        Outcome::measured(*p, &sim, scene.dt, wall, failure),
+        result,
+        plan,
+        plan_sets,
+    )
+}
+
+/// Per-class errors of `v` against `reference`.
+fn class_errors(reference: &analysis::Result, v: &analysis::Result) -> ClassErrors {
+    let d_ref = cut_size(reference);
+    let d50 = cut_size(v);
+    ClassErrors {
+        names: v.classes.iter().map(|c| c.name.clone()).collect(),
+        w1: w1_to(reference, v),
+        d50,
+        d50_error: match (d50, d_ref) {
+            (Some(a), Some(b)) => ((a - b) / b).abs(),
+            _ => f64::NAN,
+        },
+    }
+}
+
+/// The systems of each step set, in [`StepSet::ORDER`].
+pub type PlanSets = Vec<(StepSet, Vec<&'static str>)>;
+
+fn plan_sets(sim: &Simulation) -> PlanSets {
+    StepSet::ORDER
+        .iter()
+        .map(|s| (*s, sim.plan().in_set(*s).map(|x| x.system.name()).collect()))
+        .collect()
+}
+
+fn gcd(a: u64, b: u64) -> u64 {
+    if b == 0 { a } else { gcd(b, a % b) }
+}
+
+/// The note written when population-mode errors are not computed.
+pub fn population_error_note() -> &'static str {
+    "population scene without a classifier flow: no error metric is computed (the \
+     classifier's per-class W1 and d50 errors apply only to classifier scenes); times and \
+     particle-steps are measured"
+}
+
+/// Run the whole sweep. `progress` is called after each point.
+pub fn sweep(
+    base: &Scene,
+    pts: &[Point],
+    reference: Point,
+    mut progress: impl FnMut(&Outcome),
+) -> Sweep {
+    if is_classifier(base) {
+        return sweep_classifier(base, pts, reference, progress);
+    }
+    let single = single_particle(base);
+    let steps_base = base.steps();
+    // Sample interval: the scene's record interval, rounded up to a multiple of every dt
+    // multiplier, so that all points sample at the same times.
+    let lcm = pts
+        .iter()
+        .chain(std::iter::once(&reference))
+        .map(|p| p.dt_mult as u64)
+        .fold(1u64, |a, b| a / gcd(a, b) * b);
+    let sample = base.record_every.max(1).div_ceil(lcm) * lcm;
+    // Warm-up (thread pool, caches, clock ramp): a tenth of the reference, untimed, so
+    // that the reference time every speed-up divides is not the slowest by accident.
+    let _ = run_point(base, &reference, steps_base / 10, sample);
+    let (ref_out, ref_traj, plan, plan_sets) = run_point(base, &reference, steps_base, sample);
+    progress(&ref_out);
+    let length = ref_traj.iter().map(|d| d.length()).fold(0.0, f64::max);
+    let mut notes = Vec::new();
+    if !single {
+        notes.push(population_error_note().to_string());
+    }
+    let mut outcomes = vec![ref_out.clone()];
+    outcomes[0].error = if single { 0.0 } else { f64::NAN };
+    for p in pts {
+        if *p == reference {
+            continue;
+        }
+        let (mut o, traj, _, _) = run_point(base, p, steps_base, sample);
+        if single {
+            let n = traj.len().min(ref_traj.len());
+            // RMS over the sample times (NaN propagates): unlike the maximum, it does not
+            // saturate once both particles have reached the vessel wall.
+            let sq = (0..n)
+                .map(|k| (traj[k] - ref_traj[k]).length_squared())
+                .sum::<f64>();
+            let e = if n > 0 { (sq / n as f64).sqrt() } else { 0.0 };
+            o.error = if length > 0.0 { e / length } else { e };
+            if o.failure.is_some() {
+                o.error = f64::NAN;
+            }
+        }
+        progress(&o);
+        outcomes.push(o);
+    }
+    Sweep {
+        scene: base.name.clone(),
+        duration: base.duration,
+        single,
+        plan,
+        plan_sets,
+        reference,
+        length,
+        outcomes,
+        notes,
+    }
+}
+
+/// The classifier sweep: error = largest per-class W1 (/ vessel radius) to the reference.
+fn sweep_classifier(
+    base: &Scene,
+    pts: &[Point],
+    reference: Point,
+    mut progress: impl FnMut(&Outcome),
+) -> Sweep {
+    let (mut ref_out, ref_res, plan, plan_sets) = run_classifier_point(base, &reference);
+    if let Some(r) = &ref_res {
+        let ce = class_errors(r, r);
+        ref_out.error = ce.w1.iter().copied().fold(0.0, f64::max);
+        ref_out.classes = Some(ce);
+    }
+    progress(&ref_out);
+    let mut outcomes = vec![ref_out];
+    for p in pts {
+        if *p == reference {
+            continue;
+        }
+        let (mut o, res, _, _) = run_classifier_point(base, p);
+        if let (Some(r), Some(v), None) = (&ref_res, &res, &o.failure) {
+            let ce = class_errors(r, v);
+            o.error = ce.w1.iter().copied().fold(
+                0.0,
+                |a: f64, b| if b.is_nan() { f64::NAN } else { a.max(b) },
+            );
+            o.classes = Some(ce);
+        }
+        progress(&o);
+        outcomes.push(o);
+    }
+    Sweep {
+        scene: base.name.clone(),
+        duration: base.duration,
+        single: false,
+        plan,
+        plan_sets,
+        reference,
+        length: analysis::vessel_radius(base),
+        outcomes,
+        notes: vec![format!(
+            "classifier: every group coarse-grained through `[coarse_grain]` (feeders keep \
+             the solid volume rate); error = largest per-class 1-Wasserstein distance of the \
+             radial distributions over t ∈ [{}, {}] s to the reference's, divided by the \
+             vessel radius; d50 from the partition curve (drained fractions). The analysis \
+             reads every recorded frame, included in the wall times.",
+            0.5 * base.duration,
+            base.duration
+        )],
+    }
+}
+
+/// Originals represented per simulated particle.
+fn represented(p: &Point) -> f64 {
+    match p.law {
+        None | Some(CoarseGrainLaw::Mass) => 1.0,
+        Some(_) => p.alpha.powi(3),
+    }
+}
+
+/// Estimated speed-up for a system of N originals against the reference.
+pub fn speedup(s: &Sweep, o: &Outcome) -> f64 {
+    let r = &s.outcomes[0];
+    let t = r.wall_s / o.wall_s.max(1e-12);
+    if s.single {
+        t * represented(&o.point) / represented(&r.point)
+    } else {
+        // The population runs hold the particles themselves.
+        t
+    }
+}
+
+/// Pareto front (indices into `outcomes`): no other point is both faster and more accurate.
+pub fn pareto(outcomes: &[Outcome]) -> Vec<usize> {
+    let ok: Vec<usize> = (0..outcomes.len())
+        .filter(|&i| outcomes[i].error.is_finite() && outcomes[i].failure.is_none())
+        .collect();
+    let mut front: Vec<usize> = ok
+        .iter()
+        .copied()
+        .filter(|&i| {
+            let (t, e) = (outcomes[i].wall_s, outcomes[i].error.max(ERROR_FLOOR));
+            !ok.iter().any(|&j| {
+                let (tj, ej) = (outcomes[j].wall_s, outcomes[j].error.max(ERROR_FLOOR));
+                j != i && tj <= t && ej <= e && (tj < t || ej < e)
+            })
+        })
+        .collect();
+    front.sort_by(|a, b| outcomes[*a].wall_s.total_cmp(&outcomes[*b].wall_s));
+    front
+}

@@ -1,0 +1,151 @@
+//! `scg study classifier|classifier-psd`: the paper's Section 5 end to end. Runs the three
+//! variants (original, CG α = 2 with SCG, CG α = 2 without SCG), then writes the radial
+//! distributions (Fig. 10), top-view snapshots (Fig. 9), drained fractions and the
+//! partition curve with d50, the computing time for 0.1 s (Fig. 8), the normalised W1
+//! distances to the original, and `summary.json`.
+
+mod plot;
+mod report;
+mod run;
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+
+use crate::EXIT_BAD_INPUT;
+
+/// W1 of each class to the reference variant (lives in [`crate::analysis`]).
+pub use crate::analysis::w1_to;
+pub use plot::{plot_partition, plot_radial, plot_snapshot, plot_time, write_plots};
+pub use report::{report, summary, write_tables};
+pub use run::{VariantRun, run_variant};
+
+/// The classifier scene (embedded so the study runs from any directory).
+pub const CLASSIFIER: &str = include_str!("../../../../cases/classifier.toml");
+/// The classifier with a continuous size distribution.
+pub const CLASSIFIER_PSD: &str = include_str!("../../../../cases/classifier-psd.toml");
+
+/// Arguments of `scg study`.
+#[derive(Args, Debug)]
+pub struct StudyArgs {
+    /// `classifier` (paper Table 3) or `classifier-psd` (size distribution, partition curve).
+    pub study: String,
+    /// Fewer particles (feed rates scaled down): a few minutes in all.
+    #[arg(long)]
+    pub quick: bool,
+    /// Output folder (default `recordings/study-<study>[-quick]`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Do not write an MCAP recording per variant.
+    #[arg(long)]
+    pub no_record: bool,
+    /// Extra scene overrides applied to every variant (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+}
+
+/// One study: its scene and windows.
+#[derive(Clone, Debug)]
+pub struct StudySpec {
+    /// Name.
+    pub name: &'static str,
+    /// Scene text.
+    pub scene: &'static str,
+    /// Analysis window (distributions), s; the computing time is measured over its last
+    /// 0.1 s, the drained fraction over the particles fed up to half of `to`.
+    pub window: (f64, f64),
+    /// Feed-rate scale of `--quick`.
+    pub quick_scale: f64,
+}
+
+/// The studies.
+pub fn spec(name: &str) -> Option<StudySpec> {
+    match name {
+        "classifier" => Some(StudySpec {
+            name: "classifier",
+            scene: CLASSIFIER,
+            window: (0.2, 0.3),
+            quick_scale: 1.0 / 12.0,
+        }),
+        "classifier-psd" => Some(StudySpec {
+            name: "classifier-psd",
+            scene: CLASSIFIER_PSD,
+            window: (0.5, 0.6),
+            quick_scale: 1.0 / 4.0,
+        }),
+        _ => None,
+    }
+}
+
+/// The variants: name and the overrides that select them.
+pub const VARIANTS: [(&str, [&str; 2]); 3] = [
+    ("original", ["coarse_grain.alpha=1", "coarse_grain.law=scg"]),
+    ("scg", ["coarse_grain.alpha=2", "coarse_grain.law=scg"]),
+    ("none", ["coarse_grain.alpha=2", "coarse_grain.law=none"]),
+];
+
+/// Write every table and plot of a study into `out`.
+pub fn write_outputs(runs: &[VariantRun], nozzle: f64, out: &Path) -> Result<(), String> {
+    write_tables(runs, out)?;
+    write_plots(runs, nozzle, out)
+}
+
+/// Run `scg study`; returns the exit status.
+pub fn study(a: StudyArgs) -> i32 {
+    let Some(spec) = spec(&a.study) else {
+        eprintln!(
+            "error: unknown study `{}` (classifier, classifier-psd)",
+            a.study
+        );
+        return EXIT_BAD_INPUT;
+    };
+    let out = a.out.clone().unwrap_or_else(|| {
+        PathBuf::from(format!(
+            "recordings/study-{}{}",
+            spec.name,
+            if a.quick { "-quick" } else { "" }
+        ))
+    });
+    if let Err(e) = std::fs::create_dir_all(&out) {
+        eprintln!("error: cannot create {}: {e}", out.display());
+        return EXIT_BAD_INPUT;
+    }
+    let mut runs = Vec::new();
+    let mut nozzle = 0.0;
+    for (name, sets) in VARIANTS {
+        let mut overrides: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        overrides.push(format!("name=\"{}-{name}\"", spec.name));
+        if a.quick {
+            overrides.push(format!("feed_scale={}", spec.quick_scale));
+        }
+        overrides.extend(a.set.iter().cloned());
+        let mcap = (!a.no_record).then(|| out.join(format!("{}-{name}.mcap", spec.name)));
+        eprintln!("study {}: running variant `{name}`…", spec.name);
+        match run_variant(name, spec.scene, &overrides, spec.window, mcap.as_deref()) {
+            Ok(v) => {
+                eprintln!(
+                    "  done in {:.1} s ({} resident, 0.1 s took {:.2} s)",
+                    v.total_s, v.resident, v.time_s
+                );
+                runs.push(v);
+            }
+            Err(e) => {
+                eprintln!("error: variant `{name}`: {e}");
+                return 1;
+            }
+        }
+        if let Ok(s) = scg_scene::parse(spec.scene, "<study>", spec.name, &[]) {
+            nozzle = s.outlet.map_or(0.0, |o| o.geometry.nozzle_radius);
+        }
+    }
+    print!("{}", report(&runs));
+    if let Err(e) = write_outputs(&runs, nozzle, &out) {
+        eprintln!("error: {e}");
+        return 1;
+    }
+    eprintln!(
+        "wrote tables, plots and summary.json under {}",
+        out.display()
+    );
+    0
+}
