@@ -50,7 +50,10 @@ pub struct Force(pub DVec3);
 pub struct Torque(pub DVec3);
 
 /// Stable particle id, unique over a run and never reused.
-#[derive(Component, Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(
+    Component, Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, TransparentWrapper,
+)]
+#[repr(transparent)]
 pub struct ParticleId(pub u32);
 
 /// Index of the scene group (size class) the particle belongs to.

@@ -13,7 +13,7 @@ use glam::DVec3;
 
 use super::table::{bypass, columns_mut};
 use crate::components::*;
-use crate::exec::par::for_each_piece;
+use crate::exec::par::{Split, for_each_piece};
 use crate::physics::drag::{DragLaw, particle_reynolds};
 use crate::physics::flow::{FlowField, Fluid};
 use crate::physics::integrate::{
@@ -97,15 +97,6 @@ pub fn advance_clock(mut clock: ResMut<SimClock>, q: Query<(), With<ParticleId>>
     clock.particle_steps += q.iter().len() as u64;
 }
 
-/// Velocity after the wall kick: v + F/m·dt (unchanged without walls).
-#[inline]
-fn kick(v: DVec3, f: Option<&Force>, m: f64, dt: f64) -> DVec3 {
-    match f {
-        Some(f) => linear_kick(v, f.0, m, dt),
-        None => v,
-    }
-}
-
 /// One exponential-midpoint step for response time `tau` with factors for dt.
 ///
 /// The fluid velocity is frozen at the predicted mid-step position x + v·dt/2 (one flow
@@ -138,6 +129,114 @@ type MoveQuery<'w, 's, T> = Query<
         Option<&'static BodyAcceleration>,
     ),
 >;
+
+/// The columns of a move query as plain slices; `S` the drag columns.
+type Columns<'a, S> = (
+    &'a mut [Position],
+    &'a mut [Velocity],
+    S,
+    &'a [Mass],
+    Option<&'a [Force]>,
+    Option<&'a [BodyAcceleration]>,
+);
+
+/// The drag columns of a move query, read row by row.
+trait DragRows: Split + Copy {
+    /// One particle's drag data.
+    type Row;
+    /// Row `i`.
+    fn row(&self, i: usize) -> Self::Row;
+}
+
+impl DragRows for () {
+    type Row = ();
+    fn row(&self, _: usize) {}
+}
+
+impl<'a> DragRows for &'a [FluidCoupling] {
+    type Row = &'a FluidCoupling;
+    fn row(&self, i: usize) -> &'a FluidCoupling {
+        &self[i]
+    }
+}
+
+impl<'a> DragRows for (&'a [StokesFactors], &'a [FluidCoupling]) {
+    type Row = (&'a StokesFactors, &'a FluidCoupling);
+    fn row(&self, i: usize) -> Self::Row {
+        (&self.0[i], &self.1[i])
+    }
+}
+
+/// Inputs of one particle's move: position (m), velocity (m/s), mass (kg), wall force of
+/// the step (N, when the scene has walls) and body acceleration (m/s²).
+struct Mover {
+    x: DVec3,
+    v: DVec3,
+    m: f64,
+    force: Option<DVec3>,
+    a: DVec3,
+}
+
+impl Mover {
+    /// Velocity after the wall kick: v + F/m·dt (unchanged without walls).
+    #[inline]
+    fn kicked(&self, dt: f64) -> DVec3 {
+        match self.force {
+            Some(f) => linear_kick(self.v, f, self.m, dt),
+            None => self.v,
+        }
+    }
+}
+
+/// Move the particles of one piece: `advance` gives each particle's new position and
+/// velocity; they are written back, a non-finite result raises the guard, and the largest
+/// displacement is recorded.
+#[inline(always)]
+fn move_rows<S: DragRows>(
+    (xs, vs, drag, ms, fs, gs): Columns<'_, S>,
+    health: &Health,
+    disp: Option<&StepDisplacement>,
+    advance: &impl Fn(Mover, S::Row) -> (DVec3, DVec3),
+) {
+    let mut d2max = 0.0_f64;
+    for i in 0..xs.len() {
+        let x = xs[i].0;
+        let mover = Mover {
+            x,
+            v: vs[i].0,
+            m: ms[i].0,
+            force: fs.map(|f| f[i].0),
+            a: gs.map_or(DVec3::ZERO, |g| g[i].0),
+        };
+        let (x1, v1) = advance(mover, drag.row(i));
+        // One test catches any NaN or infinity among the six numbers.
+        if !(x1 + v1).element_sum().is_finite() {
+            health.raise();
+        }
+        d2max = d2max.max((x1 - x).length_squared());
+        xs[i].0 = x1;
+        vs[i].0 = v1;
+    }
+    if let Some(d) = disp {
+        d.record(d2max);
+    }
+}
+
+/// [`move_rows`] over the particle table's columns (`None`: no particle), in pieces on
+/// the team; the step's displacements are then complete.
+fn move_pass<S: DragRows>(
+    columns: Option<Columns<'_, S>>,
+    health: &Health,
+    disp: Option<&StepDisplacement>,
+    advance: impl Fn(Mover, S::Row) -> (DVec3, DVec3) + Sync,
+) {
+    if let Some(columns) = columns {
+        for_each_piece(columns, |piece| move_rows(piece, health, disp, &advance));
+    }
+    if let Some(d) = disp {
+        d.mark_reported();
+    }
+}
 
 /// The drag-only loop of the fast path (no forces, no body acceleration): returns the sum
 /// of all new positions and velocities (non-finite iff one of them is) and, with `TRACK`,
@@ -217,46 +316,30 @@ fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
     disp: Option<&StepDisplacement>,
     flow: U,
 ) {
-    let Some((xs, vs, (sfs, fcs), ms, fs, gs)) = columns_mut(&mut q) else {
-        return;
+    let columns = columns_mut(&mut q)
+        .map(|(xs, vs, drag, ms, fs, gs)| (bypass(xs), bypass(vs), drag, ms, fs, gs));
+    let advance = move |p: Mover, (sf, fc): (&StokesFactors, &FluidCoupling)| {
+        let vk = p.kicked(dt);
+        let u = flow(p.x + vk * (0.5 * dt));
+        exponential_drift(p.x, vk, u, p.a, fc.tau, sf.gain, sf.relax, dt)
     };
-    let columns = (bypass(xs), bypass(vs), sfs, fcs, ms, fs, gs);
-    for_each_piece(columns, move |(xs, vs, sfs, fcs, ms, fs, gs)| {
-        // Local copies: the loop then keeps the flow and dt in registers instead of
-        // reloading them through the closure on every particle.
-        let (dt, flow) = (dt, flow);
-        let n = xs.len().min(vs.len()).min(sfs.len());
-        let (xs, vs, sfs) = (&mut xs[..n], &mut vs[..n], &sfs[..n]);
-        if fs.is_none() && gs.is_none() {
-            // Drag only: the common case, kept free of per-particle branches.
-            // Any NaN or infinity makes the running sum non-finite: one test per piece.
-            let (sum, d2max) = match disp {
-                Some(_) => drag_only_loop::<true, U>(xs, vs, sfs, dt, flow),
-                None => drag_only_loop::<false, U>(xs, vs, sfs, dt, flow),
-            };
-            if !sum.is_finite() {
-                health.raise();
-            }
-            if let Some(d) = disp {
-                d.record(d2max);
-            }
-            return;
-        }
-        let mut d2max = 0.0_f64;
-        for i in 0..n {
-            let (x, v) = (xs[i].0, vs[i].0);
-            let vk = kick(v, fs.map(|f| &f[i]), ms[i].0, dt);
-            let a = gs.map_or(DVec3::ZERO, |g| g[i].0);
-            let u = flow(x + vk * (0.5 * dt));
-            let sf = &sfs[i];
-            let (x1, v1) = exponential_drift(x, vk, u, a, fcs[i].tau, sf.gain, sf.relax, dt);
-            // One test catches any NaN or infinity among the six numbers.
-            if !(x1 + v1).element_sum().is_finite() {
-                health.raise();
-            }
-            d2max = d2max.max((x1 - x).length_squared());
-            xs[i].0 = x1;
-            vs[i].0 = v1;
+    let drag_only = columns
+        .as_ref()
+        .is_some_and(|c| c.4.is_none() && c.5.is_none());
+    if !drag_only {
+        // No particle, or wall forces or gravity: the general per-particle step.
+        return move_pass(columns, health, disp, advance);
+    }
+    let Some(columns) = columns else { return };
+    // Drag only: the common case, kept free of per-particle branches.
+    for_each_piece(columns, move |(xs, vs, (sfs, _), ..)| {
+        // Any NaN or infinity makes the running sum non-finite: one test per piece.
+        let (sum, d2max) = match disp {
+            Some(_) => drag_only_loop::<true, U>(xs, vs, sfs, dt, flow),
+            None => drag_only_loop::<false, U>(xs, vs, sfs, dt, flow),
+        };
+        if !sum.is_finite() {
+            health.raise();
         }
         if let Some(d) = disp {
             d.record(d2max);
@@ -274,57 +357,6 @@ fn effective_tau(law: DragLaw, tau: f64, fc: &FluidCoupling, fluid: &Fluid, slip
     tau / law.correction(re)
 }
 
-/// Inputs of one particle's move: position (m), velocity (m/s), mass (kg), wall force of
-/// the step (N, when the scene has walls) and body acceleration (m/s²).
-struct Mover {
-    x: DVec3,
-    v: DVec3,
-    m: f64,
-    force: Option<DVec3>,
-    a: DVec3,
-}
-
-/// The per-particle pass of the drag laws with a response time evaluated per step:
-/// `advance` gives each particle's new position and velocity; the pass writes them, raises
-/// the guard on a non-finite result and records the largest displacement.
-fn drag_pass(
-    q: &mut MoveQuery<&'static FluidCoupling>,
-    health: &Health,
-    disp: Option<&StepDisplacement>,
-    advance: impl Fn(Mover, &FluidCoupling) -> (DVec3, DVec3) + Sync,
-) {
-    let Some((xs, vs, fcs, ms, fs, gs)) = columns_mut(q) else {
-        return;
-    };
-    let columns = (bypass(xs), bypass(vs), fcs, ms, fs, gs);
-    for_each_piece(columns, |(xs, vs, fcs, ms, fs, gs)| {
-        let mut d2max = 0.0_f64;
-        for i in 0..xs.len() {
-            let x = xs[i].0;
-            let mover = Mover {
-                x,
-                v: vs[i].0,
-                m: ms[i].0,
-                force: fs.map(|f| f[i].0),
-                a: gs.map_or(DVec3::ZERO, |g| g[i].0),
-            };
-            let (x1, v1) = advance(mover, &fcs[i]);
-            if !(x1.is_finite() && v1.is_finite()) {
-                health.raise();
-            }
-            d2max = d2max.max((x1 - x).length_squared());
-            xs[i].0 = x1;
-            vs[i].0 = v1;
-        }
-        if let Some(d) = disp {
-            d.record(d2max);
-        }
-    });
-    if let Some(d) = disp {
-        d.mark_reported();
-    }
-}
-
 /// Reynolds-dependent drag (e.g. Schiller–Naumann), exponential scheme: τ is evaluated
 /// from the slip at the start of the step and held over it.
 pub fn integrate_drag_exponential(
@@ -338,16 +370,20 @@ pub fn integrate_drag_exponential(
 ) {
     let (dt, law) = (clock.dt, motion.drag.unwrap_or_default());
     let (flow, fluid) = (*flow, *fluid);
-    drag_pass(&mut q, &health, disp.as_deref(), |p, fc| {
-        let vk = match p.force {
-            Some(f) => linear_kick(p.v, f, p.m, dt),
-            None => p.v,
-        };
-        let slip = (flow.velocity(p.x) - vk).length();
-        let tau = effective_tau(law, fc.tau, fc, &fluid, slip);
-        let (gain, relax) = exponential_factors(tau, dt);
-        exponential_midpoint(&flow, p.x, vk, p.a, tau, gain, relax, dt)
-    });
+    let columns = columns_mut(&mut q)
+        .map(|(xs, vs, drag, ms, fs, gs)| (bypass(xs), bypass(vs), drag, ms, fs, gs));
+    move_pass(
+        columns,
+        &health,
+        disp.as_deref(),
+        |p, fc: &FluidCoupling| {
+            let vk = p.kicked(dt);
+            let slip = (flow.velocity(p.x) - vk).length();
+            let tau = effective_tau(law, fc.tau, fc, &fluid, slip);
+            let (gain, relax) = exponential_factors(tau, dt);
+            exponential_midpoint(&flow, p.x, vk, p.a, tau, gain, relax, dt)
+        },
+    );
 }
 
 /// Any drag law, semi-implicit Euler; sub-stepped so that every sub-step has dt ≤ τ/2.
@@ -362,22 +398,29 @@ pub fn integrate_drag_explicit(
 ) {
     let (dt, law) = (clock.dt, motion.drag.unwrap_or_default());
     let (flow, fluid) = (*flow, *fluid);
-    drag_pass(&mut q, &health, disp.as_deref(), |p, fc| {
-        let mut a = p.a;
-        if let Some(f) = p.force {
-            a += f / p.m;
-        }
-        let (mut xi, mut vi) = (p.x, p.v);
-        let slip0 = (flow.velocity(xi) - vi).length();
-        let n = explicit_substeps(effective_tau(law, fc.tau, fc, &fluid, slip0), dt);
-        let h = dt / n as f64;
-        for _ in 0..n {
-            let u = flow.velocity(xi);
-            let tau = effective_tau(law, fc.tau, fc, &fluid, (u - vi).length());
-            (xi, vi) = explicit_euler(xi, vi, u, a, tau, h);
-        }
-        (xi, vi)
-    });
+    let columns = columns_mut(&mut q)
+        .map(|(xs, vs, drag, ms, fs, gs)| (bypass(xs), bypass(vs), drag, ms, fs, gs));
+    move_pass(
+        columns,
+        &health,
+        disp.as_deref(),
+        |p, fc: &FluidCoupling| {
+            let mut a = p.a;
+            if let Some(f) = p.force {
+                a += f / p.m;
+            }
+            let (mut xi, mut vi) = (p.x, p.v);
+            let slip0 = (flow.velocity(xi) - vi).length();
+            let n = explicit_substeps(effective_tau(law, fc.tau, fc, &fluid, slip0), dt);
+            let h = dt / n as f64;
+            for _ in 0..n {
+                let u = flow.velocity(xi);
+                let tau = effective_tau(law, fc.tau, fc, &fluid, (u - vi).length());
+                (xi, vi) = explicit_euler(xi, vi, u, a, tau, h);
+            }
+            (xi, vi)
+        },
+    );
 }
 
 /// No fluid: wall kick, then the exact drift under gravity (free fall is exact; with
@@ -389,36 +432,11 @@ pub fn integrate_ballistic(
     mut q: MoveQuery<()>,
 ) {
     let dt = clock.dt;
-    let health = &*health;
-    let disp = disp.as_deref();
-    let Some((xs, vs, (), ms, fs, gs)) = columns_mut(&mut q) else {
-        return;
-    };
-    for_each_piece(
-        (bypass(xs), bypass(vs), ms, fs, gs),
-        |(xs, vs, ms, fs, gs)| {
-            let mut d2max = 0.0_f64;
-            for i in 0..xs.len() {
-                let (x, a) = (xs[i].0, gs.map_or(DVec3::ZERO, |g| g[i].0));
-                let vk = kick(vs[i].0, fs.map(|f| &f[i]), ms[i].0, dt);
-                let x1 = x + vk * dt + 0.5 * a * dt * dt;
-                let v1 = vk + a * dt;
-                if !(x1 + v1).element_sum().is_finite() {
-                    health.raise();
-                }
-                let d2 = (x1 - x).length_squared();
-                if d2 > d2max {
-                    d2max = d2;
-                }
-                xs[i].0 = x1;
-                vs[i].0 = v1;
-            }
-            if let Some(d) = disp {
-                d.record(d2max);
-            }
-        },
-    );
-    if let Some(d) = disp {
-        d.mark_reported();
-    }
+    let columns = columns_mut(&mut q)
+        .map(|(xs, vs, (), ms, fs, gs)| (bypass(xs), bypass(vs), (), ms, fs, gs));
+    move_pass(columns, &health, disp.as_deref(), |p, ()| {
+        let vk = p.kicked(dt);
+        let x1 = p.x + vk * dt + 0.5 * p.a * dt * dt;
+        (x1, vk + p.a * dt)
+    });
 }

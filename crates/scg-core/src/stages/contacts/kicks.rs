@@ -36,7 +36,7 @@ pub fn apply_contact_kicks(
     let slots = &st.slots;
     let (kick_v, kick_w) = (&st.kick_v, &st.kick_w);
     if !st.sparse {
-        assert!(ids.iter().zip(&st.ids).all(|(a, b)| a.0 == *b), "{MOVED}");
+        assert!(ParticleId::peel_slice(ids) == st.ids, "{MOVED}");
         kick_all(vs, ws, slots, kick_v, kick_w);
         return;
     }

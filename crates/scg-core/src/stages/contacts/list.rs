@@ -38,7 +38,7 @@ pub fn maintain_neighbour_list(
     let drift = disp.take();
     let (ids, groups, xs, ds, ms) = columns(&q).unwrap_or_default();
     let pos = Position::peel_slice(xs);
-    let same_set = ids.len() == st.ids.len() && ids.iter().zip(&st.ids).all(|(a, b)| a.0 == *b);
+    let same_set = ParticleId::peel_slice(ids) == st.ids;
     if same_set {
         if !st.list.needs_rebuild(pos, drift) {
             return;
