@@ -104,7 +104,7 @@ split_tuple!(A a a0 a1, B b b0 b1, C c c0 c1, D d d0 d1, E e e0 e1, F f f0 f1, G
 /// Rows per piece when columns are cut for the team.
 const PIECE_ROWS: usize = 4096;
 
-/// `body` on `columns` cut into pieces of [`PIECE_ROWS`] rows run on the team when there
+/// `body` on `columns` cut into pieces of `PIECE_ROWS` rows run on the team when there
 /// are at least [`parallel_min`] rows, else on the whole at once. The pieces depend on
 /// the row count only, and `body` must treat rows independently.
 pub fn for_each_piece<P: Split>(columns: P, body: impl Fn(P) + Sync) {

@@ -198,7 +198,7 @@ pub(super) fn slot_sum(slots: &[Slot], k: usize) -> (DVec3, DVec3) {
 }
 
 /// Compute every pair's force (parallel), then sum them per particle (fixed order) for
-/// the particles in contact. The sums are applied by [`apply_contact_kicks`].
+/// the particles in contact. The sums are applied by [`super::kicks::apply_contact_kicks`].
 pub fn particle_contact_forces(
     mut state: ResMut<ContactState>,
     clock: Res<SimClock>,
