@@ -1,8 +1,11 @@
 //! Recordings made by an earlier scg still replay bit for bit.
 //!
-//! `tests/fixtures/golden*.mcap` were recorded by the scg of commit cc41a42, before the
-//! core was laid out anew (one storage table, stages and physics split). Each stores its
-//! scene; `scg replay --verify` re-runs it and compares every frame, every particle and
+//! `tests/fixtures/golden*.mcap` are recordings of an earlier scg. All three were first
+//! recorded by commit cc41a42, before the core was laid out anew (one storage table,
+//! stages and physics split), and replayed bit for bit after it. `golden.mcap` and
+//! `golden-vortex.mcap` (which has wall contacts) were recorded again when the Tsuji
+//! damping became its exact closed form, a deliberate change of the contact bits. Each
+//! stores its scene; `scg replay --verify` re-runs it and compares every frame, every particle and
 //! every field to the last bit. The three cover the Stokes fast path in a uniform flow and
 //! in the vortex, and `golden.toml`: Schiller–Naumann drag with gravity, Hertz–Mindlin
 //! contacts with friction and rolling resistance, frictional walls (rotation), a feeder

@@ -1,6 +1,6 @@
 //! Golden test of `tsuji_damping` (issue 18, item 1).
 //!
-//! Run: `cargo test --release -p scg-core --test golden_tsuji -- --nocapture --include-ignored`
+//! Run: `cargo test --release -p scg-core --test golden_tsuji -- --nocapture`
 //! (prints the measured numbers next to the references).
 //!
 //! # What the function returns, and what the closed form means
@@ -13,8 +13,7 @@
 //! x'' = −x^(3/2) − γ·x^(1/4)·x',   x(0) = 0, x'(0) = 1,   e = −x'(t_end) where x(t_end) = 0,
 //! ```
 //!
-//! so e depends on γ alone; the function inverts e(γ) numerically (RK4 at h = 2e-4 and a
-//! regula falsi). The closed form γ_cf(e) = √5·|ln e|/√(ln²e + π²) is in the same
+//! so e depends on γ alone. The closed form γ_cf(e) = √5·|ln e|/√(ln²e + π²) is in the same
 //! normalisation (it is also the LIGGGHTS Hertz damping 2·√(5/6)·β·√(S_n·m*),
 //! β = ln e/√(ln²e + π²), S_n = 2E*·√(R*·δ) = (3/2)·K·√δ), and it is **exact** for this
 //! equation:
@@ -128,19 +127,13 @@ fn closed_form_is_exact_for_the_hertz_tsuji_dashpot() {
 }
 
 /// `tsuji_damping(e)` against the exact closed form over the 200 points, within 1e-6
-/// relative in γ (the issue's tolerance).
+/// relative in γ (the issue's tolerance), and the true restitution of the returned γ
+/// (independent integrator) within 1e-9 of e.
 ///
-/// FAILS on the current code: the relative error is above 1e-6 at almost every point,
-/// worst 5.5e-6 (at e ≈ 0.82); the true restitution of the returned γ misses e by up to
-/// 1.6e-6. The cause is the function's numerical inversion: `hertz_restitution`
-/// integrates with plain RK4 at h = 2e-4 through the x^(1/4) singularity at x = 0 and
-/// interpolates the exit linearly, which converges slowly and is off by ~1e-6 in e; the
-/// round trip `hertz_restitution(tsuji_damping(e)) = e` hides it because both sides
-/// share that error. Ignored (so the default run stays green) until the code is changed,
-/// e.g. to return the closed form, which is exact and needs no integration; that changes
-/// γ in the 6th digit and hence the bits of every contact run.
+/// Until 2026-11-30 the function inverted e(γ) on an RK4 solution at h = 2e-4 through the
+/// x^(1/4) singularity and was 5.5e-6 off (its restitution 1.6e-6 off); it now returns
+/// the closed form.
 #[test]
-#[ignore = "tsuji_damping is 5.5e-6 (relative) off the exact closed form; see the doc"]
 fn tsuji_damping_matches_exact_closed_form() {
     let t0 = Instant::now();
     let (mut worst_rel, mut worst_abs, mut worst_e) = ((0.0_f64, 0.0_f64), 0.0_f64, 0.0_f64);
@@ -180,5 +173,9 @@ fn tsuji_damping_matches_exact_closed_form() {
         "tsuji_damping vs closed form: {:e} at e = {}",
         worst_rel.1,
         worst_rel.0
+    );
+    assert!(
+        worst_e < 1e-9,
+        "true restitution of tsuji_damping off by {worst_e:e}"
     );
 }
