@@ -15,12 +15,13 @@ if [ ! -x "$venv/bin/python" ]; then
     "$python" -m venv "$venv"
 fi
 
+# Pinned: the versions the interop check was last verified with.
 "$venv/bin/python" -m pip install --quiet \
     "rerun-sdk==0.36.3" \
-    "mcap" \
-    "foxglove-schemas-protobuf" \
-    "protobuf" \
-    "numpy"
+    "mcap==1.6.0" \
+    "foxglove-schemas-protobuf==0.4.0" \
+    "protobuf==7.36.2" \
+    "numpy==2.4.6"
 
 "$venv/bin/python" - <<'PY'
 import importlib.metadata as md

@@ -14,7 +14,23 @@ use clap::{Parser, Subcommand};
 
 /// scg — a DEM simulator for dilute particle-laden flows with the simpler coarse-grain model.
 #[derive(Parser, Debug)]
-#[command(name = "scg", version, about, long_about = None)]
+#[command(
+    name = "scg",
+    version,
+    about = "scg: DEM of particles carried by a prescribed fluid flow, with the simpler \
+             coarse-grain (SCG) model of Kushimoto et al. (Processes 2021, 9, 1098) beside the \
+             other coarse-graining laws. Recordings open in the Rerun viewer (.rrd) and as MCAP.",
+    long_about = None,
+    after_help = "Examples:\n  \
+        scg run                                   the paper's vortex case (embedded)\n  \
+        scg run cases/classifier.toml --set coarse_grain.alpha=2\n  \
+        scg run --plan cases/uniform.toml         the systems a scene runs, in order\n  \
+        scg check cases/classifier.toml           derived quantities and warnings\n  \
+        scg replay recordings/vortex.mcap --verify\n  \
+        scg study classifier --quick              the paper's Section 5, reduced\n  \
+        scg cost cases/vortex.toml --quick        what accuracy costs in time\n\n\
+        Scene format: docs/scenes.md. Threads: --threads N or SCG_THREADS (same bits for any N)."
+)]
 pub struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
