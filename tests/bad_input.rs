@@ -143,3 +143,40 @@ fn bad_override() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("groups.9.alpha"), "{err}");
 }
+
+/// `--set` edits the text in place: an error in an overridden value names the line it has
+/// in the file, and the scene a recording stores keeps the file's comments.
+#[test]
+fn overrides_keep_line_numbers_and_comments() {
+    let case = concat!(env!("CARGO_MANIFEST_DIR"), "/cases/classifier.toml");
+    let text = std::fs::read_to_string(case).unwrap();
+    let line = text.lines().position(|l| l.starts_with("plane =")).unwrap() + 1;
+    let out = Command::new(env!("CARGO_BIN_EXE_scg"))
+        .args(["check", case, "--set", "outlet.plane=1.0"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(&format!("classifier.toml:{line}: key `outlet.plane`")),
+        "line {line}: {err}"
+    );
+    let scene = scg::scene::load(
+        std::path::Path::new(case),
+        &[
+            "duration=0.01".to_string(),
+            "coarse_grain.alpha=2".to_string(),
+        ],
+    )
+    .unwrap();
+    assert!(
+        scene.source.starts_with("# The paper's classifier"),
+        "{}",
+        scene.source
+    );
+    assert_eq!(scene.source.lines().count(), text.lines().count());
+    assert!(
+        scene.source.contains("duration = 0.01 "),
+        "comment after the value kept"
+    );
+}
