@@ -38,3 +38,38 @@ fn threads_option_sets_the_team_and_overrides_the_environment() {
         }
     }
 }
+
+#[test]
+fn coarse_grained_variants_get_their_own_recordings() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = concat!(env!("CARGO_MANIFEST_DIR"), "/cases/classifier.toml");
+    for extra in [
+        &[][..],
+        &["--set", "coarse_grain.alpha=2"][..],
+        &[
+            "--set",
+            "coarse_grain.alpha=2",
+            "--set",
+            "coarse_grain.law=none",
+        ][..],
+    ] {
+        let out = scg()
+            .args(["run", case, "--out"])
+            .arg(dir.path())
+            .args(["--set", "duration=2e-5"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    for stem in ["classifier", "classifier-scg-a2", "classifier-none-a2"] {
+        for ext in ["rrd", "mcap"] {
+            let f = dir.path().join(format!("{stem}.{ext}"));
+            assert!(f.is_file(), "{} missing", f.display());
+        }
+    }
+}

@@ -99,8 +99,9 @@ pub fn run(args: RunArgs) -> i32 {
     let mut paths = Vec::new();
     if record {
         let meta = scene.run_meta(report.messages());
-        let rrd = args.out.join(format!("{}.rrd", scene.name));
-        let mcap = args.out.join(format!("{}.mcap", scene.name));
+        let stem = recording_stem(&scene);
+        let rrd = args.out.join(format!("{stem}.rrd"));
+        let mcap = args.out.join(format!("{stem}.mcap"));
         let rrd_sink = match scg_record::RrdSink::create(&rrd, &meta) {
             Ok(s) => s,
             Err(e) => {
@@ -198,4 +199,24 @@ pub fn run(args: RunArgs) -> i32 {
         return 1;
     }
     if interrupted { 130 } else { 0 }
+}
+
+/// File stem of a run's recordings: the scene name, followed by `-<law>-a<α>` when every
+/// group is coarse-grained alike (α ≠ 1), so the coarse-grained variants of a case
+/// (`--set coarse_grain.alpha=2 --set coarse_grain.law=none`) do not overwrite the
+/// originals' recordings or each other's.
+pub fn recording_stem(scene: &scg_scene::Scene) -> String {
+    let first = scene.groups.first().map(|g| (g.law, g.alpha));
+    match first {
+        Some((law, alpha))
+            if alpha != 1.0
+                && scene
+                    .groups
+                    .iter()
+                    .all(|g| (g.law, g.alpha) == (law, alpha)) =>
+        {
+            format!("{}-{}-a{}", scene.name, law.name(), alpha)
+        }
+        _ => scene.name.clone(),
+    }
 }
