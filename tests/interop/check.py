@@ -13,7 +13,10 @@ REC.rrd and REC.mcap must hold the same run (e.g. both written by one `scg run`,
 3. the MCAP file reads with `mcap.reader.make_reader(..., validate_crcs=True)`, every
    `/particles` message decodes as `foxglove.PointCloud`, and its summary, metadata and
    attachment are present;
-4. `rerun mcap convert REC.mcap -o OUT.rrd` succeeds and `rerun rrd verify OUT.rrd` passes.
+4. `rerun mcap convert REC.mcap -o OUT.rrd` succeeds and `rerun rrd verify OUT.rrd` passes;
+5. with `--vtk DIR` (the output of `scg replay REC.mcap --vtk DIR`): meshio reads the
+   `.pvd`'s every `.vtu` frame, and its points, velocities, diameters and ids equal the
+   MCAP's bit for bit; the geometry file reads as line cells.
 
 Exits with status 1 if any check fails. Set up the environment with tests/interop/setup.sh.
 """
@@ -216,6 +219,48 @@ def check_convert(rrd: Path, mcap: Path) -> str:
         return f"{verdict}; {len(paths)} entities"
 
 
+def check_vtk(vtk: Path, mcap_path: Path) -> str:
+    import xml.etree.ElementTree as ET
+
+    import meshio
+
+    mcap = read_mcap(mcap_path, validate_crcs=False)
+    by_step = {}
+    for sequence, points in mcap["clouds"].items():
+        by_step[int(mcap["stats"][sequence]["step"])] = points
+    pvds = list(vtk.glob("*.pvd"))
+    if len(pvds) != 1:
+        raise ValueError(f"expected one .pvd in {vtk}, found {len(pvds)}")
+    files = [d.get("file") for d in ET.parse(pvds[0]).getroot().iter("DataSet")]
+    if len(files) != len(by_step):
+        raise ValueError(f"{len(files)} frames in the .pvd, {len(by_step)} in the MCAP")
+    n = 0
+    for name in files:
+        mesh = meshio.read(vtk / name)
+        step = int(name.rsplit("_", 1)[1].split(".")[0])
+        points = by_step[step]
+        order = np.argsort(mesh.point_data["id"], kind="stable")
+        ids = np.asarray(mesh.point_data["id"])[order]
+        if not np.array_equal(ids, points["id"]):
+            raise ValueError(f"{name}: ids differ from the MCAP's")
+        xyz = np.stack([points["x"], points["y"], points["z"]], axis=1)
+        vel = np.stack([points["vx"], points["vy"], points["vz"]], axis=1)
+        for label, got, want in [("points", mesh.points[order], xyz),
+                                 ("velocity", mesh.point_data["velocity"][order], vel),
+                                 ("diameter", mesh.point_data["diameter"][order],
+                                  points["diameter"])]:
+            if not np.array_equal(np.asarray(got, dtype=np.float64).view(np.uint64),
+                                  np.asarray(want, dtype=np.float64).view(np.uint64)):
+                raise ValueError(f"{name}: {label} differ from the MCAP's")
+        if mesh.cells[0].type != "vertex":
+            raise ValueError(f"{name}: cells are {mesh.cells[0].type}, not vertex")
+        n += len(ids)
+    geometry = list(vtk.glob("*_geometry.vtu"))
+    lines = sum(len(c.data) for g in geometry for c in meshio.read(g).cells if c.type == "line")
+    return (f"meshio {meshio.__version__}: {len(files)} frames, {n} points bit-identical to the "
+            f"MCAP; geometry {lines} line cells")
+
+
 CHECKS = [
     ("rerun rrd verify", check_verify),
     ("positions rrd == mcap", check_positions),
@@ -228,10 +273,15 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("rrd", type=Path, help="Rerun recording (.rrd)")
     parser.add_argument("mcap", type=Path, help="MCAP recording of the same run")
+    parser.add_argument("--vtk", type=Path, help="VTK folder written by `scg replay --vtk`")
     args = parser.parse_args()
 
+    checks = list(CHECKS)
+    if args.vtk is not None:
+        vtk = args.vtk
+        checks.append(("meshio reads the VTK export", lambda _rrd, mcap: check_vtk(vtk, mcap)))
     failures = 0
-    for number, (name, check) in enumerate(CHECKS, start=1):
+    for number, (name, check) in enumerate(checks, start=1):
         try:
             detail = check(args.rrd, args.mcap)
             print(f"PASS {number}. {name}: {detail}")
@@ -239,7 +289,7 @@ def main() -> int:
             failures += 1
             print(f"FAIL {number}. {name}: {err}")
             traceback.print_exc(limit=3, file=sys.stderr)
-    print(f"{len(CHECKS) - failures} passed, {failures} failed")
+    print(f"{len(checks) - failures} passed, {failures} failed")
     return 1 if failures else 0
 
 

@@ -21,11 +21,12 @@ fi
     "mcap==1.6.0" \
     "foxglove-schemas-protobuf==0.4.0" \
     "protobuf==7.36.2" \
-    "numpy==2.4.6"
+    "numpy==2.4.6" \
+    "meshio==5.3.5"
 
 "$venv/bin/python" - <<'PY'
 import importlib.metadata as md
-for name in ("rerun-sdk", "mcap", "foxglove-schemas-protobuf", "protobuf", "numpy"):
+for name in ("rerun-sdk", "mcap", "foxglove-schemas-protobuf", "protobuf", "numpy", "meshio"):
     print(f"{name}=={md.version(name)}")
 PY
 echo "interop venv ready: $venv (run: $venv/bin/python tests/interop/check.py REC.rrd REC.mcap)"

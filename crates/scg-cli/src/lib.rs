@@ -5,7 +5,7 @@ mod bench;
 mod chart;
 pub mod cost;
 pub mod replay;
-mod run;
+pub mod run;
 pub mod study;
 
 use std::path::PathBuf;

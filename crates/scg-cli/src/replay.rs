@@ -37,6 +37,13 @@ pub struct ReplayArgs {
     /// Open the Rerun viewer on the rebuilt (or a sibling) .rrd when `rerun` is installed.
     #[arg(long)]
     pub spawn: bool,
+    /// Write every frame as VTK for ParaView (`<case>_<step>.vtu`, `<case>.pvd`,
+    /// `<case>_geometry.vtu`) into this folder.
+    #[arg(long, value_name = "DIR")]
+    pub vtk: Option<PathBuf>,
+    /// Write every frame as CSV (`<case>_<step>.csv`) into this folder.
+    #[arg(long, value_name = "DIR")]
+    pub frames_csv: Option<PathBuf>,
 }
 
 /// Run `scg replay`; returns the exit status.
@@ -67,6 +74,26 @@ pub fn replay(a: ReplayArgs) -> i32 {
                 eprintln!("error: {e}");
                 return 1;
             }
+        }
+    }
+    if a.vtk.is_some() || a.frames_csv.is_some() {
+        let written = crate::run::extra_sinks(&a.vtk, &a.frames_csv, &rec.meta)
+            .map_err(|e| e.to_string())
+            .and_then(|mut sinks| {
+                for s in sinks.iter_mut() {
+                    for f in &rec.frames {
+                        s.write_frame(f)?;
+                    }
+                    s.finish()?;
+                }
+                Ok(())
+            });
+        if let Err(e) = written {
+            eprintln!("error: {e}");
+            return 1;
+        }
+        for dir in a.vtk.iter().chain(&a.frames_csv) {
+            eprintln!("wrote {} frames to {}", rec.frames.len(), dir.display());
         }
     }
     if a.analyze {

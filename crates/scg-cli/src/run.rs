@@ -8,6 +8,7 @@ use std::time::Instant;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
+use scg_core::frame::{FrameSink, RunMeta};
 use scg_core::step::StepSet;
 use scg_scene::Scene;
 
@@ -30,6 +31,13 @@ pub struct RunArgs {
     /// Do not write recordings.
     #[arg(long)]
     pub no_record: bool,
+    /// Also write every frame as VTK for ParaView (`<name>_<step>.vtu`, `<name>.pvd`,
+    /// `<name>_geometry.vtu`) into this folder.
+    #[arg(long, value_name = "DIR")]
+    pub vtk: Option<PathBuf>,
+    /// Also write every frame as CSV (`<name>_<step>.csv`) into this folder.
+    #[arg(long, value_name = "DIR")]
+    pub frames_csv: Option<PathBuf>,
 }
 
 impl Default for RunArgs {
@@ -41,6 +49,8 @@ impl Default for RunArgs {
             set: Vec::new(),
             plan: false,
             no_record: false,
+            vtk: None,
+            frames_csv: None,
         }
     }
 }
@@ -116,13 +126,20 @@ pub fn run(args: RunArgs) -> i32 {
                 return 1;
             }
         };
+        let mut sinks: Vec<Box<dyn FrameSink>> = vec![Box::new(rrd_sink), Box::new(mcap_sink)];
+        match extra_sinks(&args.vtk, &args.frames_csv, &RunMeta { case: stem, ..meta }) {
+            Ok(extra) => sinks.extend(extra),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return 1;
+            }
+        }
         // Encoding and compression run on a writer thread, overlapping the simulation.
-        sim.add_recorder(Box::new(scg_record::Background::spawn(vec![
-            Box::new(rrd_sink),
-            Box::new(mcap_sink),
-        ])));
+        sim.add_recorder(Box::new(scg_record::Background::spawn(sinks)));
         paths.push(rrd);
         paths.push(mcap);
+        paths.extend(args.vtk.iter().cloned());
+        paths.extend(args.frames_csv.iter().cloned());
     }
 
     let stop = Arc::new(AtomicBool::new(false));
@@ -219,4 +236,21 @@ pub fn recording_stem(scene: &scg_scene::Scene) -> String {
         }
         _ => scene.name.clone(),
     }
+}
+
+/// The VTK and per-frame CSV writers asked for (folders `vtk` and `csv`), named after
+/// `meta.case`.
+pub fn extra_sinks(
+    vtk: &Option<PathBuf>,
+    csv: &Option<PathBuf>,
+    meta: &RunMeta,
+) -> Result<Vec<Box<dyn FrameSink>>, scg_record::RecordError> {
+    let mut out: Vec<Box<dyn FrameSink>> = Vec::new();
+    if let Some(dir) = vtk {
+        out.push(Box::new(scg_record::VtkSink::create(dir, meta)?));
+    }
+    if let Some(dir) = csv {
+        out.push(Box::new(scg_record::CsvSink::create(dir, meta)?));
+    }
+    Ok(out)
 }

@@ -25,11 +25,13 @@ pub mod layout;
 mod mcap_read;
 mod mcap_write;
 mod rrd_write;
+pub mod vtk;
 
 pub use background::Background;
 pub use mcap_read::read_mcap;
 pub use mcap_write::{McapOptions, McapSink};
 pub use rrd_write::{RrdSink, write_rrd};
+pub use vtk::{CsvSink, VtkSink};
 
 /// Errors of the recorders and readers.
 #[derive(Debug, thiserror::Error)]

@@ -1,0 +1,244 @@
+//! VTK files for ParaView (and any VTK reader): one XML UnstructuredGrid (`.vtu`) per
+//! frame, the particles as vertex cells with their velocity, diameter, density, id and
+//! group as point data; a ParaView collection (`<case>.pvd`) that puts the frames on the
+//! simulation time; and the scene geometry as line cells in `<case>_geometry.vtu`.
+//!
+//! The files are ASCII, floats written in shortest round-trip exponent form, so a reader
+//! gets back every recorded value bit for bit. [`VtkSink`] writes them while a run goes
+//! (`scg run --vtk DIR`) or from a recording (`scg replay REC.mcap --vtk DIR`).
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use scg_core::frame::{Frame, FrameSink, Outline, RunMeta};
+
+use crate::RecordError;
+
+/// Writes a run as VTK files into a folder (see the module documentation).
+pub struct VtkSink {
+    dir: PathBuf,
+    case: String,
+    /// (file name, time in s) of every frame written.
+    written: Vec<(String, f64)>,
+}
+
+impl VtkSink {
+    /// A sink writing into `dir` (created if missing), with the geometry of `meta` written
+    /// at once.
+    pub fn create(dir: &Path, meta: &RunMeta) -> Result<Self, RecordError> {
+        std::fs::create_dir_all(dir).map_err(|source| RecordError::Io {
+            path: dir.to_path_buf(),
+            source,
+        })?;
+        let sink = VtkSink {
+            dir: dir.to_path_buf(),
+            case: meta.case.clone(),
+            written: Vec::new(),
+        };
+        if !meta.outlines.is_empty() {
+            let path = dir.join(format!("{}_geometry.vtu", meta.case));
+            write_file(&path, &geometry_vtu(&meta.outlines))?;
+        }
+        Ok(sink)
+    }
+
+    /// The collection file that indexes the frames by time.
+    pub fn pvd_path(&self) -> PathBuf {
+        self.dir.join(format!("{}.pvd", self.case))
+    }
+}
+
+fn write_file(path: &Path, text: &str) -> Result<(), RecordError> {
+    std::fs::write(path, text).map_err(|source| RecordError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+impl FrameSink for VtkSink {
+    fn write_frame(&mut self, frame: &Frame) -> Result<(), String> {
+        let name = format!("{}_{:09}.vtu", self.case, frame.step);
+        write_file(&self.dir.join(&name), &frame_vtu(frame)).map_err(|e| e.to_string())?;
+        self.written.push((name, frame.time));
+        Ok(())
+    }
+
+    fn finish(&mut self) -> Result<(), String> {
+        let mut pvd = String::from(
+            "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
+        );
+        for (name, t) in &self.written {
+            let _ = writeln!(
+                pvd,
+                "<DataSet timestep=\"{t}\" part=\"0\" file=\"{name}\"/>"
+            );
+        }
+        pvd.push_str("</Collection>\n</VTKFile>\n");
+        write_file(&self.pvd_path(), &pvd).map_err(|e| e.to_string())
+    }
+}
+
+/// VTK cell types used here.
+const VTK_VERTEX: u8 = 1;
+const VTK_LINE: u8 = 3;
+
+/// A number as an ASCII `DataArray` writes it: floats in shortest round-trip exponent
+/// form (`1.5e-5`), integers plain.
+trait Ascii {
+    fn put(&self, out: &mut String);
+}
+
+impl Ascii for f64 {
+    fn put(&self, out: &mut String) {
+        let _ = write!(out, "{self:e}");
+    }
+}
+
+macro_rules! ascii_int {
+    ($($t:ty),*) => {$(
+        impl Ascii for $t {
+            fn put(&self, out: &mut String) {
+                let _ = write!(out, "{self}");
+            }
+        }
+    )*};
+}
+ascii_int!(u8, u32, usize);
+
+impl<T: Ascii> Ascii for &T {
+    fn put(&self, out: &mut String) {
+        (*self).put(out)
+    }
+}
+
+/// One `DataArray` of ASCII numbers.
+fn data_array<T: Ascii>(
+    out: &mut String,
+    ty: &str,
+    name: &str,
+    components: usize,
+    values: impl IntoIterator<Item = T>,
+) {
+    let comps = if components > 1 {
+        format!(" NumberOfComponents=\"{components}\"")
+    } else {
+        String::new()
+    };
+    let _ = write!(
+        out,
+        "<DataArray type=\"{ty}\" Name=\"{name}\"{comps} format=\"ascii\">"
+    );
+    for (k, v) in values.into_iter().enumerate() {
+        if k > 0 {
+            out.push(' ');
+        }
+        v.put(out);
+    }
+    out.push_str("</DataArray>\n");
+}
+
+/// An UnstructuredGrid of `points` with the cells given by (connectivity, offsets, type).
+fn grid(
+    points: &[[f64; 3]],
+    cells: (&[usize], &[usize], u8),
+    point_data: impl FnOnce(&mut String),
+) -> String {
+    let (conn, offsets, ty) = cells;
+    let mut s = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\">\n<UnstructuredGrid>\n",
+    );
+    let _ = writeln!(
+        s,
+        "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
+        points.len(),
+        offsets.len()
+    );
+    s.push_str("<PointData>\n");
+    point_data(&mut s);
+    s.push_str("</PointData>\n<Points>\n");
+    data_array(&mut s, "Float64", "Points", 3, points.iter().flatten());
+    s.push_str("</Points>\n<Cells>\n");
+    data_array(&mut s, "Int64", "connectivity", 1, conn.iter());
+    data_array(&mut s, "Int64", "offsets", 1, offsets.iter());
+    data_array(&mut s, "UInt8", "types", 1, offsets.iter().map(|_| ty));
+    s.push_str("</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
+    s
+}
+
+/// The `.vtu` text of one frame.
+pub fn frame_vtu(frame: &Frame) -> String {
+    let n = frame.len();
+    let conn: Vec<usize> = (0..n).collect();
+    let offsets: Vec<usize> = (1..=n).collect();
+    grid(&frame.position, (&conn, &offsets, VTK_VERTEX), |s| {
+        data_array(s, "Float64", "velocity", 3, frame.velocity.iter().flatten());
+        data_array(s, "Float64", "diameter", 1, &frame.diameter);
+        data_array(s, "Float64", "density", 1, &frame.density);
+        data_array(s, "UInt32", "id", 1, &frame.id);
+        data_array(s, "UInt32", "group", 1, &frame.group);
+    })
+}
+
+/// The `.vtu` text of the scene geometry: every strip as consecutive line segments.
+pub fn geometry_vtu(outlines: &[Outline]) -> String {
+    let mut points: Vec<[f64; 3]> = Vec::new();
+    let (mut conn, mut offsets) = (Vec::new(), Vec::new());
+    for strip in outlines.iter().flat_map(|o| &o.strips) {
+        let base = points.len();
+        points.extend_from_slice(strip);
+        for k in 1..strip.len() {
+            conn.extend([base + k - 1, base + k]);
+            offsets.push(conn.len());
+        }
+    }
+    grid(&points, (&conn, &offsets, VTK_LINE), |_| {})
+}
+
+/// The rows of a frame as CSV (`id,group,x,y,z,vx,vy,vz,diameter,density`, SI units),
+/// floats in shortest round-trip exponent form.
+pub fn frame_csv(frame: &Frame) -> String {
+    let mut s = String::from("id,group,x,y,z,vx,vy,vz,diameter,density\n");
+    for k in 0..frame.len() {
+        let ([x, y, z], [vx, vy, vz]) = (frame.position[k], frame.velocity[k]);
+        let (d, rho) = (frame.diameter[k], frame.density[k]);
+        let _ = writeln!(
+            s,
+            "{},{},{x:e},{y:e},{z:e},{vx:e},{vy:e},{vz:e},{d:e},{rho:e}",
+            frame.id[k], frame.group[k]
+        );
+    }
+    s
+}
+
+/// Writes one CSV file per frame into a folder (`<case>_<step>.csv`).
+pub struct CsvSink {
+    dir: PathBuf,
+    case: String,
+}
+
+impl CsvSink {
+    /// A sink writing into `dir` (created if missing).
+    pub fn create(dir: &Path, meta: &RunMeta) -> Result<Self, RecordError> {
+        std::fs::create_dir_all(dir).map_err(|source| RecordError::Io {
+            path: dir.to_path_buf(),
+            source,
+        })?;
+        Ok(CsvSink {
+            dir: dir.to_path_buf(),
+            case: meta.case.clone(),
+        })
+    }
+}
+
+impl FrameSink for CsvSink {
+    fn write_frame(&mut self, frame: &Frame) -> Result<(), String> {
+        let path = self
+            .dir
+            .join(format!("{}_{:09}.csv", self.case, frame.step));
+        write_file(&path, &frame_csv(frame)).map_err(|e| e.to_string())
+    }
+
+    fn finish(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+}
