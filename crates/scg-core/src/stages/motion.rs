@@ -140,6 +140,16 @@ type Columns<'a, S> = (
     Option<&'a [BodyAcceleration]>,
 );
 
+/// The particle table's columns of a move query as [`Columns`] (`None`: no particle).
+fn move_columns<'a, 's, S>(
+    q: &'a mut MoveQuery<'_, 's, S>,
+) -> Option<Columns<'a, <S as bevy_ecs::query::ContiguousQueryData>::Contiguous<'a, 's>>>
+where
+    S: bevy_ecs::query::ContiguousQueryData,
+{
+    columns_mut(q).map(|(xs, vs, drag, ms, fs, gs)| (bypass(xs), bypass(vs), drag, ms, fs, gs))
+}
+
 /// The drag columns of a move query, read row by row.
 trait DragRows: Split + Copy {
     /// One particle's drag data.
@@ -316,8 +326,7 @@ fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
     disp: Option<&StepDisplacement>,
     flow: U,
 ) {
-    let columns = columns_mut(&mut q)
-        .map(|(xs, vs, drag, ms, fs, gs)| (bypass(xs), bypass(vs), drag, ms, fs, gs));
+    let columns = move_columns(&mut q);
     let advance = move |p: Mover, (sf, fc): (&StokesFactors, &FluidCoupling)| {
         let vk = p.kicked(dt);
         let u = flow(p.x + vk * (0.5 * dt));
@@ -370,8 +379,7 @@ pub fn integrate_drag_exponential(
 ) {
     let (dt, law) = (clock.dt, motion.drag.unwrap_or_default());
     let (flow, fluid) = (*flow, *fluid);
-    let columns = columns_mut(&mut q)
-        .map(|(xs, vs, drag, ms, fs, gs)| (bypass(xs), bypass(vs), drag, ms, fs, gs));
+    let columns = move_columns(&mut q);
     move_pass(
         columns,
         &health,
@@ -398,8 +406,7 @@ pub fn integrate_drag_explicit(
 ) {
     let (dt, law) = (clock.dt, motion.drag.unwrap_or_default());
     let (flow, fluid) = (*flow, *fluid);
-    let columns = columns_mut(&mut q)
-        .map(|(xs, vs, drag, ms, fs, gs)| (bypass(xs), bypass(vs), drag, ms, fs, gs));
+    let columns = move_columns(&mut q);
     move_pass(
         columns,
         &health,
@@ -432,8 +439,7 @@ pub fn integrate_ballistic(
     mut q: MoveQuery<()>,
 ) {
     let dt = clock.dt;
-    let columns = columns_mut(&mut q)
-        .map(|(xs, vs, (), ms, fs, gs)| (bypass(xs), bypass(vs), (), ms, fs, gs));
+    let columns = move_columns(&mut q);
     move_pass(columns, &health, disp.as_deref(), |p, ()| {
         let vk = p.kicked(dt);
         let x1 = p.x + vk * dt + 0.5 * p.a * dt * dt;
