@@ -366,24 +366,34 @@ fn effective_tau(law: DragLaw, tau: f64, fc: &FluidCoupling, fluid: &Fluid, slip
     tau / law.correction(re)
 }
 
+/// What the Reynolds-dependent drag systems read besides the particles.
+#[derive(bevy_ecs::system::SystemParam)]
+pub struct DragInputs<'w> {
+    clock: Res<'w, SimClock>,
+    motion: Res<'w, Motion>,
+    flow: Res<'w, FlowField>,
+    fluid: Res<'w, Fluid>,
+    health: Res<'w, Health>,
+    disp: Option<Res<'w, StepDisplacement>>,
+}
+
+impl DragInputs<'_> {
+    /// dt (s), the drag law, the flow and the fluid.
+    fn constants(&self) -> (f64, DragLaw, FlowField, Fluid) {
+        let law = self.motion.drag.unwrap_or_default();
+        (self.clock.dt, law, *self.flow, *self.fluid)
+    }
+}
+
 /// Reynolds-dependent drag (e.g. Schiller–Naumann), exponential scheme: τ is evaluated
 /// from the slip at the start of the step and held over it.
-pub fn integrate_drag_exponential(
-    clock: Res<SimClock>,
-    motion: Res<Motion>,
-    flow: Res<FlowField>,
-    fluid: Res<Fluid>,
-    health: Res<Health>,
-    disp: Option<Res<StepDisplacement>>,
-    mut q: MoveQuery<&'static FluidCoupling>,
-) {
-    let (dt, law) = (clock.dt, motion.drag.unwrap_or_default());
-    let (flow, fluid) = (*flow, *fluid);
+pub fn integrate_drag_exponential(d: DragInputs, mut q: MoveQuery<&'static FluidCoupling>) {
+    let (dt, law, flow, fluid) = d.constants();
     let columns = move_columns(&mut q);
     move_pass(
         columns,
-        &health,
-        disp.as_deref(),
+        &d.health,
+        d.disp.as_deref(),
         |p, fc: &FluidCoupling| {
             let vk = p.kicked(dt);
             let slip = (flow.velocity(p.x) - vk).length();
@@ -395,22 +405,13 @@ pub fn integrate_drag_exponential(
 }
 
 /// Any drag law, semi-implicit Euler; sub-stepped so that every sub-step has dt ≤ τ/2.
-pub fn integrate_drag_explicit(
-    clock: Res<SimClock>,
-    motion: Res<Motion>,
-    flow: Res<FlowField>,
-    fluid: Res<Fluid>,
-    health: Res<Health>,
-    disp: Option<Res<StepDisplacement>>,
-    mut q: MoveQuery<&'static FluidCoupling>,
-) {
-    let (dt, law) = (clock.dt, motion.drag.unwrap_or_default());
-    let (flow, fluid) = (*flow, *fluid);
+pub fn integrate_drag_explicit(d: DragInputs, mut q: MoveQuery<&'static FluidCoupling>) {
+    let (dt, law, flow, fluid) = d.constants();
     let columns = move_columns(&mut q);
     move_pass(
         columns,
-        &health,
-        disp.as_deref(),
+        &d.health,
+        d.disp.as_deref(),
         |p, fc: &FluidCoupling| {
             let mut a = p.a;
             if let Some(f) = p.force {
