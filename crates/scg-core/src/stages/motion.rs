@@ -223,7 +223,10 @@ fn move_rows<S: DragRows>(
         if !(x1 + v1).element_sum().is_finite() {
             health.raise();
         }
-        d2max = d2max.max((x1 - x).length_squared());
+        let d2 = (x1 - x).length_squared();
+        if d2 > d2max {
+            d2max = d2;
+        }
         xs[i].0 = x1;
         vs[i].0 = v1;
     }

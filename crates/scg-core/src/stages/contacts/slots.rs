@@ -19,7 +19,7 @@ pub(super) struct Kernel<'a> {
     /// Per-particle inputs.
     pub bodies: Bodies<'a>,
     /// The pair law.
-    pub par: &'a PairParams,
+    pub par: PairParams,
     /// Time step, s.
     pub dt: f64,
     /// Group of each particle (collision counts).
@@ -109,7 +109,7 @@ impl Slot {
         let base = self.base;
         let group = k.group;
         for p in pairs {
-            let Some(c) = pair_kernel(p, &k.bodies, k.par, k.dt) else {
+            let Some(c) = pair_kernel(p, &k.bodies, &k.par, k.dt) else {
                 continue;
             };
             let (i, j) = (c.i as usize, c.j as usize);
@@ -243,7 +243,7 @@ pub fn particle_contact_forces(
     }
     let kernel = Kernel {
         bodies,
-        par: &st.params,
+        par: st.params,
         dt,
         group,
     };
@@ -337,7 +337,7 @@ mod tests {
                 omega: &omega,
                 radius: &radius,
             },
-            par: &par,
+            par,
             dt: 1e-6,
             group: &group,
         };
