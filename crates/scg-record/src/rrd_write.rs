@@ -93,12 +93,14 @@ struct GroupEntity {
 /// Layout (see `docs/recordings.md`):
 /// * timelines `sim_time` (duration, s) and `step` (sequence);
 /// * `particles/<group>`: `Points3D` with positions (m, as f32), radii = diameter/2 (m, f32),
-///   one colour per group, and the extra component `particle_id` (UInt32, one per point);
+///   one colour per group, and the extra components `particle_id` (UInt32) and `speed`
+///   (|v|, m/s, Float32), one per point;
 ///   a group without particles in a frame is logged as an empty point set;
 /// * `stats/<name>`: `Scalars`, one per entry of [`Frame::stats`] (a `/` in a name nests);
 /// * static: `geometry/<outline>` (`LineStrips3D`), `warnings` (`TextLog`, one warning per
 ///   line), `scene` (`TextDocument` with the scene file), and the recording property `scg`
-///   (case, scg_version, seed, dt, record_every, groups).
+///   (case, scg_version, seed, dt, record_every, groups), and Z-up `ViewCoordinates` at `/`;
+/// * a blueprint (viewer layout, see the `blueprint` module), sent with the first frame.
 ///
 /// The file is written as `<path>.partial` and renamed to `<path>` by [`RrdSink::close`]
 /// (or [`FrameSink::finish`]). Dropping an unfinished sink still closes the stream and writes
