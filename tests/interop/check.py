@@ -14,7 +14,10 @@ REC.rrd and REC.mcap must hold the same run (e.g. both written by one `scg run`,
    `/particles` message decodes as `foxglove.PointCloud`, and its summary, metadata and
    attachment are present;
 4. `rerun mcap convert REC.mcap -o OUT.rrd` succeeds and `rerun rrd verify OUT.rrd` passes;
-5. with `--vtk DIR` (the output of `scg replay REC.mcap --vtk DIR`): meshio reads the
+5. the `.rrd` carries a blueprint (`RrdReader.blueprints()`): a viewport, a 3D view,
+   time-series views on `/stats/...`, the time panel on `sim_time`; and every particle
+   chunk has the `speed` component;
+6. with `--vtk DIR` (the output of `scg replay REC.mcap --vtk DIR`): meshio reads the
    `.pvd`'s every `.vtu` frame, and its points, velocities, diameters and ids equal the
    MCAP's bit for bit; the geometry file reads as line cells.
 
@@ -219,6 +222,44 @@ def check_convert(rrd: Path, mcap: Path) -> str:
         return f"{verdict}; {len(paths)} entities"
 
 
+def check_blueprint(rrd: Path, mcap: Path) -> str:
+    from rerun.experimental import RrdReader
+
+    reader = RrdReader(rrd)
+    blueprints = reader.blueprints()
+    if len(blueprints) != 1:
+        raise ValueError(f"expected one blueprint store, found {blueprints}")
+    views, entities, timeline = [], set(), None
+    for chunk in reader.stream(store=blueprints[0]):
+        entities.add(chunk.entity_path)
+        batch = chunk.to_record_batch()
+        names = batch.schema.names
+        if "ViewBlueprint:class_identifier" in names:
+            for cls, origin in zip(batch.column("ViewBlueprint:class_identifier").to_pylist(),
+                                   batch.column("ViewBlueprint:space_origin").to_pylist()):
+                views.append((cls[0], origin[0] if origin else None))
+        if "TimePanelBlueprint:timeline" in names:
+            timeline = batch.column("TimePanelBlueprint:timeline").to_pylist()[-1][0]
+    if "/viewport" not in entities:
+        raise ValueError(f"no /viewport in the blueprint: {sorted(entities)[:10]}")
+    classes = [cls for cls, _ in views]
+    if classes.count("3D") != 1:
+        raise ValueError(f"expected one 3D view, found {views}")
+    plots = [origin for cls, origin in views if cls == "TimeSeries"]
+    if not plots or not all(o.startswith("/stats/") for o in plots):
+        raise ValueError(f"time-series views missing or not on /stats: {views}")
+    if timeline != "sim_time":
+        raise ValueError(f"time panel on {timeline!r}, not sim_time")
+    speed_chunks = 0
+    for chunk in reader.stream():
+        if chunk.entity_path.startswith("/particles/") and not chunk.is_static:
+            if "speed" not in chunk.to_record_batch().schema.names:
+                raise ValueError(f"{chunk.entity_path}: no speed component")
+            speed_chunks += 1
+    return (f"{len(views)} views ({', '.join(sorted(set(classes)))}), plots {plots}, "
+            f"time panel on {timeline}; speed in {speed_chunks} particle chunks")
+
+
 def check_vtk(vtk: Path, mcap_path: Path) -> str:
     import xml.etree.ElementTree as ET
 
@@ -266,6 +307,7 @@ CHECKS = [
     ("positions rrd == mcap", check_positions),
     ("mcap reader + foxglove PointCloud", check_mcap),
     ("rerun mcap convert + verify", check_convert),
+    ("blueprint in the rrd", check_blueprint),
 ]
 
 

@@ -33,6 +33,9 @@ pub const RRD_PROPERTY: &str = "scg";
 /// Extra component logged with each group's `Points3D`: the particle ids (UInt32, one per
 /// point, in the same order as the positions).
 pub const COMPONENT_PARTICLE_ID: &str = "particle_id";
+/// Extra component logged with each group's `Points3D`: the particle speeds |v| (m/s,
+/// Float32, one per point, in the same order as the positions).
+pub const COMPONENT_SPEED: &str = "speed";
 
 // ---------------------------------------------------------------------------------------------
 // MCAP

@@ -21,6 +21,7 @@ use std::path::{Path, PathBuf};
 use scg_core::frame::{Frame, RunMeta};
 
 mod background;
+mod blueprint;
 pub mod layout;
 mod mcap_read;
 mod mcap_write;

@@ -14,7 +14,7 @@ use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Duration;
 
 use rerun::external::arrow::array::{
-    ArrayRef, Float64Array, StringArray, UInt32Array, UInt64Array,
+    ArrayRef, Float32Array, Float64Array, StringArray, UInt32Array, UInt64Array,
 };
 use rerun::external::re_build_info::CrateVersion;
 use rerun::external::re_log_encoding::{Encoder, EncodingOptions};
@@ -22,13 +22,14 @@ use rerun::log::{ChunkBatcherConfig, LogMsg};
 use rerun::sink::{LogSink, SinkFlushError};
 use rerun::{
     AnyValues, AsComponents, Color, EntityPath, EntityPathPart, LineStrips3D, MediaType, Points3D,
-    RecordingInfo, RecordingStream, Scalars, TextDocument, TextLog, TextLogLevel,
+    RecordingInfo, RecordingStream, Scalars, TextDocument, TextLog, TextLogLevel, ViewCoordinates,
 };
 use scg_core::frame::{Frame, FrameSink, RunMeta};
 
 use crate::layout::{
-    COMPONENT_PARTICLE_ID, ENTITY_GEOMETRY, ENTITY_PARTICLES, ENTITY_SCENE, ENTITY_STATS,
-    ENTITY_WARNINGS, RRD_APPLICATION_ID, RRD_PROPERTY, TIMELINE_SIM_TIME, TIMELINE_STEP,
+    COMPONENT_PARTICLE_ID, COMPONENT_SPEED, ENTITY_GEOMETRY, ENTITY_PARTICLES, ENTITY_SCENE,
+    ENTITY_STATS, ENTITY_WARNINGS, RRD_APPLICATION_ID, RRD_PROPERTY, TIMELINE_SIM_TIME,
+    TIMELINE_STEP,
 };
 use crate::{RecordError, Recording, check_frame, commit_partial, partial_path};
 
@@ -92,12 +93,14 @@ struct GroupEntity {
 /// Layout (see `docs/recordings.md`):
 /// * timelines `sim_time` (duration, s) and `step` (sequence);
 /// * `particles/<group>`: `Points3D` with positions (m, as f32), radii = diameter/2 (m, f32),
-///   one colour per group, and the extra component `particle_id` (UInt32, one per point);
+///   one colour per group, and the extra components `particle_id` (UInt32) and `speed`
+///   (|v|, m/s, Float32), one per point;
 ///   a group without particles in a frame is logged as an empty point set;
 /// * `stats/<name>`: `Scalars`, one per entry of [`Frame::stats`] (a `/` in a name nests);
 /// * static: `geometry/<outline>` (`LineStrips3D`), `warnings` (`TextLog`, one warning per
 ///   line), `scene` (`TextDocument` with the scene file), and the recording property `scg`
-///   (case, scg_version, seed, dt, record_every, groups).
+///   (case, scg_version, seed, dt, record_every, groups), and Z-up `ViewCoordinates` at `/`;
+/// * a blueprint (viewer layout, see the `blueprint` module), sent with the first frame.
 ///
 /// The file is written as `<path>.partial` and renamed to `<path>` by [`RrdSink::close`]
 /// (or [`FrameSink::finish`]). Dropping an unfinished sink still closes the stream and writes
@@ -110,6 +113,9 @@ pub struct RrdSink {
     partial: PathBuf,
     groups: Vec<GroupEntity>,
     stats_paths: HashMap<String, EntityPath>,
+    /// The run description until the blueprint is sent (with the first frame, whose scalars
+    /// decide the plots, or when closing a recording without frames).
+    pending_blueprint: Option<RunMeta>,
 }
 
 fn rerun_err(err: impl std::fmt::Display) -> RecordError {
@@ -209,6 +215,7 @@ impl RrdSink {
             partial: partial.to_path_buf(),
             groups,
             stats_paths: HashMap::new(),
+            pending_blueprint: Some(meta.clone()),
         };
         sink.log_static(meta)?;
         Ok(sink)
@@ -233,6 +240,10 @@ impl RrdSink {
 
     fn log_static(&mut self, meta: &RunMeta) -> Result<(), RecordError> {
         let rec = self.stream()?;
+
+        // Z up, as the scenes are.
+        rec.log_static("/", &ViewCoordinates::RIGHT_HAND_Z_UP())
+            .map_err(rerun_err)?;
 
         let group_names: Vec<&str> = meta.groups.iter().map(|g| g.name.as_str()).collect();
         let properties = AnyValues::default()
@@ -300,22 +311,31 @@ impl RrdSink {
         let mut positions: Vec<Vec<[f32; 3]>> = vec![Vec::new(); self.groups.len()];
         let mut radii: Vec<Vec<f32>> = vec![Vec::new(); self.groups.len()];
         let mut ids: Vec<Vec<u32>> = vec![Vec::new(); self.groups.len()];
+        let mut speeds: Vec<Vec<f32>> = vec![Vec::new(); self.groups.len()];
         for i in 0..frame.len() {
             let g = frame.group[i] as usize;
             let p = frame.position[i];
+            let v = frame.velocity[i];
             positions[g].push([p[0] as f32, p[1] as f32, p[2] as f32]);
             radii[g].push((0.5 * frame.diameter[i]) as f32);
             ids[g].push(frame.id[i]);
+            speeds[g].push((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt() as f32);
         }
-        for (((group, positions), radii), ids) in
-            self.groups.iter().zip(positions).zip(radii).zip(ids)
+        for ((((group, positions), radii), ids), speeds) in self
+            .groups
+            .iter()
+            .zip(positions)
+            .zip(radii)
+            .zip(ids)
+            .zip(speeds)
         {
             let points = Points3D::new(positions)
                 .with_radii(radii)
                 .with_colors([group.color]);
-            let ids = AnyValues::default()
-                .with_component_from_data(COMPONENT_PARTICLE_ID, one(UInt32Array::from(ids)));
-            rec.log(group.path.clone(), &[&points as &dyn AsComponents, &ids])
+            let extra = AnyValues::default()
+                .with_component_from_data(COMPONENT_PARTICLE_ID, one(UInt32Array::from(ids)))
+                .with_component_from_data(COMPONENT_SPEED, one(Float32Array::from(speeds)));
+            rec.log(group.path.clone(), &[&points as &dyn AsComponents, &extra])
                 .map_err(rerun_err)?;
         }
 
@@ -327,6 +347,11 @@ impl RrdSink {
             rec.log(path.clone(), &Scalars::single(*value))
                 .map_err(rerun_err)?;
         }
+
+        if let Some(meta) = self.pending_blueprint.take() {
+            let names: Vec<String> = frame.stats.iter().map(|(n, _)| n.clone()).collect();
+            crate::blueprint::send(rec, &meta, &names)?;
+        }
         Ok(())
     }
 
@@ -336,10 +361,16 @@ impl RrdSink {
         let Some(stream) = self.stream.take() else {
             return Ok(());
         };
+        // A recording without frames still gets a layout.
+        let blueprint = match self.pending_blueprint.take() {
+            Some(meta) => crate::blueprint::send(&stream, &meta, &[]),
+            None => Ok(()),
+        };
         let flushed = stream.flush_blocking().map_err(rerun_err);
         // Dropping the last handle joins the stream's threads: every message is encoded.
         drop(stream);
         let closed = close_encoder(&self.encoder, &self.partial);
+        blueprint?;
         flushed?;
         closed?;
         commit_partial(&self.partial, &self.path)

@@ -10,15 +10,21 @@ use std::path::Path;
 use common::{N_FRAMES, frames, meta};
 use rerun::external::re_log_encoding::DecoderApp;
 use rerun::log::{Chunk, LogMsg};
-use rerun::{EntityPath, EntityPathPart, Points3D, TimelineName};
+use rerun::{EntityPath, EntityPathPart, Points3D, StoreKind, TimelineName};
 use scg_core::frame::{Frame, FrameSink};
 use scg_record::layout::{COMPONENT_PARTICLE_ID, TIMELINE_SIM_TIME, TIMELINE_STEP};
 use scg_record::{McapSink, RecordError, RrdSink, partial_path, read_mcap, write_rrd};
 
 /// What an `.rrd` file holds, as decoded by Rerun.
 struct Decoded {
+    /// Store infos of the recording (not of the blueprint).
     store_infos: usize,
+    /// Chunks of the recording.
     chunks: Vec<Chunk>,
+    /// Entity paths of the blueprint's chunks.
+    blueprint_entities: BTreeSet<String>,
+    /// Whether a blueprint store was declared and activated (as the default).
+    blueprint_activated: bool,
     /// Number of RRD manifests in the footer (0 without footer).
     manifests: usize,
 }
@@ -29,20 +35,38 @@ fn decode(path: &Path) -> Decoded {
     let mut decoded = Decoded {
         store_infos: 0,
         chunks: Vec::new(),
+        blueprint_entities: BTreeSet::new(),
+        blueprint_activated: false,
         manifests: 0,
     };
+    let mut blueprint_id = None;
     for message in messages.by_ref() {
         match message.expect("message") {
             LogMsg::SetStoreInfo(info) => {
                 assert_eq!(info.info.store_id.application_id().as_str(), "scg");
-                decoded.store_infos += 1;
+                match info.info.store_id.kind() {
+                    StoreKind::Recording => decoded.store_infos += 1,
+                    StoreKind::Blueprint => {
+                        let id = blueprint_id.get_or_insert_with(|| info.info.store_id.clone());
+                        assert_eq!(id, &info.info.store_id, "one blueprint");
+                    }
+                }
             }
-            LogMsg::ArrowMsg(_, arrow) => {
-                decoded
-                    .chunks
-                    .push(Chunk::from_arrow_msg(&arrow).expect("chunk"));
+            LogMsg::ArrowMsg(store, arrow) => {
+                let chunk = Chunk::from_arrow_msg(&arrow).expect("chunk");
+                match store.kind() {
+                    StoreKind::Recording => decoded.chunks.push(chunk),
+                    StoreKind::Blueprint => {
+                        decoded
+                            .blueprint_entities
+                            .insert(chunk.entity_path().to_string());
+                    }
+                }
             }
-            LogMsg::BlueprintActivationCommand(_) => {}
+            LogMsg::BlueprintActivationCommand(cmd) => {
+                assert_eq!(Some(&cmd.blueprint_id), blueprint_id.as_ref());
+                decoded.blueprint_activated = cmd.make_active && cmd.make_default;
+            }
         }
     }
     decoded.manifests = messages.rrd_manifests().expect("footer").len();
@@ -131,6 +155,34 @@ fn expected_particles(frames: &[Frame]) -> Particles {
     out
 }
 
+/// The viewer layout: a viewport, panels, a 3D view, one plot per stats family of the first
+/// frame (`count`, `energy`, `height max`; `undefined` comes later and is only in the
+/// viewer's tree), the warnings and the scene, with visualizer overrides for the particle
+/// groups and the per-group series.
+fn check_blueprint(decoded: &Decoded) {
+    assert!(decoded.blueprint_activated, "blueprint activated");
+    let bp = &decoded.blueprint_entities;
+    for expected in [
+        "/viewport",
+        "/time_panel",
+        "/blueprint_panel",
+        "/selection_panel",
+    ] {
+        assert!(bp.contains(expected), "{expected} missing from {bp:?}");
+    }
+    let views = bp
+        .iter()
+        .filter(|p| p.starts_with("/view/") && p.matches('/').count() == 2)
+        .count();
+    assert_eq!(views, 1 + 3 + 2, "3D, three plots, warnings, scene: {bp:?}");
+    let overridden = |entity: &str| {
+        bp.iter()
+            .any(|p| p.contains("/ViewContents/overrides/") && p.contains(entity))
+    };
+    assert!(overridden("/particles/large\\ grains/visualizers"));
+    assert!(overridden("/stats/count/small/visualizers"));
+}
+
 /// Checks everything the recording of `frames()` must hold.
 fn check_recording(path: &Path) {
     let decoded = decode(path);
@@ -140,6 +192,8 @@ fn check_recording(path: &Path) {
         "the footer (RRD manifest) is present"
     );
     assert!(!decoded.chunks.is_empty());
+
+    check_blueprint(&decoded);
 
     let (got, rows) = particles(&decoded);
     assert_eq!(got, expected_particles(&frames()));
