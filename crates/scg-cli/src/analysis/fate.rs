@@ -143,7 +143,10 @@ impl Fates {
 
     /// The fate of particle `id` (undecided if never seen).
     pub fn fate(&self, id: u32) -> Fate {
-        self.fate.get(id as usize).copied().unwrap_or(Fate::Undecided)
+        self.fate
+            .get(id as usize)
+            .copied()
+            .unwrap_or(Fate::Undecided)
     }
 
     /// Counts per group (`groups` of them) over every particle seen.
@@ -199,16 +202,28 @@ mod tests {
         // id 2 (group 1) vanishes while undecided (drained between frames);
         // id 3 (group 0) stays in between: undecided;
         // id 4 (group 1) enters in the second frame and never moves: undecided.
-        f.observe(&frame(0, &[(0, 0, 10e-3), (1, 1, 28e-3), (2, 1, 7e-3), (3, 0, 20e-3)]), &axis);
+        f.observe(
+            &frame(
+                0,
+                &[(0, 0, 10e-3), (1, 1, 28e-3), (2, 1, 7e-3), (3, 0, 20e-3)],
+            ),
+            &axis,
+        );
         assert_eq!(f.fate(0), Fate::Undecided);
         f.observe(
-            &frame(1, &[(0, 0, 6e-3), (1, 1, 29e-3), (3, 0, 20e-3), (4, 1, 15e-3)]),
+            &frame(
+                1,
+                &[(0, 0, 6e-3), (1, 1, 29e-3), (3, 0, 20e-3), (4, 1, 15e-3)],
+            ),
             &axis,
         );
         assert_eq!(f.fate(0), Fate::Fine);
         assert_eq!(f.fate(1), Fate::Coarse);
         assert_eq!(f.fate(2), Fate::Fine);
-        f.observe(&frame(2, &[(1, 1, 25e-3), (3, 0, 28.9e-3), (4, 1, 15e-3)]), &axis);
+        f.observe(
+            &frame(2, &[(1, 1, 25e-3), (3, 0, 28.9e-3), (4, 1, 15e-3)]),
+            &axis,
+        );
         // id 0 vanished after being decided (stays fine); id 1 stays coarse.
         assert_eq!(f.fate(0), Fate::Fine);
         assert_eq!(f.fate(1), Fate::Coarse);

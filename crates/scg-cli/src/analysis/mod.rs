@@ -19,9 +19,7 @@ mod radial;
 mod stats;
 
 pub use axis::FlowAxis;
-pub use classes::{
-    cut_size, d50, partition, steady_cut_size, steady_partition, undecided, w1_to,
-};
+pub use classes::{cut_size, d50, partition, steady_cut_size, steady_partition, undecided, w1_to};
 pub use fate::{Fate, FateBounds, FateCounts, Fates, WALL_ZONE};
 pub use groups::group_stats;
 pub use radial::{
