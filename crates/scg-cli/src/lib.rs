@@ -56,7 +56,8 @@ enum Command {
     Bench(bench::BenchArgs),
     /// What accuracy costs in time: sweep α, law, dt, integrator and stiffness on a scene.
     Cost(cost::CostArgs),
-    /// Studies: `classifier` and `classifier-psd` (paper Section 5, Figs 8–10).
+    /// Studies: `classifier`, `classifier-psd` (paper Section 5, Figs 8–10) and
+    /// `classifier-cut` (the steady-state cut size).
     Study(study::StudyArgs),
     /// Work from an MCAP recording: rebuild .rrd, analyse, verify.
     Replay(replay::ReplayArgs),

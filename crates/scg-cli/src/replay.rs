@@ -162,18 +162,30 @@ fn classify_recording(rec: &Recording, a: &ReplayArgs) -> Result<(), i32> {
         1
     })?;
     println!(
-        "classifier: {:<10} {:>12} {:>9} {:>10}",
-        "class", "mean_r[m]", "drained", "samples"
+        "classifier: {:<10} {:>12} {:>9} {:>10} {:>7} {:>7} {:>7}",
+        "class", "mean_r[m]", "drained", "samples", "fine", "coarse", "undec"
     );
     for c in &r.classes {
         println!(
-            "classifier: {:<10} {:>12.5e} {:>9.4} {:>10}",
+            "classifier: {:<10} {:>12.5e} {:>9.4} {:>10} {:>7} {:>7} {:>7}",
             c.name,
             c.mean_r,
             c.drained_fraction,
-            c.radii.len()
+            c.radii.len(),
+            c.fates.fine,
+            c.fates.coarse,
+            c.fates.undecided
         );
     }
+    let um = |d: Option<f64>| d.map_or("—".to_string(), |d| format!("{:.1} µm", d * 1e6));
+    println!(
+        "classifier: d50 drained (cohort fed by {} s, gone by {} s) {}; d50 steady (decided fates) {}, {} undecided",
+        r.params.cohort_until,
+        r.last_time,
+        um(analysis::cut_size(&r)),
+        um(analysis::steady_cut_size(&r)),
+        analysis::undecided(&r)
+    );
     eprintln!("wrote {}", path.display());
     Ok(())
 }

@@ -1,5 +1,6 @@
 //! What the classes of a [`Result`] say together: the partition (Tromp) curve of drained
-//! fractions, its cut size d50, and the W1 distances to a reference run.
+//! fractions after a finite time and its cut size d50, the steady-state partition of
+//! decided fates and its cut size, and the W1 distances to a reference run.
 
 use super::radial::Result;
 use super::stats::wasserstein1;
@@ -29,6 +30,25 @@ pub fn d50(points: &[(f64, f64)]) -> Option<f64> {
 /// The cut size d50 of a run's [`partition`] curve, m.
 pub fn cut_size(r: &Result) -> Option<f64> {
     d50(&partition(r))
+}
+
+/// The steady-state partition curve (original diameter, fine fraction of the decided
+/// particles, see `fate.rs`) of a run, in class order.
+pub fn steady_partition(r: &Result) -> Vec<(f64, f64)> {
+    r.classes
+        .iter()
+        .map(|c| (c.diameter, c.fates.fine_fraction()))
+        .collect()
+}
+
+/// The steady-state cut size: d50 of the [`steady_partition`] curve, m.
+pub fn steady_cut_size(r: &Result) -> Option<f64> {
+    d50(&steady_partition(r))
+}
+
+/// Particles of a run whose fate was still undecided at its last frame, over all classes.
+pub fn undecided(r: &Result) -> u64 {
+    r.classes.iter().map(|c| c.fates.undecided).sum()
 }
 
 /// Normalised W1 (/ the reference's radius) of each class of `v` to the same class of

@@ -6,17 +6,21 @@
 //! * `stats.rs`: mean, percentiles, histograms, W1;
 //! * `axis.rs`: the flow axis radial distances are measured from;
 //! * `radial.rs`: the per-class analysis fed frame by frame ([`Analysis`]), its CSV;
-//! * `classes.rs`: partition curve, d50, W1 of every class to a reference;
+//! * `fate.rs`: each particle's fate (fine at the nozzle, coarse at the wall, undecided);
+//! * `classes.rs`: partition curves (finite-time drained, steady-state fates), their d50,
+//!   W1 of every class to a reference;
 //! * `groups.rs`: per-group statistics of a recording (`scg replay --analyze`).
 
 mod axis;
 mod classes;
+mod fate;
 mod groups;
 mod radial;
 mod stats;
 
 pub use axis::FlowAxis;
-pub use classes::{cut_size, d50, partition, w1_to};
+pub use classes::{cut_size, d50, partition, steady_cut_size, steady_partition, undecided, w1_to};
+pub use fate::{Fate, FateBounds, FateCounts, Fates, WALL_ZONE};
 pub use groups::group_stats;
 pub use radial::{
     Analysis, ClassResult, Params, Result, SharedAnalysis, SnapPoint, analyze_recording,

@@ -15,6 +15,7 @@ use scg_core::physics::flow::FlowField;
 use scg_scene::Scene;
 
 use super::axis::FlowAxis;
+use super::fate::{FateBounds, FateCounts, Fates, WALL_ZONE};
 use super::stats::{histogram, mean, percentile};
 
 /// Time windows of the analysis.
@@ -33,6 +34,8 @@ pub struct Params {
     pub radius: f64,
     /// Histogram bins over [0, radius].
     pub bins: usize,
+    /// Where each particle's fate is decided (the steady-state partition, `fate.rs`).
+    pub fates: FateBounds,
 }
 
 impl Params {
@@ -46,12 +49,19 @@ impl Params {
             cohort_until: 0.5 * to,
             radius,
             bins: 30,
+            fates: FateBounds {
+                fine_radius: 0.0,
+                coarse_radius: radius - WALL_ZONE,
+            },
         }
     }
 
-    /// [`Params::for_window`] with the vessel radius of `scene`.
+    /// [`Params::for_window`] with the vessel radius of `scene`, fates decided fine at its
+    /// outlet's nozzle radius.
     pub fn for_scene(scene: &Scene, from: f64, to: f64) -> Self {
-        Params::for_window(from, to, vessel_radius(scene))
+        let mut p = Params::for_window(from, to, vessel_radius(scene));
+        p.fates.fine_radius = scene.outlet.map_or(0.0, |o| o.geometry.nozzle_radius);
+        p
     }
 }
 
@@ -84,6 +94,7 @@ pub struct Analysis {
     last_ids: Vec<u32>,
     last_time: f64,
     snapshot: Option<(f64, Vec<SnapPoint>)>,
+    fates: Fates,
 }
 
 /// Per-class result.
@@ -105,6 +116,9 @@ pub struct ClassResult {
     pub drained_fraction: f64,
     /// Histogram over [0, radius]: fraction of the samples per bin.
     pub histogram: Vec<f64>,
+    /// Fates of every particle of the class seen (fine, coarse, undecided by the last
+    /// frame): the steady-state partition.
+    pub fates: FateCounts,
 }
 
 /// The whole result.
@@ -139,12 +153,14 @@ impl Analysis {
             last_ids: Vec::new(),
             last_time: f64::NEG_INFINITY,
             snapshot: None,
+            fates: Fates::new(params.fates),
         }
     }
 
     /// Take one frame (frames must come in time order).
     pub fn observe(&mut self, f: &Frame) {
         let p = self.params;
+        self.fates.observe(f, &self.axis);
         if f.time >= p.from - T_EPS && f.time <= p.to + T_EPS {
             self.frames_in_window += 1;
             for (i, g) in f.group.iter().enumerate() {
@@ -205,6 +221,7 @@ impl Analysis {
                 remaining[(*g - 1) as usize] += 1;
             }
         }
+        let fates = self.fates.counts(ng);
         let classes = (0..ng)
             .map(|gi| {
                 let mut radii = self.samples[gi].clone();
@@ -224,6 +241,7 @@ impl Analysis {
                     } else {
                         drained as f64 / cohort[gi] as f64
                     },
+                    fates: fates[gi],
                 }
             })
             .collect();
@@ -243,7 +261,8 @@ impl Analysis {
 pub fn radial_csv(r: &Result) -> String {
     let bins = r.params.bins;
     let mut s = String::from(
-        "class,diameter_m,samples,mean_r_m,p10_m,p50_m,p90_m,cohort,drained,drained_fraction",
+        "class,diameter_m,samples,mean_r_m,p10_m,p50_m,p90_m,cohort,drained,drained_fraction,\
+         fate_fine,fate_coarse,fate_undecided,fate_fine_fraction",
     );
     for b in 0..bins {
         s.push_str(&format!(",bin{b}"));
@@ -252,7 +271,7 @@ pub fn radial_csv(r: &Result) -> String {
     for c in &r.classes {
         let q = |p: f64| percentile(&c.radii, p);
         s.push_str(&format!(
-            "{},{:e},{},{:e},{:e},{:e},{:e},{},{},{:e}",
+            "{},{:e},{},{:e},{:e},{:e},{:e},{},{},{:e},{},{},{},{:e}",
             c.name,
             c.diameter,
             c.radii.len(),
@@ -262,7 +281,11 @@ pub fn radial_csv(r: &Result) -> String {
             q(0.9),
             c.cohort,
             c.drained,
-            c.drained_fraction
+            c.drained_fraction,
+            c.fates.fine,
+            c.fates.coarse,
+            c.fates.undecided,
+            c.fates.fine_fraction()
         ));
         for h in &c.histogram {
             s.push_str(&format!(",{h:e}"));

@@ -1,7 +1,7 @@
 //! `scg study classifier|classifier-psd`: the paper's Section 5 end to end. Runs the three
 //! variants (original, CG α = 2 with SCG, CG α = 2 without SCG), then writes the radial
 //! distributions (Fig. 10), top-view snapshots (Fig. 9), drained fractions and the
-//! partition curve with d50, the computing time for 0.1 s (Fig. 8), the normalised W1
+//! partition curves with both cut sizes (finite-time drained, steady-state fates), the computing time for 0.1 s (Fig. 8), the normalised W1
 //! distances to the original, and `summary.json`.
 
 mod plot;
@@ -24,11 +24,14 @@ pub use run::{VariantRun, run_variant};
 pub const CLASSIFIER: &str = include_str!("../../../../cases/classifier.toml");
 /// The classifier with a continuous size distribution.
 pub const CLASSIFIER_PSD: &str = include_str!("../../../../cases/classifier-psd.toml");
+/// The classifier with its classes concentrated at the cut (steady-state d50).
+pub const CLASSIFIER_CUT: &str = include_str!("../../../../cases/classifier-cut.toml");
 
 /// Arguments of `scg study`.
 #[derive(Args, Debug)]
 pub struct StudyArgs {
-    /// `classifier` (paper Table 3) or `classifier-psd` (size distribution, partition curve).
+    /// `classifier` (paper Table 3), `classifier-psd` (size distribution, partition curve)
+    /// or `classifier-cut` (classes at the cut: the steady-state d50).
     pub study: String,
     /// Fewer particles (feed rates scaled down): a few minutes in all.
     #[arg(long)]
@@ -73,6 +76,12 @@ pub fn spec(name: &str) -> Option<StudySpec> {
             window: (0.5, 0.6),
             quick_scale: 1.0 / 4.0,
         }),
+        "classifier-cut" => Some(StudySpec {
+            name: "classifier-cut",
+            scene: CLASSIFIER_CUT,
+            window: (0.9, 1.0),
+            quick_scale: 1.0 / 2.0,
+        }),
         _ => None,
     }
 }
@@ -94,7 +103,7 @@ pub fn write_outputs(runs: &[VariantRun], nozzle: f64, out: &Path) -> Result<(),
 pub fn study(a: StudyArgs) -> i32 {
     let Some(spec) = spec(&a.study) else {
         eprintln!(
-            "error: unknown study `{}` (classifier, classifier-psd)",
+            "error: unknown study `{}` (classifier, classifier-psd, classifier-cut)",
             a.study
         );
         return EXIT_BAD_INPUT;

@@ -151,7 +151,7 @@ pub fn plot_partition(runs: &[VariantRun], path: &Path) -> PlotResult {
     let root = svg_root(path, (720, 480))?;
     let mut chart = ChartBuilder::on(&root)
         .caption(
-            "partition curve: drained fraction (fines) per class",
+            "partition: drained by the end (solid), steady-state fates (dashed)",
             ("sans-serif", 16),
         )
         .margin(10)
@@ -162,7 +162,7 @@ pub fn plot_partition(runs: &[VariantRun], path: &Path) -> PlotResult {
     chart
         .configure_mesh()
         .x_desc("original diameter [µm]")
-        .y_desc("drained fraction")
+        .y_desc("fraction to the fines")
         .draw()
         .map_err(perr)?;
     for (vi, v) in runs.iter().enumerate() {
@@ -181,6 +181,28 @@ pub fn plot_partition(runs: &[VariantRun], path: &Path) -> PlotResult {
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col));
         chart
             .draw_series(pts.iter().map(|p| Circle::new(*p, 4, col.filled())))
+            .map_err(perr)?;
+        let steady: Vec<(f64, f64)> = v
+            .result
+            .classes
+            .iter()
+            .filter(|c| c.fates.fine_fraction().is_finite())
+            .map(|c| (c.diameter * 1e6, c.fates.fine_fraction()))
+            .collect();
+        chart
+            .draw_series(DashedLineSeries::new(
+                steady.clone(),
+                6,
+                4,
+                col.stroke_width(2),
+            ))
+            .map_err(perr)?;
+        chart
+            .draw_series(
+                steady
+                    .iter()
+                    .map(|p| TriangleMarker::new(*p, 5, col.filled())),
+            )
             .map_err(perr)?;
     }
     chart

@@ -3,7 +3,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use crate::analysis::{self, cut_size, w1_to};
+use crate::analysis::{self, cut_size, steady_cut_size, undecided, w1_to};
 
 use super::VariantRun;
 
@@ -28,24 +28,46 @@ pub fn summary(runs: &[VariantRun]) -> serde_json::Value {
                 serde_json::json!({
                     "w1": json_num(*w),
                     "drained": json_num(c.drained_fraction),
+                    "fate_fine": c.fates.fine,
+                    "fate_coarse": c.fates.coarse,
+                    "fate_undecided": c.fates.undecided,
+                    "steady_fine_fraction": json_num(c.fates.fine_fraction()),
                     "mean_r_m": json_num(c.mean_r),
                 }),
             );
         }
-        let d50 = cut_size(&v.result).map(|d| d * 1e6);
+        let um = |d: Option<f64>| d.map_or(serde_json::Value::Null, |d| json_num(d * 1e6));
+        let decided: u64 = v
+            .result
+            .classes
+            .iter()
+            .map(|c| c.fates.fine + c.fates.coarse)
+            .sum();
         variants.insert(
             v.name.clone(),
             serde_json::json!({
                 "time_s": v.time_s,
-                "d50_um": d50.map_or(serde_json::Value::Null, json_num),
+                "total_s": v.total_s,
+                "d50_drained_um": um(cut_size(&v.result)),
+                "d50_steady_um": um(steady_cut_size(&v.result)),
+                "fates_decided": decided,
+                "fates_undecided": undecided(&v.result),
                 "classes": classes,
             }),
         );
     }
-    serde_json::json!({ "variants": variants })
+    serde_json::json!({
+        "definitions": {
+        "d50_drained_um": "finite time: the partition of drained fractions of the particles fed by cohort_until, gone by the last frame",
+        "d50_steady_um": "steady state: the partition of each particle's decided fate (fine at the nozzle radius or drained, coarse in the wall zone), undecided particles left out"
+        },
+        "cohort_until_s": runs[0].result.params.cohort_until,
+        "last_frame_s": runs[0].result.last_time,
+        "variants": variants
+    })
 }
 
-/// Text report: per class mean radius, drained fraction, W1; times; d50.
+/// Text report: per class mean radius, drained fraction, fates, W1; times; both d50s.
 pub fn report(runs: &[VariantRun]) -> String {
     let mut s = String::new();
     let reference = &runs[0].result;
@@ -59,45 +81,82 @@ pub fn report(runs: &[VariantRun]) -> String {
     );
     let _ = writeln!(
         s,
-        "{:<10} {:>8} {:>10} {:>9} {:>9} {:>10} {:>8}",
-        "variant", "class", "mean_r[m]", "r/R", "drained", "W1/R", "samples"
+        "fates (steady state): fine once at r ≤ {:.4} m or drained, coarse once at r ≥ {:.4} m, \
+         else undecided by {} s",
+        reference.params.fates.fine_radius,
+        reference.params.fates.coarse_radius,
+        reference.last_time
+    );
+    let _ = writeln!(
+        s,
+        "{:<10} {:>8} {:>10} {:>9} {:>9} {:>10} {:>8} {:>7} {:>7} {:>7} {:>7}",
+        "variant",
+        "class",
+        "mean_r[m]",
+        "r/R",
+        "drained",
+        "W1/R",
+        "samples",
+        "fine",
+        "coarse",
+        "undec",
+        "f_fine"
     );
     for v in runs {
         let w1 = w1_to(reference, &v.result);
         for (c, w) in v.result.classes.iter().zip(&w1) {
             let _ = writeln!(
                 s,
-                "{:<10} {:>6.0}µm {:>10.4e} {:>9.4} {:>9.4} {:>10.4} {:>8}",
+                "{:<10} {:>6.0}µm {:>10.4e} {:>9.4} {:>9.4} {:>10.4} {:>8} {:>7} {:>7} {:>7} {:>7.4}",
                 v.name,
                 c.diameter * 1e6,
                 c.mean_r,
                 c.mean_r / reference.params.radius,
                 c.drained_fraction,
                 w,
-                c.radii.len()
+                c.radii.len(),
+                c.fates.fine,
+                c.fates.coarse,
+                c.fates.undecided,
+                c.fates.fine_fraction()
             );
         }
     }
     let _ = writeln!(
         s,
-        "\n{:<10} {:>14} {:>12} {:>10} {:>10} {:>10}",
-        "variant", "time 0.1 s [s]", "total [s]", "resident", "lost", "d50 [µm]"
+        "\n{:<10} {:>14} {:>12} {:>10} {:>10} {:>14} {:>14} {:>10}",
+        "variant",
+        "time 0.1 s [s]",
+        "total [s]",
+        "resident",
+        "lost",
+        "d50 drained",
+        "d50 steady",
+        "undecided"
     );
     let t0 = runs[0].time_s;
+    let um = |d: Option<f64>| d.map_or("—".to_string(), |d| format!("{:.1} µm", d * 1e6));
     for v in runs {
-        let d50 = cut_size(&v.result);
         let _ = writeln!(
             s,
-            "{:<10} {:>14.3} {:>12.3} {:>10} {:>10} {:>10}   (time ratio to original {:.3})",
+            "{:<10} {:>14.3} {:>12.3} {:>10} {:>10} {:>14} {:>14} {:>10}   (time ratio to original {:.3})",
             v.name,
             v.time_s,
             v.total_s,
             v.resident,
             v.lost.iter().sum::<usize>(),
-            d50.map_or("—".to_string(), |d| format!("{:.1}", d * 1e6)),
+            um(cut_size(&v.result)),
+            um(steady_cut_size(&v.result)),
+            undecided(&v.result),
             v.time_s / t0
         );
     }
+    let _ = writeln!(
+        s,
+        "d50 drained: finite-time cut of the drained fractions (cohort fed by {} s, gone by {} s); \
+         d50 steady: cut of the decided fates (undecided particles left out)",
+        reference.params.cohort_until, reference.last_time
+    );
     s
 }
 
@@ -133,7 +192,11 @@ pub fn write_tables(runs: &[VariantRun], out: &Path) -> Result<(), String> {
     let mut w1 = String::from("variant,class_um,w1_over_R,mean_r_m,drained_fraction\n");
     let mut part = String::from("class_um");
     for v in runs {
-        let _ = write!(part, ",{}", v.name);
+        let _ = write!(
+            part,
+            ",{0}_drained,{0}_steady,{0}_fine,{0}_coarse,{0}_undecided",
+            v.name
+        );
         for (c, d) in v.result.classes.iter().zip(w1_to(reference, &v.result)) {
             let _ = writeln!(
                 w1,
@@ -150,17 +213,28 @@ pub fn write_tables(runs: &[VariantRun], out: &Path) -> Result<(), String> {
     for (ci, c) in reference.classes.iter().enumerate() {
         let _ = write!(part, "{}", (c.diameter * 1e6).round());
         for v in runs {
-            let _ = write!(part, ",{:e}", v.result.classes[ci].drained_fraction);
+            let c = &v.result.classes[ci];
+            let _ = write!(
+                part,
+                ",{:e},{:e},{},{},{}",
+                c.drained_fraction,
+                c.fates.fine_fraction(),
+                c.fates.fine,
+                c.fates.coarse,
+                c.fates.undecided
+            );
         }
         part.push('\n');
     }
+    let um = |d: Option<f64>| d.map_or(String::new(), |d| format!("{:e}", d * 1e6));
     part.push_str("d50_um");
     for v in runs {
-        let d = cut_size(&v.result);
         let _ = write!(
             part,
-            ",{}",
-            d.map_or("".into(), |d| format!("{:e}", d * 1e6))
+            ",{},{},,,{}",
+            um(cut_size(&v.result)),
+            um(steady_cut_size(&v.result)),
+            undecided(&v.result)
         );
     }
     part.push('\n');
