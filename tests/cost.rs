@@ -72,27 +72,6 @@ fn sweep_checks(case: &str) {
         let e: Vec<f64> = ["2", "4", "8"].iter().map(|a| err_of(l, a)).collect();
         assert!(e[0] > 1e-6 && e[0] < e[1] && e[1] < e[2], "{l}: {e:?}");
     }
-    // Every point runs a population representing the same 8 192 originals (--quick):
-    // N/α³ particles for scg and none, N for mass; the measured speed-up is a ratio of wall
-    // times, the one-particle estimate a labelled extra column.
-    let steps_of = |l: &str, a: &str| -> f64 {
-        rows.iter()
-            .find(|r| r[law] == l && r[alpha] == a && &r[dt] == base_dt)
-            .unwrap()[col("particle_steps")]
-            .parse()
-            .unwrap()
-    };
-    let orig = steps_of("original", "1");
-    for (l, a, n) in [("scg", "2", 8.0), ("none", "4", 64.0), ("mass", "2", 1.0)] {
-        assert_eq!(orig / steps_of(l, a), n, "{l} α={a}");
-    }
-    assert!((orig / 8192.0).fract() == 0.0, "{orig} particle-steps");
-    let est = col("est_speedup_per_particle_alpha3");
-    let speed = col("speedup");
-    for r in &rows {
-        let (m, e): (f64, f64) = (r[speed].parse().unwrap(), r[est].parse().unwrap());
-        assert!(m.is_finite() && e.is_finite() && m > 0.0 && e > 0.0, "{r:?}");
-    }
     let md = std::fs::read_to_string(dir.path().join("cost.md")).unwrap();
     // Neither scene declares contacts: no neighbour search is paid for.
     assert!(

@@ -34,16 +34,12 @@
 //!
 //! # Timing
 //!
-//! Points run one after another (never in parallel), so that each wall time is not
-//! distorted by another run. On a single-particle scene every point simulates a
-//! population representing the same `--represented` originals (default 32 768, 8 192 with
-//! `--quick`): N/α³ copies of the scene's particle for `scg`, `none` and `parcel`, N for
-//! `mass` (whose particles keep the original's mass), the copies turned about the vortex
-//! axis; the error reads the first copy. The speed-up is the measured ratio of wall times
-//! for the same represented system. The old estimate — the speed-up of one particle run
-//! alone times the originals a particle stands for — is kept as the labelled column
-//! `est_speedup_per_particle_alpha3`; it ignores the per-step cost and the cores a small
-//! population leaves idle, and overstates the gain.
+//! Points run one after another on the simulator's thread pool (never in parallel), so
+//! that each wall time is not distorted by another run. A single-particle run measures the
+//! cost per particle-step; the speed-up column estimates what the same change saves on a
+//! system of N originals: `(wall_ref / wall) · n_ref / n` with n = α³ originals represented
+//! per CG particle (laws `scg`, `none`, `parcel`; 1 for `mass`, whose particles keep the
+//! original's mass and so stand for one original each).
 //!
 //! # Files
 //!
@@ -65,12 +61,10 @@ use crate::EXIT_BAD_INPUT;
 pub use plot::plot;
 pub use report::{csv, markdown};
 pub use run::{
-    ClassErrors, Outcome, PlanSets, SetTimes, Sweep, estimated_speedup, pareto,
-    population_error_note, speedup, sweep,
+    ClassErrors, Outcome, PlanSets, SetTimes, Sweep, pareto, population_error_note, speedup, sweep,
 };
 pub use sweep::{
-    Point, design, is_classifier, original_group, originals_per_particle, point_scene, points,
-    population, single_particle,
+    Point, design, is_classifier, original_group, point_scene, points, single_particle,
 };
 
 /// Smallest error shown on the log–log plot.
@@ -106,11 +100,6 @@ pub struct CostArgs {
     /// Override a scene key before the sweep (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
-    /// Single-particle scenes: originals every point represents (each point simulates
-    /// this many over the originals one of its particles stands for). Default 32 768,
-    /// with `--quick` 8 192.
-    #[arg(long, value_name = "N")]
-    pub represented: Option<usize>,
 }
 
 /// Run `scg cost`; returns the exit status.
@@ -134,22 +123,15 @@ pub fn cost(a: CostArgs) -> i32 {
         return bad(e);
     }
     let n = 1 + pts.iter().filter(|p| **p != reference).count();
-    let represented = a
-        .represented
-        .unwrap_or(if a.quick { 8192 } else { 32768 })
-        .max(1);
     eprintln!(
         "scg cost `{}`: {} points of {} s simulated each, run sequentially for honest timings{}",
         base.name,
         n,
         base.duration,
         if single_particle(&base) {
-            format!(
-                " (populations of {represented} originals: N/α³ copies of the scene's particle, \
-                 N for mass-equivalent)"
-            )
+            " (single-particle mode: the original particle alone)"
         } else {
-            " (population mode)".to_string()
+            " (population mode)"
         }
     );
     let bar = ProgressBar::new(n as u64);
@@ -157,7 +139,7 @@ pub fn cost(a: CostArgs) -> i32 {
         ProgressStyle::with_template("{bar:40} {pos}/{len} points  {elapsed_precise} {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let s = sweep(&base, &pts, reference, represented, |o| {
+    let s = sweep(&base, &pts, reference, |o| {
         bar.set_message(format!(
             "{} α={} {:.1e}s {}",
             o.point.law_name(),

@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use scg_core::step::StepSet;
 
 use super::ERROR_FLOOR;
-use super::run::{Outcome, Sweep, estimated_speedup, pareto, speedup};
+use super::run::{Outcome, Sweep, pareto, speedup};
 
 /// An error for the Markdown table and the progress bar (`n/a` for NaN).
 pub(super) fn fmt_err(e: f64) -> String {
@@ -19,7 +19,7 @@ pub(super) fn fmt_err(e: f64) -> String {
 /// `cost.csv`.
 pub fn csv(s: &Sweep) -> String {
     let mut out = String::from(
-        "law,alpha,dt,integrator,stiffness,wall_s,particle_steps,particle_steps_per_s,error,speedup,pareto,est_speedup_per_particle_alpha3",
+        "law,alpha,dt,integrator,stiffness,wall_s,particle_steps,particle_steps_per_s,error,speedup,pareto",
     );
     for set in StepSet::ORDER {
         let _ = write!(out, ",t_{}_s", set.name());
@@ -42,7 +42,6 @@ pub fn csv(s: &Sweep) -> String {
             speedup(s, o),
             front.contains(&i)
         );
-        let _ = write!(out, ",{:.4}", estimated_speedup(s, o));
         for t in o.sets {
             let _ = write!(out, ",{t:.6}");
         }
@@ -109,14 +108,9 @@ pub fn markdown(s: &Sweep) -> String {
         );
         let _ = writeln!(
             m,
-            "Timing: every point simulates a population representing the same {} originals \
-             ({} / α³ copies of the scene's particle for scg, none and parcel, {} for mass, whose \
-             particles keep the original's mass), the copies turned about the vortex axis; the \
-             error reads the first copy, which starts where the scene's particle does. Speed-up = \
-             reference wall time / wall time, both measured for the same represented system. \
-             `cost.csv` keeps the old estimate (speed-up per particle × originals per particle) \
-             as `est_speedup_per_particle_alpha3`.\n",
-            s.represented, s.represented, s.represented
+            "Speed-up: (reference wall time / wall time) × (originals represented per particle: α³ for \
+             scg, none, parcel; 1 for mass) — the estimate for a system of many originals, measured \
+             here on one particle.\n"
         );
     }
     for n in &s.notes {
@@ -175,10 +169,7 @@ pub fn markdown(s: &Sweep) -> String {
             m,
             "\n## Speed-up of each α against its error (base points)\n"
         );
-        let _ = writeln!(
-            m,
-            "| law | α | speed-up (measured) | error | estimate from one particle |\n|---|---|---|---|---|"
-        );
+        let _ = writeln!(m, "| law | α | speed-up | error |\n|---|---|---|---|");
         for o in &s.outcomes {
             let p = &o.point;
             if p.dt_mult == s.reference.dt_mult
@@ -187,12 +178,11 @@ pub fn markdown(s: &Sweep) -> String {
             {
                 let _ = writeln!(
                     m,
-                    "| {} | {} | {:.1}× | {} | {:.1}× |",
+                    "| {} | {} | {:.1}× | {} |",
                     p.law_name(),
                     p.alpha,
                     speedup(s, o),
-                    fmt_err(o.error),
-                    estimated_speedup(s, o)
+                    fmt_err(o.error)
                 );
             }
         }

@@ -7,16 +7,14 @@ use std::time::Instant;
 use glam::DVec3;
 
 use scg_core::Simulation;
+use scg_core::physics::scaling::CoarseGrainLaw;
 use scg_core::step::StepSet;
 use scg_scene::Scene;
 
 use crate::analysis::{self, Analysis, Params, SharedAnalysis, cut_size, w1_to};
 
 use super::ERROR_FLOOR;
-use super::sweep::{
-    Point, classifier_overrides, is_classifier, originals_per_particle, point_scene,
-    single_particle,
-};
+use super::sweep::{Point, classifier_overrides, is_classifier, point_scene, single_particle};
 
 /// Wall time per step set, s, indexed like [`StepSet::ORDER`].
 pub type SetTimes = [f64; StepSet::ORDER.len()];
@@ -40,9 +38,6 @@ pub struct Outcome {
     pub failure: Option<String>,
     /// Classifier scenes: per-class errors.
     pub classes: Option<ClassErrors>,
-    /// Single-particle scenes: wall time of the point's particle alone, s (the basis of the
-    /// old per-particle estimate; NaN when not measured).
-    pub one_particle_wall_s: f64,
 }
 
 impl Outcome {
@@ -57,7 +52,6 @@ impl Outcome {
             sets: [0.0; StepSet::ORDER.len()],
             failure,
             classes: None,
-            one_particle_wall_s: f64::NAN,
         }
     }
 
@@ -112,11 +106,8 @@ pub struct Sweep {
     pub scene: String,
     /// Simulated duration of every point, s.
     pub duration: f64,
-    /// Single-particle scene (populations of copies, trajectory error of the first) or a
-    /// population scene.
+    /// Single-particle mode (trajectory error) or population mode.
     pub single: bool,
-    /// Originals every point of a single-particle scene represents.
-    pub represented: usize,
     /// The plan of the reference run, rendered.
     pub plan: String,
     /// Systems per set in the reference run.
@@ -136,11 +127,10 @@ pub struct Sweep {
 fn run_point(
     base: &Scene,
     p: &Point,
-    represented: usize,
     steps_base: u64,
     sample_base_steps: u64,
 ) -> (Outcome, Vec<DVec3>, String, PlanSets) {
-    let scene = point_scene(base, p, represented);
+    let scene = point_scene(base, p);
     let mut sim = scene.build(false);
     let plan = sim.plan().render();
     let plan_sets = plan_sets(&sim);
@@ -261,7 +251,6 @@ pub fn sweep(
     base: &Scene,
     pts: &[Point],
     reference: Point,
-    represented: usize,
     mut progress: impl FnMut(&Outcome),
 ) -> Sweep {
     if is_classifier(base) {
@@ -279,17 +268,8 @@ pub fn sweep(
     let sample = base.record_every.max(1).div_ceil(lcm) * lcm;
     // Warm-up (thread pool, caches, clock ramp): a tenth of the reference, untimed, so
     // that the reference time every speed-up divides is not the slowest by accident.
-    let _ = run_point(base, &reference, represented, steps_base / 10, sample);
-    let (mut ref_out, ref_traj, plan, plan_sets) =
-        run_point(base, &reference, represented, steps_base, sample);
-    let one_particle = |p: &Point| {
-        if single {
-            run_point(base, p, 1, steps_base, sample).0.wall_s
-        } else {
-            f64::NAN
-        }
-    };
-    ref_out.one_particle_wall_s = one_particle(&reference);
+    let _ = run_point(base, &reference, steps_base / 10, sample);
+    let (ref_out, ref_traj, plan, plan_sets) = run_point(base, &reference, steps_base, sample);
     progress(&ref_out);
     let length = ref_traj.iter().map(|d| d.length()).fold(0.0, f64::max);
     let mut notes = Vec::new();
@@ -302,8 +282,7 @@ pub fn sweep(
         if *p == reference {
             continue;
         }
-        let (mut o, traj, _, _) = run_point(base, p, represented, steps_base, sample);
-        o.one_particle_wall_s = one_particle(p);
+        let (mut o, traj, _, _) = run_point(base, p, steps_base, sample);
         if single {
             let n = traj.len().min(ref_traj.len());
             // RMS over the sample times (NaN propagates): unlike the maximum, it does not
@@ -324,7 +303,6 @@ pub fn sweep(
         scene: base.name.clone(),
         duration: base.duration,
         single,
-        represented,
         plan,
         plan_sets,
         reference,
@@ -369,7 +347,6 @@ fn sweep_classifier(
         scene: base.name.clone(),
         duration: base.duration,
         single: false,
-        represented: 0,
         plan,
         plan_sets,
         reference,
@@ -387,21 +364,24 @@ fn sweep_classifier(
     }
 }
 
-/// Speed-up against the reference for the same represented system: wall_ref / wall.
-/// Single-particle scenes run populations of the same number of originals at every point,
-/// population scenes hold their particles themselves, so both are measured ratios.
-pub fn speedup(s: &Sweep, o: &Outcome) -> f64 {
-    s.outcomes[0].wall_s / o.wall_s.max(1e-12)
+/// Originals represented per simulated particle.
+fn represented(p: &Point) -> f64 {
+    match p.law {
+        None | Some(CoarseGrainLaw::Mass) => 1.0,
+        Some(_) => p.alpha.powi(3),
+    }
 }
 
-/// The old estimate, kept as a labelled extra column: the speed-up of the point's
-/// particle run alone, times the originals each particle stands for (α³ for scg, none and
-/// parcel; 1 for mass) — what a one-particle run extrapolates to many originals, ignoring
-/// per-step costs and the cores a small population leaves idle (NaN for population scenes).
-pub fn estimated_speedup(s: &Sweep, o: &Outcome) -> f64 {
+/// Estimated speed-up for a system of N originals against the reference.
+pub fn speedup(s: &Sweep, o: &Outcome) -> f64 {
     let r = &s.outcomes[0];
-    r.one_particle_wall_s / o.one_particle_wall_s.max(1e-12) * originals_per_particle(&o.point)
-        / originals_per_particle(&r.point)
+    let t = r.wall_s / o.wall_s.max(1e-12);
+    if s.single {
+        t * represented(&o.point) / represented(&r.point)
+    } else {
+        // The population runs hold the particles themselves.
+        t
+    }
 }
 
 /// Pareto front (indices into `outcomes`): no other point is both faster and more accurate.

@@ -1,8 +1,6 @@
 //! The design of a sweep: which points run, the reference, and the scene of each point.
 
-use glam::DVec3;
 use scg_core::physics::contact::NormalLaw;
-use scg_core::physics::flow::FlowField;
 use scg_core::physics::integrate::Integrator;
 use scg_core::physics::scaling::CoarseGrainLaw;
 use scg_scene::{Placement, Scene};
@@ -108,58 +106,14 @@ pub fn single_particle(scene: &Scene) -> bool {
     scene.groups[original_group(scene)].count() == 1
 }
 
-/// Originals one simulated particle of `p` stands for: α³ for `scg`, `none` and `parcel`,
-/// 1 for the original and for `mass` (whose particles keep the original's mass).
-pub fn originals_per_particle(p: &Point) -> f64 {
-    match p.law {
-        None | Some(CoarseGrainLaw::Mass) => 1.0,
-        Some(_) => p.alpha.powi(3),
-    }
-}
-
-/// Simulated particles of `p` for a population of `represented` originals (at least 1).
-pub fn population(p: &Point, represented: usize) -> usize {
-    ((represented as f64 / originals_per_particle(p)).round() as usize).max(1)
-}
-
-/// The scene of one point (see the module documentation for the rule). A single-particle
-/// scene becomes a population of `represented` originals: [`population`] copies of the
-/// original group's particle, the first where the scene puts it, the others turned about
-/// the vortex axis (equal angles) when the flow has one, else in the same place; the
-/// trajectory error reads the first.
-pub fn point_scene(base: &Scene, p: &Point, represented: usize) -> Scene {
+/// The scene of one point (see the module documentation for the rule).
+pub fn point_scene(base: &Scene, p: &Point) -> Scene {
     let mut s = base.clone();
     let law = p.law.unwrap_or(CoarseGrainLaw::Scg);
     if single_particle(base) {
         let mut g = base.groups[original_group(base)].clone();
         g.alpha = p.alpha;
         g.law = law;
-        // Where the scene puts the original group's particle.
-        let gi = original_group(base) as u32;
-        let (x0, v0) = base
-            .initial_particles()
-            .into_iter()
-            .find(|q| q.group == gi)
-            .map_or((DVec3::ZERO, DVec3::ZERO), |q| (q.position, q.velocity));
-        let n = population(p, represented);
-        let axis = match base.flow {
-            FlowField::Vortex(v) | FlowField::Classifier { vortex: v, .. } => {
-                Some((v.center, v.axis.normalize()))
-            }
-            _ => None,
-        };
-        let turn = |k: usize, x: DVec3, is_position: bool| match axis {
-            Some((c, a)) => {
-                let q =
-                    glam::DQuat::from_axis_angle(a, std::f64::consts::TAU * k as f64 / n as f64);
-                if is_position { c + q * (x - c) } else { q * x }
-            }
-            None => x,
-        };
-        g.placement = Placement::Explicit {
-            positions: (0..n).map(|k| turn(k, x0, true)).collect(),
-            velocities: (0..n).map(|k| turn(k, v0, false)).collect(),
-        };
         s.groups = vec![g];
     } else {
         for g in &mut s.groups {
