@@ -124,11 +124,15 @@ pub fn markdown(s: &Sweep) -> String {
         m,
         "Simulated duration {} s per point. Reference: α = 1, dt × {}, {} integrator, stiffness × {}. \
          Points ran **sequentially** (one at a time, after an untimed warm-up) so that wall times are not distorted by each other; \
-         other load on the machine still adds noise of some 10 %.\n",
+         other load on the machine still adds noise of some 10 %. Threads: {} (a pass over {} or more \
+         particles runs on all of them, a smaller one on one thread; `--threads N` or \
+         `SCG_THREADS`).\n",
         s.duration,
         r.dt_mult,
         r.integrator.name(),
-        r.stiffness
+        r.stiffness,
+        s.threads.0,
+        s.threads.1
     );
     if let (true, Some(n)) = (s.single, s.represented) {
         let _ = writeln!(

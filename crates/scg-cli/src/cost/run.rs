@@ -125,6 +125,9 @@ pub struct Sweep {
     pub single: bool,
     /// Single-particle mode: originals every point's population stands for.
     pub represented: Option<usize>,
+    /// Threads of the simulator's team, and the particle count from which a pass runs on
+    /// it (below it, on the calling thread alone).
+    pub threads: (usize, usize),
     /// The plan of the reference run, rendered.
     pub plan: String,
     /// Systems per set in the reference run.
@@ -230,6 +233,12 @@ fn run_classifier_point(
     )
 }
 
+/// The team size and the parallel threshold in force.
+fn team() -> (usize, usize) {
+    let e = scg_core::exec::settings();
+    (e.team_size(), e.parallel_min)
+}
+
 /// Per-class errors of `v` against `reference`.
 fn class_errors(reference: &analysis::Result, v: &analysis::Result) -> ClassErrors {
     let d_ref = cut_size(reference);
@@ -332,6 +341,7 @@ pub fn sweep(
         duration: base.duration,
         single,
         represented: population,
+        threads: team(),
         plan,
         plan_sets,
         reference,
@@ -377,6 +387,7 @@ fn sweep_classifier(
         duration: base.duration,
         single: false,
         represented: None,
+        threads: team(),
         plan,
         plan_sets,
         reference,
