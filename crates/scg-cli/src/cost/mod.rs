@@ -9,13 +9,17 @@
 //!
 //! * **Single-particle mode** (the scene's original group holds exactly one particle, as in
 //!   `cases/uniform.toml` and `cases/vortex.toml`): the *original* is the scene's first
-//!   group with α = 1 (the first group when none has α = 1). Every point runs a scene that
-//!   holds only that particle, with the point's α and law, at the original's start
-//!   position. The other groups of the file (which only show the paper's CG variants side
-//!   by side) are dropped.
+//!   group with α = 1 (the first group when none has α = 1). Every point runs a
+//!   *population* standing for the same number `N_orig` of original particles
+//!   (`--represented`, default [`population::REPRESENTED_DEFAULT`], under `--quick`
+//!   [`population::REPRESENTED_QUICK`]): `N_orig / α³` particles of that group with the
+//!   point's α and law, particle 0 at the original's start, the others spread over the
+//!   region the scene's particles live in ([`population`]). The other groups of the file
+//!   (which only show the paper's CG variants side by side) are dropped.
 //! * **Population mode** (any other scene): every group is given the point's α and law and
 //!   its random particle count is divided by α³ (a CG particle stands for α³ originals).
-//!   No error is computed there yet (see [`population_error_note`]).
+//!   No error is computed there yet (see [`population_error_note`]), except on classifier
+//!   scenes (per-class W1 and d50; feeders keep the solid volume rate).
 //!
 //! The points are not the full factorial product: for every (law, α) pair the *base point*
 //! uses the first value of each of `--dt-mult`, `--integrators` and `--stiffness`, and each
@@ -25,28 +29,37 @@
 //! # Error
 //!
 //! The reference is α = 1 with the smallest dt multiplier, the exponential integrator and
-//! the largest stiffness factor. The trajectory error of a point is the RMS over common
-//! sample times t_k of `|(x(t_k) − x(0)) − (x_ref(t_k) − x_ref(0))| / L`, each particle
-//! measured from its own start, with `L` the reference particle's largest displacement
-//! from its start. (The maximum over t_k saturates once a particle sits on a wall, which
-//! hides how much earlier it got there; the RMS does not.) Errors below [`ERROR_FLOOR`] are clamped to it in the
-//! plot (log axes cannot show 0); the CSV keeps the measured value.
+//! the largest stiffness factor. The trajectory error of a point is measured on particle 0
+//! (the one that starts where the scene's original does) against particle 0 of the
+//! reference population: the RMS over common sample times t_k of
+//! `|(x(t_k) − x(0)) − (x_ref(t_k) − x_ref(0))| / L`, each particle measured from its own
+//! start, with `L` the reference particle's largest displacement from its start. (The
+//! maximum over t_k saturates once a particle sits on a wall, which hides how much earlier
+//! it got there; the RMS does not.) In the uniform flow and the vortex every particle of a
+//! population follows particle 0's path shifted or rotated (the particles do not touch
+//! each other), so its error is every particle's. Errors below [`ERROR_FLOOR`] are clamped
+//! to it in the plot (log axes cannot show 0); the CSV keeps the measured value.
 //!
 //! # Timing
 //!
 //! Points run one after another on the simulator's thread pool (never in parallel), so
-//! that each wall time is not distorted by another run. A single-particle run measures the
-//! cost per particle-step; the speed-up column estimates what the same change saves on a
-//! system of N originals: `(wall_ref / wall) · n_ref / n` with n = α³ originals represented
-//! per CG particle (laws `scg`, `none`, `parcel`; 1 for `mass`, whose particles keep the
-//! original's mass and so stand for one original each).
+//! that each wall time is not distorted by another run. The wall time of a point is the
+//! whole run of its population, so the speed-up is measured: `wall_ref / wall`, both
+//! standing for the same `N_orig` originals. The old estimate — one particle alone timed,
+//! multiplied by the originals it stands for — is kept beside it as
+//! `est_speedup_alpha3 = (wall_alone_ref / wall_alone) · n / n_ref`, with n = α³ originals
+//! per CG particle for `scg`, `none`, `parcel` and 1 for `mass` (whose particle keeps one
+//! original's mass). A single particle's run is dominated by the per-step overhead, so
+//! that estimate is roughly α³ × the dt multiplier whatever the step costs; it is never
+//! the main number.
 //!
 //! # Files
 //!
-//! `sweep.rs` designs the points, `run.rs` runs and measures them, `report.rs` writes the
+//! `sweep.rs` designs the points, `population.rs` places a point's population, `run.rs` runs and measures them, `report.rs` writes the
 //! CSV and Markdown tables, `plot.rs` the SVG.
 
 mod plot;
+mod population;
 mod report;
 mod run;
 mod sweep;
@@ -59,12 +72,14 @@ use indicatif::{ProgressBar, ProgressStyle};
 use crate::EXIT_BAD_INPUT;
 
 pub use plot::plot;
+pub use population::{REPRESENTED_DEFAULT, REPRESENTED_QUICK, simulated_count};
 pub use report::{csv, markdown};
 pub use run::{
-    ClassErrors, Outcome, PlanSets, SetTimes, Sweep, pareto, population_error_note, speedup, sweep,
+    ClassErrors, Outcome, PlanSets, SetTimes, Sweep, est_speedup_alpha3, pareto,
+    population_error_note, speedup, sweep,
 };
 pub use sweep::{
-    Point, design, is_classifier, original_group, point_scene, points, single_particle,
+    Design, Point, design, is_classifier, original_group, point_scene, points, single_particle,
 };
 
 /// Smallest error shown on the log–log plot.
@@ -97,6 +112,10 @@ pub struct CostArgs {
     /// Young's-modulus factors (only with walls or contacts).
     #[arg(long, value_delimiter = ',', default_value = "1,0.1")]
     pub stiffness: Vec<f64>,
+    /// Single-particle scenes: original particles every point stands for (α = 1 simulates
+    /// them all, α simulates N/α³). Default 10000, under `--quick` 2000.
+    #[arg(long, value_name = "N")]
+    pub represented: Option<usize>,
     /// Override a scene key before the sweep (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
@@ -115,10 +134,11 @@ pub fn cost(a: CostArgs) -> i32 {
         eprintln!("error: {m}");
         EXIT_BAD_INPUT
     };
-    let (pts, reference) = match design(&a, &mut base) {
+    let d = match design(&a, &mut base) {
         Ok(d) => d,
         Err(m) => return bad(m),
     };
+    let (pts, reference) = (&d.points, d.reference);
     if let Err(e) = crate::run::ensure_writable(&a.out) {
         return bad(e);
     }
@@ -129,9 +149,13 @@ pub fn cost(a: CostArgs) -> i32 {
         n,
         base.duration,
         if single_particle(&base) {
-            " (single-particle mode: the original particle alone)"
+            format!(
+                " (single-particle scene: every point runs a population standing for {} \
+                 originals, N/α³ particles, and times one particle alone for the α³ estimate)",
+                d.represented
+            )
         } else {
-            " (population mode)"
+            " (population mode)".to_string()
         }
     );
     let bar = ProgressBar::new(n as u64);
@@ -139,12 +163,13 @@ pub fn cost(a: CostArgs) -> i32 {
         ProgressStyle::with_template("{bar:40} {pos}/{len} points  {elapsed_precise} {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let s = sweep(&base, &pts, reference, |o| {
+    let s = sweep(&base, pts, reference, d.represented, |o| {
         bar.set_message(format!(
-            "{} α={} {:.1e}s {}",
+            "{} α={} {:.1e}s {} particles {}",
             o.point.law_name(),
             o.point.alpha,
             o.dt,
+            o.particles().round(),
             report::fmt_err(o.error)
         ));
         bar.inc(1);

@@ -1,11 +1,14 @@
-//! `cost.svg`: the sweep's error against wall time.
+//! `cost.svg`: the sweep's error against the measured wall time.
 
 use std::path::Path;
 
 use super::ERROR_FLOOR;
 use super::run::{Outcome, Sweep, pareto};
 
-/// `cost.svg`: log–log error against wall time, one series per law, Pareto front marked.
+/// `cost.svg`: log–log error against the measured wall time (single-particle scenes: of
+/// the population standing for the same originals), one curve per law through its base
+/// points in α order (from the α = 1 reference), every point labelled with α and dt, the
+/// Pareto front marked.
 pub fn plot(s: &Sweep, path: &Path) -> Result<(), String> {
     use plotters::prelude::*;
     let pts: Vec<(&Outcome, f64, f64)> = s
@@ -49,11 +52,15 @@ where
     });
     let e = |x: plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     root.fill(&WHITE).map_err(e)?;
+    let caption = match s.represented {
+        Some(n) => format!(
+            "scg cost: {}, {n} originals represented (errors clamped at {ERROR_FLOOR:e})",
+            s.scene
+        ),
+        None => format!("scg cost: {} (errors clamped at {ERROR_FLOOR:e})", s.scene),
+    };
     let mut chart = ChartBuilder::on(&root)
-        .caption(
-            format!("scg cost: {} (errors clamped at {ERROR_FLOOR:e})", s.scene),
-            ("sans-serif", 20),
-        )
+        .caption(caption, ("sans-serif", 20))
         .margin(12)
         .x_label_area_size(45)
         .y_label_area_size(70)
@@ -64,13 +71,28 @@ where
         .map_err(e)?;
     chart
         .configure_mesh()
-        .x_desc("wall time [s]")
+        .x_desc(if s.represented.is_some() {
+            "measured wall time of the represented population [s]"
+        } else {
+            "measured wall time [s]"
+        })
         .y_desc("error")
         .x_label_formatter(&|v| format!("{v:.3}"))
         .y_label_formatter(&|v| format!("{v:.0e}"))
         .draw()
         .map_err(e)?;
     let laws = ["original", "scg", "none", "mass", "parcel"];
+    let r = &s.reference;
+    let is_base = |o: &Outcome| {
+        o.point.dt_mult == r.dt_mult
+            && o.point.integrator == r.integrator
+            && o.point.stiffness == r.stiffness
+    };
+    // The α = 1 reference, where every law's curve starts.
+    let start = pts
+        .iter()
+        .find(|p| p.0.point.law.is_none() && is_base(p.0))
+        .map(|p| (p.1, p.2));
     for (k, law) in laws.iter().enumerate() {
         let series: Vec<(f64, f64)> = pts
             .iter()
@@ -81,6 +103,21 @@ where
             continue;
         }
         let c = Palette99::pick(k).to_rgba();
+        if k > 0 {
+            let mut base: Vec<(f64, f64, f64)> = pts
+                .iter()
+                .filter(|p| p.0.point.law_name() == *law && is_base(p.0))
+                .map(|p| (p.0.point.alpha, p.1, p.2))
+                .collect();
+            base.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let curve: Vec<(f64, f64)> = start
+                .into_iter()
+                .chain(base.iter().map(|b| (b.1, b.2)))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(curve, c.stroke_width(2)))
+                .map_err(e)?;
+        }
         chart
             .draw_series(
                 series
@@ -91,6 +128,21 @@ where
             .label(*law)
             .legend(move |(x, y)| Circle::new((x + 10, y), 5, c.filled()));
     }
+    // Labels: α and dt of every point (and the integrator or stiffness where not the
+    // reference's).
+    chart
+        .draw_series(pts.iter().map(|p| {
+            let o = p.0;
+            let mut t = format!("α{} dt{:.0e}", o.point.alpha, o.dt);
+            if o.point.integrator != r.integrator {
+                t.push_str(&format!(" {}", o.point.integrator.name()));
+            }
+            if o.point.stiffness != r.stiffness {
+                t.push_str(&format!(" E×{}", o.point.stiffness));
+            }
+            Text::new(t, (p.1, p.2), ("sans-serif", 10).into_font())
+        }))
+        .map_err(e)?;
     let front: Vec<(f64, f64)> = pareto(&s.outcomes)
         .into_iter()
         .map(|i| {

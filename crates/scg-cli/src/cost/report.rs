@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use scg_core::step::StepSet;
 
 use super::ERROR_FLOOR;
-use super::run::{Outcome, Sweep, pareto, speedup};
+use super::run::{Outcome, Sweep, est_speedup_alpha3, pareto, speedup};
 
 /// An error for the Markdown table and the progress bar (`n/a` for NaN).
 pub(super) fn fmt_err(e: f64) -> String {
@@ -16,10 +16,29 @@ pub(super) fn fmt_err(e: f64) -> String {
     }
 }
 
+/// A mean particle count for the CSV: whole numbers as such, else two decimals.
+fn fmt_particles(n: f64) -> String {
+    if n.fract() == 0.0 {
+        format!("{n}")
+    } else {
+        format!("{n:.2}")
+    }
+}
+
+/// The α³ estimate for the CSV (empty where there is none).
+fn fmt_est(x: f64) -> String {
+    if x.is_nan() {
+        String::new()
+    } else {
+        format!("{x:.4}")
+    }
+}
+
 /// `cost.csv`.
 pub fn csv(s: &Sweep) -> String {
     let mut out = String::from(
-        "law,alpha,dt,integrator,stiffness,wall_s,particle_steps,particle_steps_per_s,error,speedup,pareto",
+        "law,alpha,dt,integrator,stiffness,represented,particles,wall_s,particle_steps,\
+         particle_steps_per_s,error,speedup,est_speedup_alpha3,wall_alone_s,pareto",
     );
     for set in StepSet::ORDER {
         let _ = write!(out, ",t_{}_s", set.name());
@@ -29,17 +48,21 @@ pub fn csv(s: &Sweep) -> String {
     for (i, o) in s.outcomes.iter().enumerate() {
         let _ = write!(
             out,
-            "{},{},{:e},{},{},{:.6},{},{:.6e},{:e},{:.4},{}",
+            "{},{},{:e},{},{},{},{},{:.6},{},{:.6e},{:e},{:.4},{},{},{}",
             o.point.law_name(),
             o.point.alpha,
             o.dt,
             o.point.integrator.name(),
             o.point.stiffness,
+            s.represented.map_or(String::new(), |n| n.to_string()),
+            fmt_particles(o.particles()),
             o.wall_s,
             o.particle_steps,
             o.particle_steps_per_s(),
             o.error,
             speedup(s, o),
+            fmt_est(est_speedup_alpha3(s, o)),
+            o.alone_wall_s.map_or(String::new(), |t| format!("{t:.6}")),
             front.contains(&i)
         );
         for t in o.sets {
@@ -83,6 +106,15 @@ fn md_point(o: &Outcome) -> String {
     )
 }
 
+/// The α³ estimate for the Markdown tables (`—` where there is none).
+fn fmt_est_md(x: f64) -> String {
+    if x.is_nan() {
+        "—".into()
+    } else {
+        format!("{x:.1}×")
+    }
+}
+
 /// `cost.md`.
 pub fn markdown(s: &Sweep) -> String {
     let mut m = String::new();
@@ -92,25 +124,43 @@ pub fn markdown(s: &Sweep) -> String {
         m,
         "Simulated duration {} s per point. Reference: α = 1, dt × {}, {} integrator, stiffness × {}. \
          Points ran **sequentially** (one at a time, after an untimed warm-up) so that wall times are not distorted by each other; \
-         other load on the machine still adds noise of some 10 %.\n",
+         other load on the machine still adds noise of some 10 %. Threads: {} (a pass over {} or more \
+         particles runs on all of them, a smaller one on one thread; `--threads N` or \
+         `SCG_THREADS`).\n",
         s.duration,
         r.dt_mult,
         r.integrator.name(),
-        r.stiffness
+        r.stiffness,
+        s.threads.0,
+        s.threads.1
     );
-    if s.single {
+    if let (true, Some(n)) = (s.single, s.represented) {
         let _ = writeln!(
             m,
-            "Error: max over sample times of |Δx − Δx_ref| / L, each particle measured from its own start, \
-             L = {:.4e} m (largest displacement of the reference particle); the error is the RMS over the sample times. Errors of exactly 0 are \
-             drawn at {ERROR_FLOOR:e} on the plot (log axes).\n",
+            "Every point stands for the same **{n} original particles**: α = 1 simulates all of \
+             them, a coarse-grained point N/α³ (rounded, at least 1) of its law, particle 0 at the \
+             original's start and the others spread over the region the scene's particles live \
+             in (vortex: the original's radius, spread in angle and height). **wall** is the \
+             measured whole run of that population; **speed-up** = reference wall / wall, both \
+             for the same {n} originals.\n"
+        );
+        let _ = writeln!(
+            m,
+            "Error: on particle 0 against particle 0 of the reference population, the RMS over \
+             sample times of |Δx − Δx_ref| / L, each particle measured from its own start, \
+             L = {:.4e} m (largest displacement of the reference particle). The particles do not \
+             touch each other and the flow is the same along each particle's path up to a shift \
+             or rotation, so every particle of a population has this error. Errors of exactly 0 \
+             are drawn at {ERROR_FLOOR:e} on the plot (log axes).\n",
             s.length
         );
         let _ = writeln!(
             m,
-            "Speed-up: (reference wall time / wall time) × (originals represented per particle: α³ for \
-             scg, none, parcel; 1 for mass) — the estimate for a system of many originals, measured \
-             here on one particle.\n"
+            "est. α³ (`est_speedup_alpha3`): the old estimate, **not a measurement of the \
+             population** — the original particle alone timed at the point and at the \
+             reference (wall alone), times the originals one particle stands for (α³ for scg, \
+             none, parcel; 1 for mass). A lone particle's run is dominated by the per-step \
+             overhead, so it shows roughly α³ × the dt multiplier, not what the scene costs.\n"
         );
     }
     for n in &s.notes {
@@ -133,12 +183,12 @@ pub fn markdown(s: &Sweep) -> String {
     let _ = writeln!(m, "\n## Points\n");
     let _ = write!(
         m,
-        "{MD_POINT_HEAD} wall [s] | particle-steps | p-steps/s | error | speed-up | Pareto |"
+        "{MD_POINT_HEAD} particles | wall [s] | particle-steps | p-steps/s | error | speed-up | est. α³ | Pareto |"
     );
     for set in StepSet::ORDER {
         let _ = write!(m, " {} [s] |", set.name());
     }
-    let _ = write!(m, "\n{MD_POINT_RULE}---|---|---|---|---|---|");
+    let _ = write!(m, "\n{MD_POINT_RULE}---|---|---|---|---|---|---|---|");
     for _ in StepSet::ORDER {
         m.push_str("---|");
     }
@@ -147,8 +197,9 @@ pub fn markdown(s: &Sweep) -> String {
     for (i, o) in s.outcomes.iter().enumerate() {
         let _ = write!(
             m,
-            "{} {:.3} | {} | {:.3e} | {} | {:.1} | {} |",
+            "{} {} | {:.3} | {} | {:.3e} | {} | {:.2} | {} | {} |",
             md_point(o),
+            o.particles().round(),
             o.wall_s,
             o.particle_steps,
             o.particle_steps_per_s(),
@@ -157,6 +208,7 @@ pub fn markdown(s: &Sweep) -> String {
                 None => fmt_err(o.error),
             },
             speedup(s, o),
+            fmt_est_md(est_speedup_alpha3(s, o)),
             if front.contains(&i) { "★" } else { "" }
         );
         for t in o.sets {
@@ -169,7 +221,11 @@ pub fn markdown(s: &Sweep) -> String {
             m,
             "\n## Speed-up of each α against its error (base points)\n"
         );
-        let _ = writeln!(m, "| law | α | speed-up | error |\n|---|---|---|---|");
+        let _ = writeln!(
+            m,
+            "| law | α | particles | wall [s] | speed-up (measured) | est. α³ | error |\n\
+             |---|---|---|---|---|---|---|"
+        );
         for o in &s.outcomes {
             let p = &o.point;
             if p.dt_mult == s.reference.dt_mult
@@ -178,10 +234,13 @@ pub fn markdown(s: &Sweep) -> String {
             {
                 let _ = writeln!(
                     m,
-                    "| {} | {} | {:.1}× | {} |",
+                    "| {} | {} | {} | {:.3} | {:.2}× | {} | {} |",
                     p.law_name(),
                     p.alpha,
+                    o.particles().round(),
+                    o.wall_s,
                     speedup(s, o),
+                    fmt_est_md(est_speedup_alpha3(s, o)),
                     fmt_err(o.error)
                 );
             }
@@ -218,7 +277,8 @@ pub fn markdown(s: &Sweep) -> String {
     }
     let _ = writeln!(
         m,
-        "\nPlot: `cost.svg` (log–log error vs wall time, ★ = Pareto front)."
+        "\nPlot: `cost.svg` (log–log error vs measured wall time, one curve per law through its \
+         base points, points labelled with α and dt, ★ = Pareto front)."
     );
     m
 }

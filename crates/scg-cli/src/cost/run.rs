@@ -1,6 +1,7 @@
 //! Running the sweep: each point timed on its own, the reference first, and the error of
 //! every point against it (trajectory error, or per-class W1 and d50 on classifier scenes);
-//! the speed-up and Pareto front derived from the measurements.
+//! the measured speed-up, the α³ estimate and the Pareto front derived from the
+//! measurements.
 
 use std::time::Instant;
 
@@ -26,10 +27,15 @@ pub struct Outcome {
     pub point: Point,
     /// Time step, s.
     pub dt: f64,
-    /// Wall time of the run, s.
+    /// Wall time of the run (the whole population), s.
     pub wall_s: f64,
+    /// Steps run.
+    pub steps: u64,
     /// Particle-steps.
     pub particle_steps: u64,
+    /// Single-particle scenes: wall time of the original particle alone at this point, s
+    /// (only for the α³ estimate).
+    pub alone_wall_s: Option<f64>,
     /// Error against the reference (NaN when not computed).
     pub error: f64,
     /// Wall time per step set, s (indexed like [`StepSet::ORDER`]).
@@ -47,7 +53,9 @@ impl Outcome {
             point,
             dt,
             wall_s: 0.0,
+            steps: 0,
             particle_steps: 0,
+            alone_wall_s: None,
             error: f64::NAN,
             sets: [0.0; StepSet::ORDER.len()],
             failure,
@@ -65,6 +73,7 @@ impl Outcome {
     ) -> Self {
         Outcome {
             wall_s,
+            steps: sim.step_count(),
             particle_steps: sim.particle_steps(),
             sets: set_times(sim),
             ..Outcome::unmeasured(point, dt, failure)
@@ -74,6 +83,12 @@ impl Outcome {
     /// Particle-steps per second of wall time.
     pub fn particle_steps_per_s(&self) -> f64 {
         self.particle_steps as f64 / self.wall_s.max(1e-12)
+    }
+
+    /// Simulated particles, the mean over the run (particle-steps / steps; the count at
+    /// the start unless feeders or an outlet change it).
+    pub fn particles(&self) -> f64 {
+        self.particle_steps as f64 / self.steps.max(1) as f64
     }
 }
 
@@ -108,6 +123,11 @@ pub struct Sweep {
     pub duration: f64,
     /// Single-particle mode (trajectory error) or population mode.
     pub single: bool,
+    /// Single-particle mode: originals every point's population stands for.
+    pub represented: Option<usize>,
+    /// Threads of the simulator's team, and the particle count from which a pass runs on
+    /// it (below it, on the calling thread alone).
+    pub threads: (usize, usize),
     /// The plan of the reference run, rendered.
     pub plan: String,
     /// Systems per set in the reference run.
@@ -122,15 +142,18 @@ pub struct Sweep {
     pub notes: Vec<String>,
 }
 
-/// Run one point: wall time, particle-steps, per-set times and the sampled displacement of
-/// particle 0 from its start every `sample_base_steps · base_dt` seconds.
+/// Run one point (in a single-particle scene: the population standing for `represented`
+/// originals, or the original alone for `None`): wall time, particle-steps, per-set times
+/// and the sampled displacement of particle 0 from its start every
+/// `sample_base_steps · base_dt` seconds.
 fn run_point(
     base: &Scene,
     p: &Point,
+    represented: Option<usize>,
     steps_base: u64,
     sample_base_steps: u64,
 ) -> (Outcome, Vec<DVec3>, String, PlanSets) {
-    let scene = point_scene(base, p);
+    let scene = point_scene(base, p, represented);
     let mut sim = scene.build(false);
     let plan = sim.plan().render();
     let plan_sets = plan_sets(&sim);
@@ -210,6 +233,12 @@ fn run_classifier_point(
     )
 }
 
+/// The team size and the parallel threshold in force.
+fn team() -> (usize, usize) {
+    let e = scg_core::exec::settings();
+    (e.team_size(), e.parallel_min)
+}
+
 /// Per-class errors of `v` against `reference`.
 fn class_errors(reference: &analysis::Result, v: &analysis::Result) -> ClassErrors {
     let d_ref = cut_size(reference);
@@ -247,10 +276,12 @@ pub fn population_error_note() -> &'static str {
 }
 
 /// Run the whole sweep. `progress` is called after each point.
+/// `represented`: originals every point of a single-particle scene stands for.
 pub fn sweep(
     base: &Scene,
     pts: &[Point],
     reference: Point,
+    represented: usize,
     mut progress: impl FnMut(&Outcome),
 ) -> Sweep {
     if is_classifier(base) {
@@ -266,10 +297,15 @@ pub fn sweep(
         .map(|p| p.dt_mult as u64)
         .fold(1u64, |a, b| a / gcd(a, b) * b);
     let sample = base.record_every.max(1).div_ceil(lcm) * lcm;
+    let population = single.then_some(represented);
+    // The original alone at a point: the wall time of the α³ estimate.
+    let alone = |p: &Point| single.then(|| run_point(base, p, None, steps_base, sample).0.wall_s);
     // Warm-up (thread pool, caches, clock ramp): a tenth of the reference, untimed, so
     // that the reference time every speed-up divides is not the slowest by accident.
-    let _ = run_point(base, &reference, steps_base / 10, sample);
-    let (ref_out, ref_traj, plan, plan_sets) = run_point(base, &reference, steps_base, sample);
+    let _ = run_point(base, &reference, population, steps_base / 10, sample);
+    let (mut ref_out, ref_traj, plan, plan_sets) =
+        run_point(base, &reference, population, steps_base, sample);
+    ref_out.alone_wall_s = alone(&reference);
     progress(&ref_out);
     let length = ref_traj.iter().map(|d| d.length()).fold(0.0, f64::max);
     let mut notes = Vec::new();
@@ -282,7 +318,8 @@ pub fn sweep(
         if *p == reference {
             continue;
         }
-        let (mut o, traj, _, _) = run_point(base, p, steps_base, sample);
+        let (mut o, traj, _, _) = run_point(base, p, population, steps_base, sample);
+        o.alone_wall_s = alone(p);
         if single {
             let n = traj.len().min(ref_traj.len());
             // RMS over the sample times (NaN propagates): unlike the maximum, it does not
@@ -303,6 +340,8 @@ pub fn sweep(
         scene: base.name.clone(),
         duration: base.duration,
         single,
+        represented: population,
+        threads: team(),
         plan,
         plan_sets,
         reference,
@@ -347,6 +386,8 @@ fn sweep_classifier(
         scene: base.name.clone(),
         duration: base.duration,
         single: false,
+        represented: None,
+        threads: team(),
         plan,
         plan_sets,
         reference,
@@ -364,23 +405,32 @@ fn sweep_classifier(
     }
 }
 
-/// Originals represented per simulated particle.
-fn represented(p: &Point) -> f64 {
+/// Originals one particle alone stands for in the α³ estimate: α³ (`scg`, `none`,
+/// `parcel`), 1 for `mass` (its particle keeps one original's mass).
+fn alone_represents(p: &Point) -> f64 {
     match p.law {
         None | Some(CoarseGrainLaw::Mass) => 1.0,
         Some(_) => p.alpha.powi(3),
     }
 }
 
-/// Estimated speed-up for a system of N originals against the reference.
+/// Measured speed-up against the reference: `wall_ref / wall`, both runs standing for the
+/// same originals (single-particle scenes: the same `N_orig`; population scenes: the
+/// scene's particles, α³ fewer per CG particle).
 pub fn speedup(s: &Sweep, o: &Outcome) -> f64 {
+    s.outcomes[0].wall_s / o.wall_s.max(1e-12)
+}
+
+/// The old estimate (single-particle scenes only, else NaN): the original alone timed at
+/// the point and at the reference, times the originals one particle stands for,
+/// `(wall_alone_ref / wall_alone) · n / n_ref`.
+pub fn est_speedup_alpha3(s: &Sweep, o: &Outcome) -> f64 {
     let r = &s.outcomes[0];
-    let t = r.wall_s / o.wall_s.max(1e-12);
-    if s.single {
-        t * represented(&o.point) / represented(&r.point)
-    } else {
-        // The population runs hold the particles themselves.
-        t
+    match (r.alone_wall_s, o.alone_wall_s) {
+        (Some(tr), Some(t)) => {
+            tr / t.max(1e-12) * alone_represents(&o.point) / alone_represents(&r.point)
+        }
+        _ => f64::NAN,
     }
 }
 

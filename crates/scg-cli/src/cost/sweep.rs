@@ -5,7 +5,20 @@ use scg_core::physics::integrate::Integrator;
 use scg_core::physics::scaling::CoarseGrainLaw;
 use scg_scene::{Placement, Scene};
 
-use super::CostArgs;
+use super::{CostArgs, population};
+
+/// What a sweep runs: its points, the reference point and, for single-particle scenes,
+/// the number of originals every point represents.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Design {
+    /// The points, in run order.
+    pub points: Vec<Point>,
+    /// The reference point.
+    pub reference: Point,
+    /// Originals represented by every point (`--represented`; used by single-particle
+    /// scenes only).
+    pub represented: usize,
+}
 
 /// One point of the sweep.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -106,14 +119,19 @@ pub fn single_particle(scene: &Scene) -> bool {
     scene.groups[original_group(scene)].count() == 1
 }
 
-/// The scene of one point (see the module documentation for the rule).
-pub fn point_scene(base: &Scene, p: &Point) -> Scene {
+/// The scene of one point (see the module documentation for the rule). In a
+/// single-particle scene, `represented = Some(n)` gives the population standing for `n`
+/// originals ([`super::population`]) and `None` the original particle alone.
+pub fn point_scene(base: &Scene, p: &Point, represented: Option<usize>) -> Scene {
     let mut s = base.clone();
     let law = p.law.unwrap_or(CoarseGrainLaw::Scg);
     if single_particle(base) {
         let mut g = base.groups[original_group(base)].clone();
         g.alpha = p.alpha;
         g.law = law;
+        if let Some(n) = represented {
+            g.placement = population::placement(base, population::simulated_count(p, n));
+        }
         s.groups = vec![g];
     } else {
         for g in &mut s.groups {
@@ -178,8 +196,9 @@ pub(super) fn classifier_overrides(base: &Scene, p: &Point) -> Vec<String> {
 
 /// The sweep `a` asks for on `base`: its points and the reference point (α = 1, the
 /// smallest dt multiplier, the exponential integrator, the largest stiffness factor).
-/// `--quick` shortens `base` to a tenth of its duration (at most 0.3 s) and trims the lists.
-pub fn design(a: &CostArgs, base: &mut Scene) -> Result<(Vec<Point>, Point), String> {
+/// `--quick` shortens `base` to a tenth of its duration (at most 0.3 s), trims the lists
+/// and represents fewer originals by default.
+pub fn design(a: &CostArgs, base: &mut Scene) -> Result<Design, String> {
     let mut laws = a
         .laws
         .iter()
@@ -205,6 +224,14 @@ pub fn design(a: &CostArgs, base: &mut Scene) -> Result<(Vec<Point>, Point), Str
     if stiffness.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
         return Err("--stiffness factors must be finite numbers > 0".into());
     }
+    let represented = a.represented.unwrap_or(if a.quick {
+        population::REPRESENTED_QUICK
+    } else {
+        population::REPRESENTED_DEFAULT
+    });
+    if represented == 0 {
+        return Err("--represented must be ≥ 1".into());
+    }
     let contacts = base.material.is_some() && (!base.walls.is_empty() || base.contacts.is_some());
     if !contacts {
         stiffness = vec![1.0];
@@ -224,5 +251,9 @@ pub fn design(a: &CostArgs, base: &mut Scene) -> Result<(Vec<Point>, Point), Str
         integrator: Integrator::Exponential,
         stiffness: stiffness.iter().copied().fold(0.0, f64::max),
     };
-    Ok((pts, reference))
+    Ok(Design {
+        points: pts,
+        reference,
+        represented,
+    })
 }
