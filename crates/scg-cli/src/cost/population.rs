@@ -39,8 +39,13 @@ pub const REPRESENTED_DEFAULT: usize = 10_000;
 pub const REPRESENTED_QUICK: usize = 2_000;
 
 /// Simulated particles of point `p` standing for `n_orig` originals: `n_orig / α³`,
-/// rounded, at least 1.
+/// rounded, at least 1, for the laws that replace α³ originals by one particle (`scg`,
+/// `none`, `parcel`); `n_orig` for `mass`, whose particles keep one original's mass and so
+/// stand for one original each.
 pub fn simulated_count(p: &Point, n_orig: usize) -> usize {
+    if p.law == Some(scg_core::physics::scaling::CoarseGrainLaw::Mass) {
+        return n_orig;
+    }
     ((n_orig as f64) / p.alpha.powi(3)).round().max(1.0) as usize
 }
 
@@ -164,6 +169,11 @@ mod tests {
         assert_eq!(simulated_count(&point(4.0), 2000), 31);
         assert_eq!(simulated_count(&point(8.0), 2000), 4);
         assert_eq!(simulated_count(&point(8.0), 100), 1);
+        let mass = Point {
+            law: Some(scg_core::physics::scaling::CoarseGrainLaw::Mass),
+            ..point(4.0)
+        };
+        assert_eq!(simulated_count(&mass, 2000), 2000);
     }
 
     /// Vortex: particle 0 is the original; all at its radius, spread in angle and height,
