@@ -30,6 +30,21 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// An empty frame at `step` and `time` (s) with room for `n` particles.
+    pub fn with_capacity(step: u64, time: f64, n: usize) -> Self {
+        Frame {
+            step,
+            time,
+            id: Vec::with_capacity(n),
+            group: Vec::with_capacity(n),
+            position: Vec::with_capacity(n),
+            velocity: Vec::with_capacity(n),
+            diameter: Vec::with_capacity(n),
+            density: Vec::with_capacity(n),
+            stats: Vec::new(),
+        }
+    }
+
     /// Number of particles in the frame.
     pub fn len(&self) -> usize {
         self.id.len()

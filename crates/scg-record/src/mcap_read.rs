@@ -300,15 +300,7 @@ fn decode_particles(data: &[u8]) -> Result<Frame, String> {
     }
 
     let n = bytes.len() / stride;
-    let mut frame = Frame {
-        id: Vec::with_capacity(n),
-        group: Vec::with_capacity(n),
-        position: Vec::with_capacity(n),
-        velocity: Vec::with_capacity(n),
-        diameter: Vec::with_capacity(n),
-        density: Vec::with_capacity(n),
-        ..Frame::default()
-    };
+    let mut frame = Frame::with_capacity(0, 0.0, n);
     let [x, y, z, vx, vy, vz, d, rho, id, group] = offsets;
     for point in bytes.chunks_exact(stride) {
         let f = |at: usize| {

@@ -78,6 +78,26 @@ pub fn exponential_drift(
     (x + w * dt + dv * relax, v - dv * gain)
 }
 
+/// One exponential-midpoint step for response time `tau` with factors for dt.
+///
+/// The fluid velocity is frozen at the predicted mid-step position x + v·dt/2 (one flow
+/// evaluation per step); in a uniform flow the result is exact whatever the predictor.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn exponential_midpoint(
+    flow: &crate::physics::flow::FlowField,
+    x: DVec3,
+    v: DVec3,
+    a: DVec3,
+    tau: f64,
+    gain: f64,
+    relax: f64,
+    dt: f64,
+) -> (DVec3, DVec3) {
+    let u = flow.velocity(x + v * (0.5 * dt));
+    exponential_drift(x, v, u, a, tau, gain, relax, dt)
+}
+
 /// Velocity after the force `f` (N) acted for `dt` (s) on mass `m` (kg): v + F·dt/m.
 #[inline(always)]
 pub fn linear_kick(v: DVec3, f: DVec3, m: f64, dt: f64) -> DVec3 {

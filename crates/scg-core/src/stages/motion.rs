@@ -18,7 +18,7 @@ use crate::physics::drag::{DragLaw, particle_reynolds};
 use crate::physics::flow::{FlowField, Fluid};
 use crate::physics::integrate::{
     Integrator, angular_kick, explicit_euler, explicit_substeps, exponential_drift,
-    exponential_factors, linear_kick,
+    exponential_factors, exponential_midpoint, linear_kick,
 };
 use crate::state::{Health, SimClock, StepDisplacement};
 use crate::step::{StepBuilder, StepSet, StepSystem};
@@ -95,26 +95,6 @@ pub fn integrate_rotation(
 pub fn advance_clock(mut clock: ResMut<SimClock>, q: Query<(), With<ParticleId>>) {
     clock.step += 1;
     clock.particle_steps += q.iter().len() as u64;
-}
-
-/// One exponential-midpoint step for response time `tau` with factors for dt.
-///
-/// The fluid velocity is frozen at the predicted mid-step position x + v·dt/2 (one flow
-/// evaluation per step); in a uniform flow the result is exact whatever the predictor.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-pub fn exponential_midpoint(
-    flow: &FlowField,
-    x: DVec3,
-    v: DVec3,
-    a: DVec3,
-    tau: f64,
-    gain: f64,
-    relax: f64,
-    dt: f64,
-) -> (DVec3, DVec3) {
-    let u = flow.velocity(x + v * (0.5 * dt));
-    exponential_drift(x, v, u, a, tau, gain, relax, dt)
 }
 
 type MoveQuery<'w, 's, T> = Query<

@@ -52,17 +52,7 @@ pub fn build_frame(
     let mut rows: Vec<_> = q.iter().collect();
     rows.sort_unstable_by_key(|r| r.0.0);
     let n = rows.len();
-    let mut fr = Frame {
-        step: clock.step,
-        time: clock.time(),
-        id: Vec::with_capacity(n),
-        group: Vec::with_capacity(n),
-        position: Vec::with_capacity(n),
-        velocity: Vec::with_capacity(n),
-        diameter: Vec::with_capacity(n),
-        density: Vec::with_capacity(n),
-        stats: Vec::new(),
-    };
+    let mut fr = Frame::with_capacity(clock.step, clock.time(), n);
     let ng = params.groups.len();
     let mut count = vec![0u64; ng];
     let (mut speed_sum, mut ke) = (0.0, 0.0);
