@@ -12,9 +12,17 @@ const WINDOW: (f64, f64) = (0.1, 0.15);
 fn overrides(variant: usize, extra: &[&str]) -> Vec<String> {
     let mut o: Vec<String> = VARIANTS[variant].1.iter().map(|s| s.to_string()).collect();
     o.extend(
-        ["duration=0.15", "feed_scale=0.015", "record_every=1000"]
-            .iter()
-            .map(|s| s.to_string()),
+        // dt = 2 µs, ten times the case's: the particle and wall contacts are then
+        // under-resolved (the run says so), which this reduced check of class ordering
+        // and bookkeeping tolerates for a tenth of the run time.
+        [
+            "duration=0.15",
+            "feed_scale=0.015",
+            "record_every=1000",
+            "dt=2e-6",
+        ]
+        .iter()
+        .map(|s| s.to_string()),
     );
     o.extend(extra.iter().map(|s| s.to_string()));
     o

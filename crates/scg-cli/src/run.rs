@@ -38,6 +38,18 @@ pub struct RunArgs {
     /// Also write every frame as CSV (`<name>_<step>.csv`) into this folder.
     #[arg(long, value_name = "DIR")]
     pub frames_csv: Option<PathBuf>,
+    /// Write a checkpoint every T seconds of simulated time, at the end, and when
+    /// interrupted (to `--checkpoint`, default `<out>/<name>.ckpt`, replaced atomically).
+    #[arg(long, value_name = "T")]
+    pub checkpoint_every: Option<f64>,
+    /// Checkpoint file (default `<out>/<name>.ckpt`).
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
+    /// Go on from a checkpoint: its scene (with `--set` applied, e.g. a longer
+    /// `duration`), its particles and state; the result is bit-identical to the
+    /// uninterrupted run. Recordings start at the checkpoint's step (`<name>-from<step>`).
+    #[arg(long, value_name = "FILE", conflicts_with = "case")]
+    pub restart: Option<PathBuf>,
 }
 
 impl Default for RunArgs {
@@ -51,11 +63,32 @@ impl Default for RunArgs {
             no_record: false,
             vtk: None,
             frames_csv: None,
+            checkpoint_every: None,
+            checkpoint: None,
+            restart: None,
         }
     }
 }
 
 fn load(args: &RunArgs) -> Result<Scene, i32> {
+    if let Some(path) = &args.restart {
+        let c = scg_record::checkpoint::read_checkpoint(path).map_err(|e| {
+            eprintln!("error: {e}");
+            EXIT_BAD_INPUT
+        })?;
+        let stem = Path::new(&c.scene_file)
+            .file_stem()
+            .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+        let mut scene =
+            scg_scene::parse(&c.scene, &c.scene_file, &stem, &args.set).map_err(|e| {
+                eprintln!("error: {e}");
+                EXIT_BAD_INPUT
+            })?;
+        // `dt = "auto"` is resolved by a rule that may change between versions: the run
+        // goes on with the checkpoint's own dt.
+        scene.dt = c.dt;
+        return Ok(scene);
+    }
     let r = match &args.case {
         Some(p) => scg_scene::load(p, &args.set),
         None => Scene::embedded(&args.set),
@@ -106,10 +139,51 @@ pub fn run(args: RunArgs) -> i32 {
         return EXIT_BAD_INPUT;
     }
     let mut sim = scene.build(record);
+    if let Some(path) = &args.restart {
+        let restored = scg_record::checkpoint::read_checkpoint(path).and_then(|c| {
+            sim.restore(&c)
+                .map_err(|e| format!("{}: {e}", path.display()))
+        });
+        if let Err(e) = restored {
+            eprintln!("error: {e}");
+            return EXIT_BAD_INPUT;
+        }
+        eprintln!(
+            "restarting `{}` from {} at step {} (t = {:.6} s)",
+            scene.name,
+            path.display(),
+            sim.step_count(),
+            sim.time()
+        );
+    }
+    let mut stem = recording_stem(&scene);
+    if args.restart.is_some() {
+        stem = format!("{stem}-from{}", sim.step_count());
+    }
+    let checkpoint_path = args
+        .checkpoint
+        .clone()
+        .unwrap_or_else(|| args.out.join(format!("{}.ckpt", recording_stem(&scene))));
+    let checkpoint_every = match args.checkpoint_every {
+        None => None,
+        Some(t) if t.is_finite() && t > 0.0 => Some(((t / scene.dt).round() as u64).max(1)),
+        Some(t) => {
+            eprintln!("error: --checkpoint-every must be a positive time in seconds, not {t}");
+            return EXIT_BAD_INPUT;
+        }
+    };
+    if checkpoint_every.is_some()
+        && let Some(dir) = checkpoint_path
+            .parent()
+            .filter(|d| !d.as_os_str().is_empty())
+        && let Err(e) = ensure_writable(dir)
+    {
+        eprintln!("error: {e}");
+        return EXIT_BAD_INPUT;
+    }
     let mut paths = Vec::new();
     if record {
         let meta = scene.run_meta(report.messages());
-        let stem = recording_stem(&scene);
         let rrd = args.out.join(format!("{stem}.rrd"));
         let mcap = args.out.join(format!("{stem}.mcap"));
         let rrd_sink = match scg_record::RrdSink::create(&rrd, &meta) {
@@ -158,19 +232,39 @@ pub fn run(args: RunArgs) -> i32 {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let t0 = Instant::now();
+    let particle_steps0 = sim.particle_steps();
     let mut result = sim.record_now().map(|_| 0);
-    if result.is_ok() {
-        result = sim.run(steps, |i| {
-            if i % 256 == 0 {
-                bar.set_position(i);
+    let mut saved = Ok(());
+    // Run in chunks ending at the checkpoint steps (multiples of the interval).
+    while result.is_ok() && sim.step_count() < steps {
+        let now = sim.step_count();
+        let until = checkpoint_every.map_or(steps, |e| ((now / e + 1) * e).min(steps));
+        result = sim.run(until - now, |i| {
+            if (now + i) % 256 == 0 {
+                bar.set_position(now + i);
             }
             !stop.load(Ordering::Relaxed)
         });
+        if result.is_err() {
+            break;
+        }
+        if checkpoint_every.is_some() {
+            let mut c = sim.checkpoint();
+            c.scene.clone_from(&scene.source);
+            c.scene_file.clone_from(&scene.file);
+            saved = scg_record::checkpoint::write_checkpoint(&checkpoint_path, &c);
+            if saved.is_err() {
+                break;
+            }
+        }
+        if stop.load(Ordering::Relaxed) {
+            break;
+        }
     }
     bar.finish_and_clear();
     let wall = t0.elapsed().as_secs_f64();
     let done = sim.step_count();
-    let particle_steps = sim.particle_steps();
+    let particle_steps = sim.particle_steps() - particle_steps0;
     let fin = sim.finish_recorders();
     let interrupted = stop.load(Ordering::Relaxed);
     match &result {
@@ -205,8 +299,27 @@ pub fn run(args: RunArgs) -> i32 {
     {
         eprintln!("neighbour list: {} at the end", c.summary());
     }
+    let resolved = sim.contact_resolution();
+    for line in resolved.summary() {
+        eprintln!("{line}");
+    }
+    for w in resolved.warnings() {
+        eprintln!("warning: {w}");
+    }
     for p in &paths {
         eprintln!("wrote {}", p.display());
+    }
+    match &saved {
+        Ok(()) if checkpoint_every.is_some() => eprintln!(
+            "checkpoint {} at step {}",
+            checkpoint_path.display(),
+            sim.step_count()
+        ),
+        Ok(()) => {}
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 1;
+        }
     }
     if let Err(e) = fin {
         eprintln!("error: {e}");

@@ -11,6 +11,7 @@
 //!   coarse-grained), [`stats`] (recorded scalar names), [`frame`] (what recorders get),
 //!   [`region`] (random placement), [`diagnostics`];
 //! * [`sim`] builds a runnable [`Simulation`].
+pub mod checkpoint;
 pub mod components;
 pub mod diagnostics;
 pub mod exec;

@@ -18,7 +18,9 @@ use crate::stages::outlet::OutletSpec;
 use crate::stages::recording::RecordingParams;
 use crate::stages::walls::{WallSet, WallTangential};
 use crate::stages::{contacts, feeder, guard, motion, outlet, recording, walls};
-use crate::state::{Health, NextParticleId, NonFinite, SimClock, Tally};
+use crate::state::{
+    ContactCount, ContactResolution, Health, NextParticleId, NonFinite, SimClock, Tally,
+};
 use crate::step::{Plan, StageTimers, StepBuilder, StepSystem};
 
 /// Everything the core needs to build a simulation (the scene crate produces it).
@@ -60,6 +62,68 @@ pub struct InletOutlet {
 }
 
 /// Why a run stopped early.
+/// The contacts of a run so far, measured at their real approach speeds: particle–wall
+/// and particle–particle.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Resolved {
+    /// Time step, s.
+    pub dt: f64,
+    /// Particle–wall contacts.
+    pub wall: ContactCount,
+    /// Particle–particle contacts.
+    pub pair: ContactCount,
+}
+
+impl Resolved {
+    /// Share of under-resolved contacts above which a run warns.
+    pub const TOLERATED_SHARE: f64 = 0.01;
+
+    /// One line per contact kind met: how many, the shortest in steps, the share
+    /// under-resolved.
+    pub fn summary(&self) -> Vec<String> {
+        self.kinds()
+            .filter_map(|(kind, c)| {
+                let t = c.shortest?;
+                Some(format!(
+                    "{kind} contacts: {} started, shortest {t:.3e} s = {:.1} steps, {:.2} % under {} steps (measured at their approach speeds)",
+                    c.contacts,
+                    t / self.dt,
+                    100.0 * c.under_resolved as f64 / c.contacts.max(1) as f64,
+                    ContactResolution::MIN_STEPS
+                ))
+            })
+            .collect()
+    }
+
+    /// Warnings for the contact kinds of which more than [`Resolved::TOLERATED_SHARE`] of
+    /// the contacts lasted fewer than [`ContactResolution::MIN_STEPS`] steps.
+    pub fn warnings(&self) -> Vec<String> {
+        self.kinds()
+            .filter(|(_, c)| {
+                c.under_resolved as f64 > Self::TOLERATED_SHARE * c.contacts as f64
+            })
+            .map(|(kind, c)| {
+                format!(
+                    "{} of {} {kind} contacts ({:.1} %) lasted fewer than {} steps at their measured approach speed (shortest {:.1} steps): lower dt, or soften the material if the overlaps stay small",
+                    c.under_resolved,
+                    c.contacts,
+                    100.0 * c.under_resolved as f64 / c.contacts.max(1) as f64,
+                    ContactResolution::MIN_STEPS,
+                    c.shortest.unwrap_or(f64::INFINITY) / self.dt
+                )
+            })
+            .collect()
+    }
+
+    fn kinds(&self) -> impl Iterator<Item = (&'static str, ContactCount)> {
+        [
+            ("particle–wall", self.wall),
+            ("particle–particle", self.pair),
+        ]
+        .into_iter()
+    }
+}
+
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SimError {
     /// The state turned non-finite.
@@ -120,6 +184,7 @@ impl Simulation {
         world.insert_resource(Recorders::default());
         let ng = cfg.groups.len();
         world.insert_resource(Tally::new(ng));
+        world.insert_resource(ContactResolution::new(cfg.dt));
         world.insert_resource(RecordingParams {
             every: cfg.record_every.unwrap_or(u64::MAX).max(1),
             groups: cfg.groups.clone(),
@@ -249,6 +314,16 @@ impl Simulation {
         }
         rec.sinks.clear();
         first.map_or(Ok(()), |e| Err(SimError::Recorder(e)))
+    }
+
+    /// The shortest contacts met so far, measured at their real approach speeds.
+    pub fn contact_resolution(&self) -> Resolved {
+        let r = self.world.resource::<ContactResolution>();
+        Resolved {
+            dt: self.dt(),
+            wall: r.wall(),
+            pair: r.pair(),
+        }
     }
 
     /// Wall time per step stage.

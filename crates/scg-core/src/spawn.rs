@@ -137,6 +137,14 @@ pub fn spawn_particle(world: &mut World, spec: &ParticleSpec) -> u32 {
     id
 }
 
+/// Spawn a particle with a given id (restoring a checkpoint); returns its entity. The
+/// next free id is not changed.
+pub fn spawn_particle_with_id(world: &mut World, spec: &ParticleSpec, id: u32) -> Entity {
+    let rules = *world.resource::<SpawnRules>();
+    let dt = world.resource::<SimClock>().dt;
+    spawn_bundle!(world, &rules, spec, id, dt)
+}
+
 /// Same as [`spawn_particle`] through `Commands` (for systems such as feeders), with the
 /// id `id` and time step `dt` (s).
 pub fn spawn_particle_deferred(

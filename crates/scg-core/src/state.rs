@@ -78,6 +78,102 @@ impl Health {
     }
 }
 
+/// The shortest contact the run has met (resource): the duration of every contact at the
+/// approach speed with which it started (Hertz), measured by the contact stages, so a run
+/// can tell how many steps resolve its contacts. Only the minimum is kept, as the bits of a
+/// positive f64 (ordered like the numbers), so the result does not depend on the thread
+/// count.
+///
+/// It also counts the contacts, and those that lasted fewer than
+/// [`ContactResolution::MIN_STEPS`] steps.
+#[derive(Resource, Debug)]
+pub struct ContactResolution {
+    dt: f64,
+    shortest: [AtomicU64; 2],
+    /// Per kind (wall, pair): contacts started, and of those the under-resolved ones.
+    counts: [[AtomicU64; 2]; 2],
+}
+
+/// What [`ContactResolution`] measured for one kind of contact.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ContactCount {
+    /// Shortest contact, s (`None`: no contact yet).
+    pub shortest: Option<f64>,
+    /// Contacts started.
+    pub contacts: u64,
+    /// Contacts that lasted fewer than [`ContactResolution::MIN_STEPS`] steps.
+    pub under_resolved: u64,
+}
+
+impl ContactResolution {
+    /// Steps per contact below which a contact is under-resolved.
+    pub const MIN_STEPS: f64 = 20.0;
+
+    /// An empty record for time step `dt` (s).
+    pub fn new(dt: f64) -> Self {
+        ContactResolution {
+            dt,
+            shortest: [
+                AtomicU64::new(f64::INFINITY.to_bits()),
+                AtomicU64::new(f64::INFINITY.to_bits()),
+            ],
+            counts: Default::default(),
+        }
+    }
+
+    #[inline]
+    fn note(&self, kind: usize, tc: f64) {
+        if tc > 0.0 && tc.is_finite() {
+            self.shortest[kind].fetch_min(tc.to_bits(), Ordering::Relaxed);
+            self.counts[kind][0].fetch_add(1, Ordering::Relaxed);
+            if tc < Self::MIN_STEPS * self.dt {
+                self.counts[kind][1].fetch_add(1, Ordering::Relaxed);
+            }
+        }
+    }
+
+    /// A particle–wall contact of duration `tc` (s) started.
+    #[inline]
+    pub fn note_wall(&self, tc: f64) {
+        self.note(0, tc);
+    }
+
+    /// A particle–particle contact of duration `tc` (s) started.
+    #[inline]
+    pub fn note_pair(&self, tc: f64) {
+        self.note(1, tc);
+    }
+
+    fn count(&self, kind: usize) -> ContactCount {
+        let t = f64::from_bits(self.shortest[kind].load(Ordering::Relaxed));
+        ContactCount {
+            shortest: t.is_finite().then_some(t),
+            contacts: self.counts[kind][0].load(Ordering::Relaxed),
+            under_resolved: self.counts[kind][1].load(Ordering::Relaxed),
+        }
+    }
+
+    /// Particle–wall contacts so far.
+    pub fn wall(&self) -> ContactCount {
+        self.count(0)
+    }
+
+    /// Particle–particle contacts so far.
+    pub fn pair(&self) -> ContactCount {
+        self.count(1)
+    }
+
+    /// Set the record (restoring a checkpoint).
+    pub fn restore(&self, wall: ContactCount, pair: ContactCount) {
+        for (k, c) in [wall, pair].into_iter().enumerate() {
+            let t = c.shortest.unwrap_or(f64::INFINITY);
+            self.shortest[k].store(t.to_bits(), Ordering::Relaxed);
+            self.counts[k][0].store(c.contacts, Ordering::Relaxed);
+            self.counts[k][1].store(c.under_resolved, Ordering::Relaxed);
+        }
+    }
+}
+
 /// Per-group counters kept by the feeder, outlet and contact stages (resource).
 #[derive(Resource, Clone, Debug, Default, PartialEq)]
 pub struct Tally {
@@ -138,6 +234,20 @@ impl StepDisplacement {
     /// Mark the step as fully recorded.
     pub fn mark_reported(&self) {
         self.reported.store(true, Ordering::Relaxed);
+    }
+
+    /// The raw state (bits of the largest squared displacement, reported), for checkpoints.
+    pub fn raw(&self) -> (u64, bool) {
+        (
+            self.max2_bits.load(Ordering::Relaxed),
+            self.reported.load(Ordering::Relaxed),
+        )
+    }
+
+    /// Set the raw state (restoring a checkpoint).
+    pub fn restore(&self, (bits, reported): (u64, bool)) {
+        self.max2_bits.store(bits, Ordering::Relaxed);
+        self.reported.store(reported, Ordering::Relaxed);
     }
 
     /// The largest displacement of the step, m, if an integrator reported one; resets.

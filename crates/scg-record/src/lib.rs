@@ -22,6 +22,7 @@ use scg_core::frame::{Frame, RunMeta};
 
 mod background;
 mod blueprint;
+pub mod checkpoint;
 pub mod layout;
 mod mcap_read;
 mod mcap_write;

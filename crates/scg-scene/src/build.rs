@@ -238,7 +238,7 @@ mod tests {
 
     #[test]
     fn intervals_follow_dt_set_after_loading() {
-        let mut s = crate::parse(CLASSIFIER, "c.toml", "c", &[]).unwrap();
+        let mut s = crate::parse(CLASSIFIER, "c.toml", "c", &["dt=2e-6".into()]).unwrap();
         // 1e-4 s at dt = 2e-6 s.
         let (outlet, feeders) = everies(&s);
         assert_eq!(outlet, 50);

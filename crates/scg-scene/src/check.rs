@@ -11,6 +11,7 @@ use scg_core::physics::integrate::Integrator;
 use scg_core::physics::scaling::coarse_grain;
 use scg_core::physics::wall_shape::WallShape;
 
+use crate::model::Allow;
 use crate::{Placement, Scene};
 
 mod render;
@@ -46,6 +47,8 @@ pub struct GroupReport {
 /// Severity of a finding.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Level {
+    /// Information (e.g. warnings the scene allows).
+    Note,
     /// The run goes on, but a model assumption breaks.
     Warning,
     /// The run would be meaningless; `scg run` refuses it.
@@ -56,6 +59,7 @@ impl Level {
     /// Lower-case name, as printed.
     pub fn name(self) -> &'static str {
         match self {
+            Level::Note => "note",
             Level::Warning => "warning",
             Level::Error => "error",
         }
@@ -213,24 +217,22 @@ fn placement_velocities(g: &crate::Group) -> Vec<(DVec3, DVec3)> {
     }
 }
 
-/// Reference impact speed for contact-time estimates, m/s.
-fn reference_speed(scene: &Scene, tau: f64, g: &crate::Group) -> f64 {
-    let mut v: f64 = 0.01;
-    let rmax = max_radius(scene);
-    let omega = match scene.flow {
-        FlowField::Vortex(v) | FlowField::Classifier { vortex: v, .. } => {
-            v.omega.abs() * (1.0 + v.inflow_ratio.abs())
-        }
-        _ => 0.0,
-    };
-    v = v.max(omega * rmax);
-    for (x, u) in group_velocities(scene, g) {
-        v = v.max(u.length()).max(scene.flow.velocity(x).length());
+/// Impact speed known before the run, m/s: the fastest initial or feeding velocity of the
+/// group (with the feeder's swirl), or its settling speed τ·g (at most 10 m/s). The flow
+/// speed is not used: measured in the shipped cases, particles meet walls and each other
+/// far slower than the fluid moves (a vortex carries them along the wall, and the inflow
+/// pushes them off it), and the run measures every contact's approach speed itself
+/// ([`scg_core::sim::Resolved`]). `None` when nothing is known (particles at rest in the
+/// flow, no gravity).
+fn known_speed(scene: &Scene, tau: f64, g: &crate::Group) -> Option<f64> {
+    let mut v: f64 = 0.0;
+    for (_, u) in group_velocities(scene, g) {
+        v = v.max(u.length());
     }
     if let Some(gr) = scene.gravity {
         v = v.max((gr.length() * tau.min(1.0)).min(10.0));
     }
-    v
+    (v > 0.0).then_some(v)
 }
 
 fn contact_time(scene: &Scene, d: f64, rho: f64, v: f64) -> Option<f64> {
@@ -270,8 +272,9 @@ fn group_report(scene: &Scene, g: &crate::Group) -> GroupReport {
         _ => (f64::INFINITY, 0.0, 0.0, f64::INFINITY),
     };
     let contact_time = (!scene.walls.is_empty())
-        .then(|| contact_time(scene, s.diameter, s.density, reference_speed(scene, tau, g)))
-        .flatten();
+        .then(|| known_speed(scene, tau, g))
+        .flatten()
+        .and_then(|v| contact_time(scene, s.diameter, s.density, v));
     GroupReport {
         name: g.name.clone(),
         law: g.law.name(),
@@ -288,18 +291,25 @@ fn group_report(scene: &Scene, g: &crate::Group) -> GroupReport {
 }
 
 /// Shortest particle–particle contact time over all pairs of groups (the stiffest pair),
-/// s, when the scene declares `[contacts]`: Hertz t_c at the approach speed v_i + v_j of the
-/// two groups' reference speeds with m*, R* of the pair, or the linear law's t_c.
+/// s, when the scene declares `[contacts]`: Hertz t_c with m*, R* of the pair at the
+/// approach speed known before the run (the largest difference of the two groups' initial
+/// and feeding velocities, or the faster group's [`known_speed`] when those agree), or
+/// the linear law's t_c. The run measures the real approach speeds.
 pub fn particle_contact_time(scene: &Scene) -> Option<f64> {
     let c = scene.contacts?;
     let e_eff = c.material.effective_modulus();
-    let gs: Vec<(f64, f64, f64)> = scene
+    type Known = (f64, f64, Option<f64>, Vec<DVec3>);
+    let gs: Vec<Known> = scene
         .groups
         .iter()
         .map(|g| {
             let s = coarse_grain(g.law, g.alpha, g.diameter, g.density);
             let r = group_report(scene, g);
-            (s.mass(), 0.5 * s.diameter, reference_speed(scene, r.tau, g))
+            let vs = group_velocities(scene, g)
+                .into_iter()
+                .map(|p| p.1)
+                .collect();
+            (s.mass(), 0.5 * s.diameter, known_speed(scene, r.tau, g), vs)
         })
         .collect();
     let mut tc = f64::INFINITY;
@@ -307,8 +317,18 @@ pub fn particle_contact_time(scene: &Scene) -> Option<f64> {
         for b in &gs[i..] {
             let m = scg_core::physics::contact::normal::effective(a.0, b.0);
             let r = scg_core::physics::contact::normal::effective(a.1, b.1);
+            let mut v: f64 = 0.0;
+            for u in &a.3 {
+                for w in &b.3 {
+                    v = v.max((*u - *w).length());
+                }
+            }
+            if v == 0.0 {
+                v = a.2.unwrap_or(0.0).max(b.2.unwrap_or(0.0));
+            }
             let t = match c.law {
-                NormalLaw::Hertz { .. } => hertz_contact_time(m, r, e_eff, a.2 + b.2),
+                NormalLaw::Hertz { .. } if v > 0.0 => hertz_contact_time(m, r, e_eff, v),
+                NormalLaw::Hertz { .. } => f64::INFINITY,
                 NormalLaw::Linear { stiffness, zeta } => linear_contact_time(m, stiffness, zeta),
             };
             tc = tc.min(t);
@@ -434,85 +454,117 @@ pub fn check(scene: &Scene) -> Report {
         .map(|g| group_report(scene, g))
         .collect();
     let mut findings = Vec::new();
-    let mut warn = |m: String| {
-        findings.push(Finding {
+    let mut allowed: Vec<(Allow, usize)> = Vec::new();
+    let mut warn_unless = |code: Option<Allow>, m: String| match code {
+        Some(c) if scene.allow.contains(&c) => match allowed.iter_mut().find(|a| a.0 == c) {
+            Some(a) => a.1 += 1,
+            None => allowed.push((c, 1)),
+        },
+        _ => findings.push(Finding {
             level: Level::Warning,
             message: m,
-        })
+        }),
     };
     for r in &groups {
         if scene.drag == Some(DragLaw::Stokes) && r.reynolds > 0.1 {
-            warn(format!(
-                "group `{}`: particle Reynolds number ≈ {:.3} > 0.1, outside Stokes drag (C_d = 24/Re) validity",
-                r.name, r.reynolds
-            ));
+            warn_unless(
+                Some(Allow::StokesReynolds),
+                format!(
+                    "group `{}`: particle Reynolds number ≈ {:.3} > 0.1, outside Stokes drag (C_d = 24/Re) validity",
+                    r.name, r.reynolds
+                ),
+            );
         }
         if r.alpha >= EXTREME_ALPHA {
-            warn(format!(
-                "group `{}`: α = {} is extreme coarse graining: one particle stands for {:.0} originals and is {} m across; check that it still resolves the flow and the walls",
-                r.name,
-                r.alpha,
-                r.alpha.powi(3),
-                r.diameter
-            ));
+            warn_unless(
+                None,
+                format!(
+                    "group `{}`: α = {} is extreme coarse graining: one particle stands for {:.0} originals and is {} m across; check that it still resolves the flow and the walls",
+                    r.name,
+                    r.alpha,
+                    r.alpha.powi(3),
+                    r.diameter
+                ),
+            );
         }
         if r.density_ratio < 1.0 {
-            warn(format!(
-                "group `{}`: simulated density {:.4} kg/m³ is below the fluid's ({:.4} kg/m³): the particle would float; buoyancy, added mass and pressure forces dominate and are not modelled",
-                r.name,
-                r.density,
-                r.density / r.density_ratio
-            ));
+            warn_unless(
+                None,
+                format!(
+                    "group `{}`: simulated density {:.4} kg/m³ is below the fluid's ({:.4} kg/m³): the particle would float; buoyancy, added mass and pressure forces dominate and are not modelled",
+                    r.name,
+                    r.density,
+                    r.density / r.density_ratio
+                ),
+            );
         } else if r.density_ratio < 10.0 {
-            warn(format!(
-                "group `{}`: simulated density {:.4} kg/m³ is only {:.2}× the fluid's; added mass, buoyancy and pressure forces are not negligible",
-                r.name, r.density, r.density_ratio
-            ));
+            warn_unless(
+                Some(Allow::LightParticles),
+                format!(
+                    "group `{}`: simulated density {:.4} kg/m³ is only {:.2}× the fluid's; added mass, buoyancy and pressure forces are not negligible",
+                    r.name, r.density, r.density_ratio
+                ),
+            );
         }
         if scene.integrator == Integrator::Explicit && r.tau.is_finite() && scene.dt > 0.5 * r.tau {
-            warn(format!(
-                "group `{}`: explicit integrator with dt = {:.3e} s > τ/2 = {:.3e} s; the run sub-steps it {} times per step",
-                r.name,
-                scene.dt,
-                0.5 * r.tau,
-                scg_core::physics::integrate::explicit_substeps(r.tau, scene.dt)
-            ));
+            warn_unless(
+                None,
+                format!(
+                    "group `{}`: explicit integrator with dt = {:.3e} s > τ/2 = {:.3e} s; the run sub-steps it {} times per step",
+                    r.name,
+                    scene.dt,
+                    0.5 * r.tau,
+                    scg_core::physics::integrate::explicit_substeps(r.tau, scene.dt)
+                ),
+            );
         }
         if let Some(tc) = r.contact_time
             && scene.dt > tc / 20.0
         {
-            warn(format!(
-                "group `{}`: dt = {:.3e} s gives {:.1} steps per wall contact (t_c ≈ {:.3e} s); at least 20 are needed",
-                r.name,
-                scene.dt,
-                tc / scene.dt,
-                tc
-            ));
+            warn_unless(
+                None,
+                format!(
+                    "group `{}`: dt = {:.3e} s gives {:.1} steps per wall contact (t_c ≈ {:.3e} s); at least 20 are needed",
+                    r.name,
+                    scene.dt,
+                    tc / scene.dt,
+                    tc
+                ),
+            );
         }
     }
     if let Some(tc) = particle_contact_time(scene)
         && scene.dt > tc / 20.0
     {
-        warn(format!(
-            "dt = {:.3e} s gives {:.1} steps per particle–particle contact (t_c ≈ {:.3e} s); at least 20 are needed",
-            scene.dt,
-            tc / scene.dt,
-            tc
-        ));
+        warn_unless(
+            None,
+            format!(
+                "dt = {:.3e} s gives {:.1} steps per particle–particle contact (t_c ≈ {:.3e} s); at least 20 are needed",
+                scene.dt,
+                tc / scene.dt,
+                tc
+            ),
+        );
     }
     if scene.contacts.is_some() {
         for (a, b, frac) in initial_overlaps(scene) {
-            warn(format!(
-                "particles {a} and {b} start overlapping by {:.1} % of the smaller diameter; the contact turns its elastic energy into separation speed (bounded by that energy, not capped further)",
-                100.0 * frac
-            ));
+            warn_unless(
+                None,
+                format!(
+                    "particles {a} and {b} start overlapping by {:.1} % of the smaller diameter; the contact turns its elastic energy into separation speed (bounded by that energy, not capped further)",
+                    100.0 * frac
+                ),
+            );
         }
     }
     let st = stokes_number(scene, &groups);
     if st >= 100.0 {
-        warn(format!(
-            "Stokes number of eq. 1 ≈ {st:.3e} ≥ 100: a dense system, collisions dominate and the SCG model's dilute assumption breaks"
-        ));
+        warn_unless(
+            None,
+            format!(
+                "Stokes number of eq. 1 ≈ {st:.3e} ≥ 100: a dense system, collisions dominate and the SCG model's dilute assumption breaks"
+            ),
+        );
     }
     // Particles that start outside a wall.
     for (gi, g) in scene.groups.iter().enumerate() {
@@ -547,6 +599,15 @@ pub fn check(scene: &Scene) -> Report {
                 }
             }
         }
+    }
+    for (code, n) in allowed {
+        findings.push(Finding {
+            level: Level::Note,
+            message: format!(
+                "{n} `{}` warning(s) allowed by the scene ([checks] allow)",
+                code.name()
+            ),
+        });
     }
     Report {
         groups,

@@ -121,6 +121,30 @@ pub struct Scene {
     pub feeders: Vec<Feeder>,
     /// The outlet (`[outlet]`), if declared.
     pub outlet: Option<Outlet>,
+    /// Warnings the scene accepts knowingly (`[checks] allow`).
+    pub allow: Vec<Allow>,
+}
+
+/// A `scg check` warning a scene may accept knowingly (`[checks] allow = [...]`), e.g. a
+/// paper case that uses Stokes drag beyond its range on purpose. Allowed warnings are
+/// counted in one note instead of printed.
+#[derive(serde::Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Allow {
+    /// Stokes drag at a particle Reynolds number above 0.1.
+    StokesReynolds,
+    /// A simulated density below ten times the fluid's (added mass, buoyancy neglected).
+    LightParticles,
+}
+
+impl Allow {
+    /// The name used in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Allow::StokesReynolds => "stokes_reynolds",
+            Allow::LightParticles => "light_particles",
+        }
+    }
 }
 
 /// A feeder: particles of one group enter at a constant rate.

@@ -39,6 +39,15 @@ pub struct RawScene {
     #[serde(default)]
     pub feeders: Vec<RawFeeder>,
     pub outlet: Option<RawOutlet>,
+    pub checks: Option<RawChecks>,
+}
+
+/// `[checks]`: warnings of `scg check` the scene accepts knowingly.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawChecks {
+    #[serde(default)]
+    pub allow: Vec<crate::model::Allow>,
 }
 
 #[derive(Deserialize, Debug, Clone)]

@@ -194,6 +194,11 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
         groups,
         feeders,
         outlet,
+        allow: raw
+            .checks
+            .as_ref()
+            .map(|c| c.allow.clone())
+            .unwrap_or_default(),
     };
     if let (Some(c), Some(mat), Some(law)) = (&contacts_raw, material, normal_law) {
         scene.contacts = Some(contacts(c, mat, law, &scene.groups, cx)?);

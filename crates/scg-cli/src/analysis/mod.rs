@@ -32,7 +32,14 @@ use scg_record::Recording;
 use scg_scene::Scene;
 
 /// The scene embedded in a recording.
+///
+/// With `dt = "auto"` the step is chosen by a rule that may change between versions: the
+/// scene then takes the recording's own dt, so it re-runs as recorded.
 pub fn recording_scene(rec: &Recording) -> std::result::Result<Scene, String> {
-    scg_scene::parse(&rec.meta.scene_toml, "<recording>", &rec.meta.case, &[])
-        .map_err(|e| format!("the recording's scene: {e}"))
+    let mut scene = scg_scene::parse(&rec.meta.scene_toml, "<recording>", &rec.meta.case, &[])
+        .map_err(|e| format!("the recording's scene: {e}"))?;
+    if rec.meta.dt > 0.0 {
+        scene.dt = rec.meta.dt;
+    }
+    Ok(scene)
 }

@@ -20,19 +20,12 @@ pub fn plot(s: &Sweep, path: &Path) -> Result<(), String> {
     if pts.is_empty() {
         return Ok(());
     }
-    if path.extension().is_some_and(|x| x == "png") {
-        draw(
-            s,
-            &pts,
-            BitMapBackend::new(path, (900, 620)).into_drawing_area(),
-        )
-    } else {
-        draw(
-            s,
-            &pts,
-            SVGBackend::new(path, (900, 620)).into_drawing_area(),
-        )
-    }
+    // SVG only: no font rasterizer or system font library is needed (PNG: `rsvg-convert`).
+    draw(
+        s,
+        &pts,
+        SVGBackend::new(path, (900, 620)).into_drawing_area(),
+    )
 }
 
 fn draw<DB: plotters::prelude::DrawingBackend>(

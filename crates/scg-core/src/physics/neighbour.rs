@@ -79,6 +79,29 @@ impl NeighbourList {
         }
     }
 
+    /// Positions at the last build (m) and the displacement bound since (m), for
+    /// checkpoints.
+    pub fn carried(&self) -> (&[DVec3], f64) {
+        (&self.reference, self.drift_bound)
+    }
+
+    /// Restore a list saved by a checkpoint: its pairs, reference positions, counters and
+    /// displacement bound.
+    pub fn restore(
+        &mut self,
+        pairs: Vec<[u32; 2]>,
+        reference: Vec<DVec3>,
+        builds: u64,
+        checks: u64,
+        drift_bound: f64,
+    ) {
+        self.pairs = pairs;
+        self.reference = reference;
+        self.builds = builds;
+        self.checks = checks;
+        self.drift_bound = drift_bound;
+    }
+
     /// True when the particle count changed or some particle moved more than skin/2
     /// since the last build.
     ///

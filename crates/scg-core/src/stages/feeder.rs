@@ -115,6 +115,40 @@ impl Feeders {
     }
 }
 
+impl Feeders {
+    /// Each feeder's count and random stream (checkpoints).
+    pub fn records(&self) -> Vec<crate::checkpoint::FeederRecord> {
+        self.list
+            .iter()
+            .map(|f| crate::checkpoint::FeederRecord {
+                fed: f.fed,
+                seed: f.rng.get_seed(),
+                stream: f.rng.get_stream(),
+                word_pos: f.rng.get_word_pos(),
+            })
+            .collect()
+    }
+
+    /// Restore the counts and random streams saved by [`Feeders::records`].
+    pub fn restore(&mut self, records: &[crate::checkpoint::FeederRecord]) -> Result<(), String> {
+        if records.len() != self.list.len() {
+            return Err(format!(
+                "the checkpoint has {} feeders, the scene {}",
+                records.len(),
+                self.list.len()
+            ));
+        }
+        for (f, r) in self.list.iter_mut().zip(records) {
+            let mut rng = ChaCha8Rng::from_seed(r.seed);
+            rng.set_stream(r.stream);
+            rng.set_word_pos(r.word_pos);
+            f.rng = rng;
+            f.fed = r.fed;
+        }
+        Ok(())
+    }
+}
+
 /// Add the feeder system (only when the scene has feeders).
 pub fn plugin(world: &mut World, b: &mut StepBuilder, specs: &[FeederSpec], seed: u64) {
     if specs.is_empty() {

@@ -15,7 +15,7 @@ use crate::exec::par::for_each_piece;
 use crate::physics::contact::tangential::{rolling_torque, tangential_force};
 use crate::physics::contact::{Material, NormalLaw, TangentialLaw};
 use crate::physics::wall_shape::WallShape;
-use crate::state::SimClock;
+use crate::state::{ContactResolution, SimClock};
 use crate::step::{StepBuilder, StepSet, StepSystem};
 
 /// A named wall.
@@ -92,9 +92,13 @@ pub fn plugin(world: &mut World, b: &mut StepBuilder, tangential: Option<WallTan
 /// Normal force of every wall on every particle touching it.
 pub fn wall_normal_forces(
     walls: Res<WallSet>,
+    clock: Res<SimClock>,
+    resolution: Res<ContactResolution>,
     mut q: Query<(&Position, &Velocity, &Diameter, &Mass, &mut Force)>,
 ) {
     let walls = &*walls;
+    let resolution = &*resolution;
+    let dt = clock.dt;
     let e_eff = walls.material.effective_modulus();
     let Some((xs, vs, ds, ms, fs)) = columns_mut(&mut q) else {
         return;
@@ -106,6 +110,11 @@ pub fn wall_normal_forces(
             for w in &walls.walls {
                 if let Some(t) = w.shape.touch(x, r) {
                     let vn = v.dot(t.normal);
+                    if vn < 0.0 && t.overlap <= -vn * dt {
+                        // No history here: the contact started within the last step (one
+                        // step ago, at this speed, the sphere was clear of the wall).
+                        resolution.note_wall(walls.law.contact_time(ms[i].0, r, e_eff, -vn));
+                    }
                     let (fn_, _) = walls.law.force(t.overlap, vn, e_eff, r, ms[i].0);
                     sum += fn_ * t.normal;
                 }
@@ -137,12 +146,14 @@ pub fn wall_contact_forces(
     walls: Res<WallSet>,
     tangential: Res<WallTangential>,
     clock: Res<SimClock>,
+    resolution: Res<ContactResolution>,
     mut q: WallQuery,
 ) {
     let walls = &*walls;
     let tl = tangential.law;
     let g_eff = tangential.g_eff;
     let dt = clock.dt;
+    let resolution = &*resolution;
     let e_eff = walls.material.effective_modulus();
     // One particle: its wall forces and torque, its history updated in place.
     let one = move |x: DVec3,
@@ -166,10 +177,14 @@ pub fn wall_contact_forces(
             let vn = vc.dot(n);
             let (fn_, kn) = walls.law.force(t.overlap, vn, e_eff, r, m);
             fsum += fn_ * n;
-            let prev = hist[..old_len]
-                .iter()
-                .find(|h| h.0 == wi)
-                .map_or(DVec3::ZERO, |h| h.1);
+            let prev = match hist[..old_len].iter().find(|h| h.0 == wi) {
+                Some(h) => h.1,
+                None => {
+                    // The contact starts: its duration at this approach speed.
+                    resolution.note_wall(walls.law.contact_time(m, r, e_eff, -vn));
+                    DVec3::ZERO
+                }
+            };
             let mut xi = DVec3::ZERO;
             if tl.friction > 0.0 {
                 let vt = vc - vn * n;

@@ -140,6 +140,17 @@ impl NormalLaw {
         }
     }
 
+    /// Duration of an elastic contact, s: Hertz at approach speed `v` (m/s) with effective
+    /// mass `m_eff` (kg), radius `r_eff` (m) and modulus `e_eff` (Pa); the linear law's
+    /// damped half-period (independent of `v`). Infinite when `v` ≤ 0 for Hertz.
+    pub fn contact_time(self, m_eff: f64, r_eff: f64, e_eff: f64, v: f64) -> f64 {
+        match self {
+            NormalLaw::Hertz { .. } if v > 0.0 => hertz_contact_time(m_eff, r_eff, e_eff, v),
+            NormalLaw::Hertz { .. } => f64::INFINITY,
+            NormalLaw::Linear { stiffness, zeta } => linear_contact_time(m_eff, stiffness, zeta),
+        }
+    }
+
     /// Normal force magnitude (N, positive = repulsive) and normal stiffness (N/m, for the
     /// tangential spring) for overlap `delta` (m, > 0) and normal relative velocity `vn`
     /// (m/s, positive when separating), with effective modulus `e_eff` (Pa), radius `r_eff`

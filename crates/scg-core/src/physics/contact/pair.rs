@@ -58,6 +58,8 @@ pub struct PairContact {
     pub j: u32,
     /// Contact started this step.
     pub started: bool,
+    /// Normal approach speed of the contact points, m/s (positive when closing).
+    pub approach: f64,
     /// Force on i, N (the force on j is exactly −force).
     pub force: DVec3,
     /// Torque on i, N·m.
@@ -131,6 +133,7 @@ pub fn pair_kernel(
         i: p.i,
         j: p.j,
         started: !was,
+        approach: vn_approach,
         force: -fn_ * n,
         ..Default::default()
     };

@@ -48,18 +48,131 @@ pub fn maintain_neighbour_list(
         st.slots = layout_slots(&st.list.pairs, st.ids.len());
         return;
     }
+    let old_ids = gather(st, ids, groups, ds, ms, clock.dt);
+    st.list.build(pos, &st.radius);
+    carry_history(st, pos, Some(&old_ids));
+    st.slots = layout_slots(&st.list.pairs, st.ids.len());
+}
+
+/// Gather ids, groups, radii, masses and kick factors of the rows; returns the old ids.
+fn gather(
+    st: &mut ContactState,
+    ids: &[ParticleId],
+    groups: &[GroupId],
+    ds: &[Diameter],
+    ms: &[Mass],
+    dt: f64,
+) -> Vec<u32> {
     let old_ids = std::mem::replace(&mut st.ids, ids.iter().map(|id| id.0).collect());
     st.group = groups.iter().map(|g| g.0).collect();
     st.radius = ds.iter().map(|d| 0.5 * d.0).collect();
     st.mass = ms.iter().map(|m| m.0).collect();
-    let dt = clock.dt;
     st.kick_v = st.mass.iter().map(|&m| linear_kick_factor(m, dt)).collect();
     st.kick_w = (st.mass.iter().zip(&st.radius))
         .map(|(&m, &r)| angular_kick_factor(m, 2.0 * r, dt))
         .collect();
-    st.list.build(pos, &st.radius);
-    carry_history(st, pos, Some(&old_ids));
-    st.slots = layout_slots(&st.list.pairs, st.ids.len());
+    old_ids
+}
+
+/// The pair state of list pair (i, j) before any contact (constants of the pair law).
+fn fresh_pair(st: &ContactState, pos: &[DVec3], i: u32, j: u32) -> PairState {
+    let (a, b) = (i as usize, j as usize);
+    let par = &st.params;
+    PairState {
+        i,
+        j,
+        shift: par
+            .periodic
+            .map_or(DVec3::ZERO, |pb| pb.image_shift(pos[b] - pos[a])),
+        hertz: HertzPair::new(
+            par.e_eff,
+            effective(st.radius[a], st.radius[b]),
+            effective(st.mass[a], st.mass[b]),
+        ),
+        ..Default::default()
+    }
+}
+
+impl ContactState {
+    /// The arrays that carry over between steps (checkpoints).
+    pub fn record(&self) -> crate::checkpoint::ContactRecord {
+        let (reference, drift_bound) = self.list.carried();
+        crate::checkpoint::ContactRecord {
+            ids: self.ids.clone(),
+            list_pairs: self.list.pairs.clone(),
+            reference: reference.to_vec(),
+            builds: self.list.builds,
+            checks: self.list.checks,
+            drift_bound,
+            pairs: self
+                .pairs
+                .iter()
+                .map(|p| crate::checkpoint::PairRecord {
+                    i: p.i,
+                    j: p.j,
+                    touching: p.touching,
+                    shift: p.shift,
+                    history: p.history,
+                })
+                .collect(),
+            sparse: self.sparse,
+            active: self.active,
+        }
+    }
+
+    /// Restore the arrays saved by [`ContactState::record`] for the particle table
+    /// `ids`… (the rows of the restored particles, in order); the per-row constants are
+    /// gathered again from the table, the pair constants derived again.
+    #[allow(clippy::too_many_arguments)]
+    pub fn restore(
+        &mut self,
+        r: &crate::checkpoint::ContactRecord,
+        ids: &[ParticleId],
+        groups: &[GroupId],
+        ds: &[Diameter],
+        ms: &[Mass],
+        dt: f64,
+    ) -> Result<(), String> {
+        if ParticleId::peel_slice(ids) != r.ids.as_slice() {
+            return Err("the contact arrays do not match the particles".into());
+        }
+        if r.pairs.len() != r.list_pairs.len()
+            || r.pairs
+                .iter()
+                .zip(&r.list_pairs)
+                .any(|(p, l)| [p.i, p.j] != *l)
+            || r.list_pairs
+                .iter()
+                .any(|l| l[0] >= l[1] || l[1] as usize >= ids.len())
+            || (!r.reference.is_empty() && r.reference.len() != ids.len())
+        {
+            return Err("the contact list is inconsistent".into());
+        }
+        gather(self, ids, groups, ds, ms, dt);
+        self.list.restore(
+            r.list_pairs.clone(),
+            r.reference.clone(),
+            r.builds,
+            r.checks,
+            r.drift_bound,
+        );
+        let reference = r.reference.clone();
+        self.pairs = r
+            .pairs
+            .iter()
+            .map(|p| PairState {
+                touching: p.touching,
+                shift: p.shift,
+                history: p.history,
+                ..fresh_pair(self, &reference, p.i, p.j)
+            })
+            .collect();
+        self.slots = layout_slots(&self.list.pairs, self.ids.len());
+        self.sparse = r.sparse;
+        self.active = r.active;
+        self.marked = vec![false; self.ids.len()];
+        Ok(())
+    }
 }
 
 /// New pair states for the rebuilt list, each touching pair keeping its history
@@ -70,27 +183,11 @@ pub fn maintain_neighbour_list(
 /// indices when the set changed; a pair one of whose particles left is dropped.
 fn carry_history(st: &mut ContactState, pos: &[DVec3], ids_before: Option<&[u32]>) {
     let old = std::mem::take(&mut st.pairs);
-    let (radius, mass, par) = (&st.radius, &st.mass, &st.params);
     let mut pairs: Vec<PairState> = st
         .list
         .pairs
         .iter()
-        .map(|&[i, j]| {
-            let (a, b) = (i as usize, j as usize);
-            PairState {
-                i,
-                j,
-                shift: par
-                    .periodic
-                    .map_or(DVec3::ZERO, |pb| pb.image_shift(pos[b] - pos[a])),
-                hertz: HertzPair::new(
-                    par.e_eff,
-                    effective(radius[a], radius[b]),
-                    effective(mass[a], mass[b]),
-                ),
-                ..Default::default()
-            }
-        })
+        .map(|&[i, j]| fresh_pair(st, pos, i, j))
         .collect();
     let touching: Vec<&PairState> = old.iter().filter(|p| p.touching).collect();
     if !touching.is_empty() {

@@ -12,7 +12,7 @@ use super::ContactState;
 use crate::components::*;
 use crate::physics::contact::pair::{Bodies, PairParams, PairState, pair_kernel};
 use crate::stages::table::columns;
-use crate::state::{SimClock, Tally};
+use crate::state::{ContactResolution, SimClock, Tally};
 
 /// Everything the pair kernel reads.
 pub(super) struct Kernel<'a> {
@@ -55,6 +55,8 @@ pub(super) struct Slot {
     pub(super) collisions: Vec<u64>,
     /// Pairs in contact this step.
     pub(super) active: usize,
+    /// Shortest duration of the contacts started this step, s (at their approach speed).
+    shortest: f64,
 }
 
 impl Slot {
@@ -80,6 +82,7 @@ impl Slot {
         self.collisions.clear();
         self.collisions.resize(groups, 0);
         self.active = 0;
+        self.shortest = f64::INFINITY;
     }
 
     /// Compute the slot's pairs and sum them; `sparse` records the particles written.
@@ -130,6 +133,11 @@ impl Slot {
                 }
             }
             if c.started {
+                let tc =
+                    k.par
+                        .law
+                        .contact_time(p.hertz.m_eff, p.hertz.r_eff, k.par.e_eff, c.approach);
+                self.shortest = self.shortest.min(tc);
                 for g in [group[i], group[j]] {
                     if let Some(n) = self.collisions.get_mut(g as usize) {
                         *n += 1;
@@ -203,6 +211,7 @@ pub fn particle_contact_forces(
     mut state: ResMut<ContactState>,
     clock: Res<SimClock>,
     mut tally: ResMut<Tally>,
+    resolution: Res<ContactResolution>,
     q: Query<(&Position, &Velocity, &AngularVelocity)>,
 ) {
     let st = &mut *state;
@@ -253,6 +262,7 @@ pub fn particle_contact_forces(
     let mut active = 0;
     for slot in &st.slots {
         active += slot.active;
+        resolution.note_pair(slot.shortest);
         for (t, c) in tally.collisions.iter_mut().zip(&slot.collisions) {
             *t += c;
         }

@@ -1,0 +1,217 @@
+//! Checkpoint and restart (issue 17): a run restarted from a checkpoint is bit-identical to
+//! the uninterrupted run: particles (position, velocity, ω, force, torque, wall history),
+//! contact list and pair histories, feeder random streams, outlet log, tally and clock.
+//! Also from the checkpoint a SIGKILLed run left behind.
+
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use scg::core::checkpoint::Checkpoint;
+use scg::record::checkpoint::{read_checkpoint, write_checkpoint};
+use scg::scene::{Scene, parse};
+
+/// Every stage at once: contacts with friction and rolling resistance, frictional walls, a
+/// feeder, an outlet, drag and gravity.
+const GOLDEN: &str = include_str!("fixtures/golden.toml");
+
+fn scene(set: &[&str]) -> Scene {
+    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    parse(GOLDEN, "golden.toml", "golden", &set).unwrap()
+}
+
+fn run_to(scene: &Scene, from: Option<&Checkpoint>, steps: u64) -> Checkpoint {
+    let mut sim = scene.build(false);
+    if let Some(c) = from {
+        sim.restore(c).unwrap();
+    }
+    let left = steps - sim.step_count();
+    sim.run(left, |_| true).unwrap();
+    sim.checkpoint()
+}
+
+#[test]
+fn restart_is_bit_identical_in_process_and_through_a_file() {
+    let s = scene(&[]);
+    let total = s.steps();
+    let straight = run_to(&s, None, total);
+    // Something happened that a restart must carry: contacts, wall history, feeding.
+    let cs = straight.contacts.as_ref().unwrap();
+    assert!(
+        cs.pairs.iter().any(|p| p.touching),
+        "no pair in contact at the end"
+    );
+    assert!(straight.tally[1].iter().sum::<u64>() > 0, "nothing fed");
+    assert!(
+        straight
+            .particles
+            .iter()
+            .any(|p| p.wall_history.as_ref().is_some_and(|h| !h.is_empty())),
+        "no wall contact at the end"
+    );
+    for cut in [1, total / 3, total / 2 + 7] {
+        let half = run_to(&s, None, cut);
+        assert_eq!(half.step, cut);
+        // Through a file.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("half.ckpt");
+        write_checkpoint(&path, &half).unwrap();
+        let back = read_checkpoint(&path).unwrap();
+        assert_eq!(back, half);
+        let resumed = run_to(&s, Some(&back), total);
+        assert!(resumed == straight, "restart at step {cut} diverged");
+    }
+}
+
+#[test]
+fn restore_refuses_another_scene() {
+    let c = run_to(&scene(&[]), None, 10);
+    // Without contacts.
+    let mut other = parse(
+        &GOLDEN.replace("[contacts]", "[unused_contacts]"),
+        "g.toml",
+        "g",
+        &[],
+    )
+    .map(|s| s.build(false));
+    if let Ok(sim) = other.as_mut() {
+        assert!(sim.restore(&c).is_err());
+    }
+    // Another dt.
+    let mut sim = scene(&["dt=1e-6"]).build(false);
+    let err = sim.restore(&c).unwrap_err();
+    assert!(err.contains("dt"), "{err}");
+}
+
+fn scg(args: &[&str], dir: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_scg"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+fn without_scene(mut c: Checkpoint) -> Checkpoint {
+    c.scene.clear();
+    c.scene_file.clear();
+    c
+}
+
+/// `scg run --checkpoint-every`, killed with SIGKILL after its first checkpoint, then
+/// `scg run --restart`: the final state equals the uninterrupted run's to the last bit.
+#[test]
+fn restart_after_sigkill_matches_the_uninterrupted_run() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("golden.toml"), GOLDEN).unwrap();
+    // Long enough (≈ 100 000 steps, several seconds) to be killed mid-run.
+    let common = [
+        "--no-record",
+        "--set",
+        "duration=0.25",
+        "--checkpoint-every",
+        "0.005",
+    ];
+    let out = scg(
+        &[
+            &["run", "golden.toml"][..],
+            &common,
+            &["--checkpoint", "full.ckpt"],
+        ]
+        .concat(),
+        dir.path(),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let full = read_checkpoint(&dir.path().join("full.ckpt")).unwrap();
+
+    let mut child = Command::new(env!("CARGO_BIN_EXE_scg"))
+        .args(
+            [
+                &["run", "golden.toml"][..],
+                &common,
+                &["--checkpoint", "k.ckpt"],
+            ]
+            .concat(),
+        )
+        .current_dir(dir.path())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let ckpt = dir.path().join("k.ckpt");
+    let t0 = Instant::now();
+    while !ckpt.exists() && t0.elapsed() < Duration::from_secs(120) {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    std::thread::sleep(Duration::from_millis(200));
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    let killed = read_checkpoint(&ckpt).unwrap();
+    assert!(killed.step > 0);
+    eprintln!(
+        "killed; checkpoint at step {} of {}",
+        killed.step, full.step
+    );
+
+    let out = scg(
+        &[
+            "run",
+            "--restart",
+            "k.ckpt",
+            "--no-record",
+            "--checkpoint-every",
+            "0.005",
+            "--checkpoint",
+            "resumed.ckpt",
+        ],
+        dir.path(),
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("restarting `golden`"), "{err}");
+    let resumed = read_checkpoint(&dir.path().join("resumed.ckpt")).unwrap();
+    assert_eq!(resumed.step, full.step);
+    assert!(
+        without_scene(resumed) == without_scene(full),
+        "restarted run diverged"
+    );
+}
+
+#[test]
+fn damaged_checkpoints_are_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let c = run_to(&scene(&[]), None, 50);
+    let good = dir.path().join("good.ckpt");
+    let mut full = c.clone();
+    full.scene = GOLDEN.to_string();
+    full.scene_file = "golden.toml".into();
+    write_checkpoint(&good, &full).unwrap();
+    let bytes = std::fs::read(&good).unwrap();
+    for (name, data) in [
+        ("empty.ckpt", Vec::new()),
+        ("text.ckpt", b"hello".to_vec()),
+        ("cut.ckpt", bytes[..bytes.len() / 2].to_vec()),
+        ("tail.ckpt", [&bytes[..], b"x"].concat()),
+    ] {
+        std::fs::write(dir.path().join(name), &data).unwrap();
+        let out = scg(&["run", "--restart", name, "--no-record"], dir.path());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{name}: {err}");
+        assert!(
+            err.contains(name) && !err.contains("panicked"),
+            "{name}: {err}"
+        );
+    }
+    // The good one runs to the end.
+    let out = scg(
+        &["run", "--restart", "good.ckpt", "--no-record"],
+        dir.path(),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
