@@ -112,17 +112,17 @@ fn shipped_cases_and_the_default_run_print_no_warning() {
         .collect();
     cases.sort();
     assert!(cases.len() >= 5);
-    for case in &cases {
-        let out = Command::new(env!("CARGO_BIN_EXE_scg"))
-            .arg("check")
-            .arg(case)
-            .output()
-            .unwrap();
-        let text = String::from_utf8_lossy(&out.stdout).into_owned()
-            + &String::from_utf8_lossy(&out.stderr);
-        assert!(out.status.success(), "{}: {text}", case.display());
-        assert!(!text.contains("warning:"), "{}: {text}", case.display());
-    }
+    // `scg check cases/*.toml`, all at once.
+    let out = Command::new(env!("CARGO_BIN_EXE_scg"))
+        .arg("check")
+        .args(&cases)
+        .output()
+        .unwrap();
+    let text =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{text}");
+    assert_eq!(text.matches("scene `").count(), cases.len(), "{text}");
+    assert!(!text.contains("warning:"), "{text}");
     // The default run (the vortex), measured: every wall contact resolved.
     let out = Command::new(env!("CARGO_BIN_EXE_scg"))
         .args(["run", "--no-record"])

@@ -44,10 +44,11 @@ pub struct Cli {
 enum Command {
     /// Run a scene (the embedded vortex case when no file is given).
     Run(run::RunArgs),
-    /// Validate a scene and print derived quantities and warnings.
+    /// Validate scenes and print derived quantities and warnings.
     Check {
-        /// Scene file.
-        case: PathBuf,
+        /// Scene files (each checked in turn, e.g. `scg check cases/*.toml`).
+        #[arg(required = true, value_name = "CASE")]
+        cases: Vec<PathBuf>,
         /// Override a scene key, e.g. `--set groups.0.alpha=2` (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
@@ -87,7 +88,11 @@ pub fn main() -> i32 {
     match cli.command {
         None => run::run(run::RunArgs::default()),
         Some(Command::Run(a)) => run::run(a),
-        Some(Command::Check { case, set }) => check(case, set),
+        Some(Command::Check { cases, set }) => cases
+            .iter()
+            .map(|case| check(case, &set))
+            .max()
+            .unwrap_or(0),
         Some(Command::Bench(a)) => bench::bench(a),
         Some(Command::Replay(a)) => replay::replay(a),
         Some(Command::Study(a)) => study::study(a),
@@ -95,8 +100,8 @@ pub fn main() -> i32 {
     }
 }
 
-fn check(case: PathBuf, set: Vec<String>) -> i32 {
-    let scene = match scg_scene::load(&case, &set) {
+fn check(case: &std::path::Path, set: &[String]) -> i32 {
+    let scene = match scg_scene::load(case, set) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
