@@ -6,6 +6,7 @@
 //! velocities in m/s.
 
 pub mod error;
+pub mod foam;
 pub mod polymesh;
 
 pub use error::MeshError;

@@ -1,0 +1,143 @@
+//! `volVectorField` files → [`CellField`].
+
+use std::path::Path;
+
+use glam::DVec3;
+
+use super::parse::{ListData, Parser, Token, Value};
+use super::{TimeSel, read_maybe_gz, select_time};
+use crate::{CellField, MeshError, PolyMesh};
+
+/// Read the volVectorField `name` (e.g. `U`, in its own units: m/s for a velocity) of the
+/// time directory `time` picks, on `mesh`.
+///
+/// `internalField` gives the cell values (`uniform (x y z)` or `nonuniform List<vector>`
+/// with one value per cell); each patch of the mesh must have a `boundaryField` entry of its
+/// own name, whose `value` (uniform or one per patch face) becomes
+/// [`CellField::patches`]`[i]`, or `None` when the entry has no `value` (zeroGradient,
+/// empty, …). Every value must be finite.
+pub fn read_vector_field(
+    case_dir: impl AsRef<Path>,
+    mesh: &PolyMesh,
+    time: TimeSel,
+    name: &str,
+) -> Result<CellField, MeshError> {
+    let dir = select_time(case_dir, time)?;
+    let (file, bytes) = read_maybe_gz(&dir.join(name))?;
+    parse_vector_field(&file, &bytes, mesh)
+}
+
+/// Parse the bytes of a volVectorField file (`file` names it in errors).
+pub(crate) fn parse_vector_field(
+    file: &Path,
+    bytes: &[u8],
+    mesh: &PolyMesh,
+) -> Result<CellField, MeshError> {
+    let mut p = Parser::new(file, bytes);
+    let h = p.header()?;
+    let class = h.word("class").unwrap_or("");
+    if class != "volVectorField" {
+        return Err(p.err(
+            "FoamFile/class",
+            format!("class '{class}' where volVectorField was expected"),
+        ));
+    }
+    let body = p.dict_body("", false)?;
+    let bad = |entry: &str, message: String| MeshError::invalid(file, entry, message);
+    if body.get("dimensions").is_none() {
+        return Err(bad("dimensions", "missing".into()));
+    }
+    let internal = match body.get("internalField") {
+        Some(Value::Tokens(t)) => t,
+        Some(_) => {
+            return Err(bad(
+                "internalField",
+                "expected a value, not a dictionary".into(),
+            ));
+        }
+        None => return Err(bad("internalField", "missing".into())),
+    };
+    let cells = values(file, "internalField", internal, mesh.n_cells)?;
+    let Some(Value::Dict(bf)) = body.get("boundaryField") else {
+        return Err(bad("boundaryField", "missing or not a dictionary".into()));
+    };
+    let mut patches = Vec::with_capacity(mesh.patches.len());
+    for patch in &mesh.patches {
+        let entry = format!("boundaryField/{}", patch.name);
+        let Some(Value::Dict(d)) = bf.get(&patch.name) else {
+            return Err(bad(
+                &entry,
+                "missing: every mesh patch needs an entry of its own name (patterns and groups are not expanded)"
+                    .into(),
+            ));
+        };
+        if d.word("type").is_none() {
+            return Err(bad(&format!("{entry}/type"), "missing".into()));
+        }
+        patches.push(match d.get("value") {
+            None => None,
+            Some(Value::Tokens(t)) => Some(values(file, &format!("{entry}/value"), t, patch.size)?),
+            Some(Value::Dict(_)) => {
+                return Err(bad(
+                    &format!("{entry}/value"),
+                    "expected a value, not a dictionary".into(),
+                ));
+            }
+        });
+    }
+    Ok(CellField { cells, patches })
+}
+
+/// `uniform (x y z)` or `nonuniform List<vector> N (...)`, as `n` finite values.
+fn values(file: &Path, entry: &str, t: &[Token], n: usize) -> Result<Vec<DVec3>, MeshError> {
+    let bad = |message: String| MeshError::invalid(file, entry, message);
+    let out = match t {
+        [
+            Token::Word(u),
+            Token::Punct(b'('),
+            Token::Num(x),
+            Token::Num(y),
+            Token::Num(z),
+            Token::Punct(b')'),
+        ] if u == "uniform" => {
+            vec![DVec3::new(*x, *y, *z); n]
+        }
+        [Token::Word(u), Token::List(ListData::Vectors(v))] if u == "nonuniform" => {
+            if v.len() != n {
+                return Err(bad(format!("{} values where {n} are needed", v.len())));
+            }
+            v.clone()
+        }
+        // `nonuniform List<vector> 0()` may also be written `nonuniform 0()`.
+        [
+            Token::Word(u),
+            Token::Num(z),
+            Token::Punct(b'('),
+            Token::Punct(b')'),
+        ] if u == "nonuniform" && *z == 0.0 => {
+            if n != 0 {
+                return Err(bad(format!("0 values where {n} are needed")));
+            }
+            Vec::new()
+        }
+        [Token::Word(u), Token::List(_)] if u == "nonuniform" => {
+            return Err(bad("a list of vectors (List<vector>) was expected".into()));
+        }
+        [Token::Word(u), Token::Num(_)] if u == "uniform" => {
+            return Err(bad("a scalar where a vector (x y z) was expected".into()));
+        }
+        _ => {
+            return Err(bad(
+                "expected 'uniform (x y z)' or 'nonuniform List<vector> N (...)'".into(),
+            ));
+        }
+    };
+    if let Some((i, v)) = out.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(MeshError::invalid(
+            file,
+            format!("{entry}[{i}]"),
+            format!("not finite: {v}"),
+        ));
+    }
+    Ok(out)
+}
