@@ -8,6 +8,7 @@
 pub mod error;
 pub mod foam;
 pub mod polymesh;
+pub mod vtk;
 
 pub use error::MeshError;
 pub use polymesh::{CellField, Patch, PolyMesh};

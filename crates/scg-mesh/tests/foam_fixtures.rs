@@ -40,16 +40,27 @@ fn ascii_case_matches_check_mesh() {
     // Patch table of checkMesh (walls 36, inlet 9, outlet 9 faces) and blockMesh's types.
     assert_eq!(
         sizes,
-        [("walls", "wall", 36), ("inlet", "patch", 9), ("outlet", "patch", 9)]
+        [
+            ("walls", "wall", 36),
+            ("inlet", "patch", 9),
+            ("outlet", "patch", 9)
+        ]
     );
     // "Overall domain bounding box (0 0 0) (0.30000000000000004 0.60000000000000009
     // 0.90000000000000024)": checkMesh prints 17 significant digits, so compare to 1e-15 m.
     let lo = mesh.points.iter().fold(DVec3::INFINITY, |a, &p| a.min(p));
-    let hi = mesh.points.iter().fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
+    let hi = mesh
+        .points
+        .iter()
+        .fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
     assert!(lo.abs_diff_eq(DVec3::ZERO, 1e-15), "{lo}");
     assert!(
         hi.abs_diff_eq(
-            DVec3::new(0.30000000000000004, 0.60000000000000009, 0.90000000000000024),
+            DVec3::new(
+                0.30000000000000004,
+                0.60000000000000009,
+                0.90000000000000024
+            ),
             1e-15
         ),
         "{hi}"
@@ -59,7 +70,11 @@ fn ascii_case_matches_check_mesh() {
     // "Total volume = 0.16200000000000006": the divergence theorem over the boundary faces.
     let vol: f64 = (mesh.n_internal_faces()..mesh.n_faces())
         .map(|f| {
-            let pts: Vec<DVec3> = mesh.face(f).iter().map(|&i| mesh.points[i as usize]).collect();
+            let pts: Vec<DVec3> = mesh
+                .face(f)
+                .iter()
+                .map(|&i| mesh.points[i as usize])
+                .collect();
             let c = pts.iter().sum::<DVec3>() / pts.len() as f64;
             (0..pts.len())
                 .map(|k| (pts[k] - c).cross(pts[(k + 1) % pts.len()] - c) * 0.5)
