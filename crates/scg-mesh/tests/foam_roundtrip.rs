@@ -12,13 +12,21 @@ use scg_mesh::foam::{self, Format, TimeSel};
 use scg_mesh::{CellField, PolyMesh};
 
 fn boxes() -> Vec<(&'static str, PolyMesh)> {
-    let g = box_grid([3, 2, 4], DVec3::new(-0.1, 0.0, 0.2), DVec3::new(0.2, 0.05, 0.6));
+    let g = box_grid(
+        [3, 2, 4],
+        DVec3::new(-0.1, 0.0, 0.2),
+        DVec3::new(0.2, 0.05, 0.6),
+    );
     vec![("hex", g.hex_mesh()), ("tet", g.tet_mesh())]
 }
 
 #[test]
 fn generated_boxes_have_the_expected_counts_and_orientation() {
-    let g = box_grid([3, 2, 4], DVec3::new(-0.1, 0.0, 0.2), DVec3::new(0.2, 0.05, 0.6));
+    let g = box_grid(
+        [3, 2, 4],
+        DVec3::new(-0.1, 0.0, 0.2),
+        DVec3::new(0.2, 0.05, 0.6),
+    );
     let hex = g.hex_mesh();
     hex.check(Path::new("hex")).unwrap();
     assert_eq!(hex.n_cells, 24);
@@ -35,7 +43,10 @@ fn generated_boxes_have_the_expected_counts_and_orientation() {
     for (name, m) in [("hex", &hex), ("tet", &tet)] {
         let (closure, min_dot) = check_orientation(m);
         assert!(closure < 1e-12, "{name}: closure {closure}");
-        assert!(min_dot > 0.0, "{name}: a face points into its cell ({min_dot})");
+        assert!(
+            min_dot > 0.0,
+            "{name}: a face points into its cell ({min_dot})"
+        );
     }
 }
 
@@ -98,7 +109,13 @@ fn latest_time_is_the_largest_number() {
         cells: vec![DVec3::splat(t); mesh.n_cells],
         patches: vec![None; mesh.patches.len()],
     };
-    foam::write_case(dir.path(), &mesh, Some(("U", &field_at(0.0))), Format::Ascii).unwrap();
+    foam::write_case(
+        dir.path(),
+        &mesh,
+        Some(("U", &field_at(0.0))),
+        Format::Ascii,
+    )
+    .unwrap();
     // "10" sorts before "2" and "0.5" as text; numerically 10 is the latest.
     for (name, t) in [("0.5", 0.5), ("2", 2.0), ("10", 10.0), ("1e-3", 1e-3)] {
         foam::write_vector_field(dir.path(), name, "U", &mesh, &field_at(t), Format::Binary)
@@ -111,7 +128,11 @@ fn latest_time_is_the_largest_number() {
         .map(|t| t.0)
         .collect();
     assert_eq!(times, [0.0, 1e-3, 0.5, 2.0, 10.0]);
-    let read = |sel| foam::read_vector_field(dir.path(), &mesh, sel, "U").unwrap().cells[0];
+    let read = |sel| {
+        foam::read_vector_field(dir.path(), &mesh, sel, "U")
+            .unwrap()
+            .cells[0]
+    };
     assert_eq!(read(TimeSel::Latest), DVec3::splat(10.0));
     assert_eq!(read(TimeSel::Time(0.001)), DVec3::splat(1e-3));
     assert_eq!(read(TimeSel::Time(2.0)), DVec3::splat(2.0));
@@ -158,8 +179,11 @@ fn label64_scalar32_and_big_endian_binary() {
         };
         let labels = |v: &[u32]| v.iter().flat_map(|&x| label(x)).collect::<Vec<u8>>();
         for (name, list) in [("owner", &mesh.owner), ("neighbour", &mesh.neighbour)] {
-            std::fs::write(pm.join(name), binary_file("labelList", arch, list.len(), &labels(list)))
-                .unwrap();
+            std::fs::write(
+                pm.join(name),
+                binary_file("labelList", arch, list.len(), &labels(list)),
+            )
+            .unwrap();
         }
         let mut faces = binary_file(
             "faceCompactList",
@@ -217,7 +241,10 @@ fn uniform_fields_and_list_shorthand() {
     let f = foam::read_vector_field(dir.path(), &mesh, TimeSel::Latest, "U").unwrap();
     assert_eq!(f.cells, vec![DVec3::new(1.5, -2.0, 0.3); mesh.n_cells]);
     assert_eq!(f.patches[0], Some(vec![DVec3::Z; n_walls]));
-    assert_eq!(f.patches[1], Some(vec![DVec3::new(0.0, 0.0, 2.0); mesh.patches[1].size]));
+    assert_eq!(
+        f.patches[1],
+        Some(vec![DVec3::new(0.0, 0.0, 2.0); mesh.patches[1].size])
+    );
     assert_eq!(f.patches[2], None);
 }
 

@@ -1,6 +1,6 @@
 //! `constant/polyMesh` → [`PolyMesh`].
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
@@ -15,23 +15,48 @@ use crate::{MeshError, Patch, PolyMesh};
 /// [`PolyMesh::check`].
 pub fn read_mesh(case_dir: impl AsRef<Path>) -> Result<PolyMesh, MeshError> {
     let dir = case_dir.as_ref().join("constant").join("polyMesh");
-    let points = read_points(&dir.join("points"))?;
-    let (face_offsets, face_points) = read_faces(&dir.join("faces"))?;
-    let (owner, owner_note) = read_labels(&dir.join("owner"), "owner")?;
-    let (neighbour, _) = read_labels(&dir.join("neighbour"), "neighbour")?;
-    let patches = read_boundary(&dir.join("boundary"))?;
+    let files = ["points", "faces", "owner", "neighbour", "boundary"]
+        .map(|name| read_maybe_gz(&dir.join(name)));
+    let [points, faces, owner, neighbour, boundary] = files;
+    let (points, faces, owner, neighbour, boundary) =
+        (points?, faces?, owner?, neighbour?, boundary?);
+    parse_mesh(
+        &dir,
+        [
+            view(&points),
+            view(&faces),
+            view(&owner),
+            view(&neighbour),
+            view(&boundary),
+        ],
+    )
+}
+
+fn view(x: &(PathBuf, Vec<u8>)) -> (&Path, &[u8]) {
+    (x.0.as_path(), x.1.as_slice())
+}
+
+/// The mesh from the bytes of its five files (points, faces, owner, neighbour, boundary),
+/// each with the path that names it in errors; `dir` names the mesh as a whole.
+pub(crate) fn parse_mesh(dir: &Path, files: [(&Path, &[u8]); 5]) -> Result<PolyMesh, MeshError> {
+    let [points, faces, owner_f, neighbour_f, boundary] = files;
+    let points = parse_points(points.0, points.1)?;
+    let (face_offsets, face_points) = parse_faces(faces.0, faces.1)?;
+    let (owner, owner_note) = parse_labels(owner_f.0, owner_f.1, "owner")?;
+    let (neighbour, _) = parse_labels(neighbour_f.0, neighbour_f.1, "neighbour")?;
+    let patches = parse_boundary(boundary.0, boundary.1)?;
 
     let n_faces = face_offsets.len().saturating_sub(1);
     if owner.len() != n_faces {
         return Err(MeshError::invalid(
-            dir.join("owner"),
+            owner_f.0,
             "owner",
             format!("{} owners for {n_faces} faces", owner.len()),
         ));
     }
     if neighbour.len() > n_faces {
         return Err(MeshError::invalid(
-            dir.join("neighbour"),
+            neighbour_f.0,
             "neighbour",
             format!("{} neighbours for {n_faces} faces", neighbour.len()),
         ));
@@ -46,7 +71,7 @@ pub fn read_mesh(case_dir: impl AsRef<Path>) -> Result<PolyMesh, MeshError> {
         && nc != n_cells
     {
         return Err(MeshError::invalid(
-            dir.join("owner"),
+            owner_f.0,
             "FoamFile/note",
             format!("nCells:{nc} but the owner and neighbour lists address {n_cells} cells"),
         ));
@@ -60,7 +85,7 @@ pub fn read_mesh(case_dir: impl AsRef<Path>) -> Result<PolyMesh, MeshError> {
         patches,
         n_cells,
     };
-    mesh.check(&dir)?;
+    mesh.check(dir)?;
     Ok(mesh)
 }
 
@@ -93,15 +118,14 @@ fn end(p: &mut Parser, entry: &str) -> Result<(), MeshError> {
     }
 }
 
-fn read_points(base: &Path) -> Result<Vec<DVec3>, MeshError> {
-    let (file, bytes) = read_maybe_gz(base)?;
-    let mut p = Parser::new(&file, &bytes);
+fn parse_points(file: &Path, bytes: &[u8]) -> Result<Vec<DVec3>, MeshError> {
+    let mut p = Parser::new(file, bytes);
     header_class(&mut p, &["vectorField"])?;
     let points = p.list("points", VECTOR)?;
     end(&mut p, "points")?;
     if let Some((i, x)) = points.iter().enumerate().find(|(_, x)| !x.is_finite()) {
         return Err(MeshError::invalid(
-            &file,
+            file,
             format!("points[{i}]"),
             format!("not finite: {x}"),
         ));
@@ -114,9 +138,8 @@ fn index(file: &Path, entry: impl FnOnce() -> String, v: i64) -> Result<u32, Mes
     u32::try_from(v).map_err(|_| MeshError::invalid(file, entry(), format!("invalid index {v}")))
 }
 
-fn read_faces(base: &Path) -> Result<(Vec<u32>, Vec<u32>), MeshError> {
-    let (file, bytes) = read_maybe_gz(base)?;
-    let mut p = Parser::new(&file, &bytes);
+fn parse_faces(file: &Path, bytes: &[u8]) -> Result<(Vec<u32>, Vec<u32>), MeshError> {
+    let mut p = Parser::new(file, bytes);
     let (_, class) = header_class(&mut p, &["faceList", "faceCompactList"])?;
     if class == "faceList" {
         let faces: Vec<Vec<i64>> = p.list("faces", Elem::Face(|v| v))?;
@@ -126,9 +149,9 @@ fn read_faces(base: &Path) -> Result<(Vec<u32>, Vec<u32>), MeshError> {
         let mut pts = Vec::with_capacity(faces.iter().map(Vec::len).sum());
         for (f, face) in faces.iter().enumerate() {
             for &v in face {
-                pts.push(index(&file, || format!("faces[{f}]"), v)?);
+                pts.push(index(file, || format!("faces[{f}]"), v)?);
             }
-            offsets.push(index(&file, || format!("faces[{f}]"), pts.len() as i64)?);
+            offsets.push(index(file, || format!("faces[{f}]"), pts.len() as i64)?);
         }
         Ok((offsets, pts))
     } else {
@@ -137,7 +160,7 @@ fn read_faces(base: &Path) -> Result<(Vec<u32>, Vec<u32>), MeshError> {
         end(&mut p, "faces")?;
         if offs.first().is_some_and(|&o| o != 0) {
             return Err(MeshError::invalid(
-                &file,
+                file,
                 "faces/offsets[0]",
                 format!("{} where 0 was expected", offs[0]),
             ));
@@ -147,7 +170,7 @@ fn read_faces(base: &Path) -> Result<(Vec<u32>, Vec<u32>), MeshError> {
         for (i, &o) in offs.iter().enumerate() {
             if o < prev || o as usize > pts.len() {
                 return Err(MeshError::invalid(
-                    &file,
+                    file,
                     format!("faces/offsets[{i}]"),
                     format!(
                         "offset {o} out of order or past the {} point indices",
@@ -163,7 +186,7 @@ fn read_faces(base: &Path) -> Result<(Vec<u32>, Vec<u32>), MeshError> {
         }
         if *offsets.last().unwrap_or(&0) as usize != pts.len() {
             return Err(MeshError::invalid(
-                &file,
+                file,
                 "faces/offsets",
                 format!(
                     "the last offset is {} but there are {} point indices",
@@ -175,30 +198,32 @@ fn read_faces(base: &Path) -> Result<(Vec<u32>, Vec<u32>), MeshError> {
         let pts = pts
             .iter()
             .enumerate()
-            .map(|(i, &v)| index(&file, || format!("faces/points[{i}]"), v))
+            .map(|(i, &v)| index(file, || format!("faces/points[{i}]"), v))
             .collect::<Result<Vec<u32>, _>>()?;
         Ok((offsets, pts))
     }
 }
 
 /// A labelList (owner or neighbour), with the header's `note` if any.
-fn read_labels(base: &Path, name: &str) -> Result<(Vec<u32>, Option<String>), MeshError> {
-    let (file, bytes) = read_maybe_gz(base)?;
-    let mut p = Parser::new(&file, &bytes);
+fn parse_labels(
+    file: &Path,
+    bytes: &[u8],
+    name: &str,
+) -> Result<(Vec<u32>, Option<String>), MeshError> {
+    let mut p = Parser::new(file, bytes);
     let (h, _) = header_class(&mut p, &["labelList"])?;
     let raw = p.list(name, LABEL)?;
     end(&mut p, name)?;
     let list = raw
         .iter()
         .enumerate()
-        .map(|(i, &v)| index(&file, || format!("{name}[{i}]"), v))
+        .map(|(i, &v)| index(file, || format!("{name}[{i}]"), v))
         .collect::<Result<Vec<u32>, _>>()?;
     Ok((list, h.word("note").map(str::to_owned)))
 }
 
-fn read_boundary(base: &Path) -> Result<Vec<Patch>, MeshError> {
-    let (file, bytes) = read_maybe_gz(base)?;
-    let mut p = Parser::new(&file, &bytes);
+fn parse_boundary(file: &Path, bytes: &[u8]) -> Result<Vec<Patch>, MeshError> {
+    let mut p = Parser::new(file, bytes);
     header_class(&mut p, &["polyBoundaryMesh"])?;
     // The patch list is read as text even in binary files (OpenFOAM writes it so).
     p.enc.binary = false;
@@ -213,18 +238,18 @@ fn read_boundary(base: &Path) -> Result<Vec<Patch>, MeshError> {
         let entry = format!("boundary/{name}");
         let kind = dict
             .word("type")
-            .ok_or_else(|| MeshError::invalid(&file, format!("{entry}/type"), "missing"))?
+            .ok_or_else(|| MeshError::invalid(file, format!("{entry}/type"), "missing"))?
             .to_string();
         let count = |key: &str| -> Result<usize, MeshError> {
             match dict.number(key) {
                 Some(x) if x >= 0.0 && x.fract() == 0.0 && x < u32::MAX as f64 => Ok(x as usize),
                 Some(x) => Err(MeshError::invalid(
-                    &file,
+                    file,
                     format!("{entry}/{key}"),
                     format!("{x} is not a face count"),
                 )),
                 None => Err(MeshError::invalid(
-                    &file,
+                    file,
                     format!("{entry}/{key}"),
                     "missing or not a number",
                 )),

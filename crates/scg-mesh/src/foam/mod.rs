@@ -8,6 +8,8 @@
 //! directives (`#include`, …) and `$var` macros are rejected with an error naming the entry.
 
 mod field;
+#[cfg(test)]
+mod fuzz_tests;
 mod mesh;
 pub(crate) mod parse;
 mod write;

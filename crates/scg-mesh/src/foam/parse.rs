@@ -117,9 +117,14 @@ pub(crate) struct Parser<'a> {
     file: &'a Path,
     buf: &'a [u8],
     pos: usize,
+    /// Nesting depth of `{ }` blocks being read.
+    depth: usize,
     /// Data encoding, from the header.
     pub enc: Encoding,
 }
+
+/// Deepest `{ }` nesting accepted (real files nest 3 or 4 deep).
+const MAX_DEPTH: usize = 64;
 
 fn is_delim(b: u8) -> bool {
     b.is_ascii_whitespace() || matches!(b, b'(' | b')' | b'{' | b'}' | b'[' | b']' | b';' | b'"')
@@ -131,6 +136,7 @@ impl<'a> Parser<'a> {
             file,
             buf,
             pos: 0,
+            depth: 0,
             enc: Encoding::default(),
         }
     }
@@ -290,11 +296,12 @@ impl<'a> Parser<'a> {
     /// Entries up to the closing `}` (consumed) or, at the top level, the end of the file.
     pub fn dict_body(&mut self, path: &str, braced: bool) -> Result<Dict, MeshError> {
         let mut d = Dict::default();
+        let here = if path.is_empty() { "top level" } else { path };
         loop {
             self.skip_ws();
             match self.peek() {
                 None if braced => {
-                    return Err(self.err(path, "missing '}' (truncated file?)"));
+                    return Err(self.err(here, "missing '}' (truncated file?)"));
                 }
                 None => return Ok(d),
                 Some(b'}') if braced => {
@@ -304,13 +311,13 @@ impl<'a> Parser<'a> {
                 Some(b'#') => {
                     let w = String::from_utf8_lossy(self.raw_word()).into_owned();
                     return Err(self.err(
-                        path,
+                        here,
                         format!("directive '{w}' is not supported (#include, #inputMode, … are not expanded)"),
                     ));
                 }
                 _ => {}
             }
-            let key = self.keyword(path)?;
+            let key = self.keyword(here)?;
             if key.starts_with('$') {
                 return Err(self.err(
                     path,
@@ -325,7 +332,13 @@ impl<'a> Parser<'a> {
             self.skip_ws();
             let value = if self.peek() == Some(b'{') {
                 self.pos += 1;
-                Value::Dict(self.dict_body(&sub, true)?)
+                if self.depth >= MAX_DEPTH {
+                    return Err(self.err(&sub, "dictionaries nested too deep"));
+                }
+                self.depth += 1;
+                let d = self.dict_body(&sub, true);
+                self.depth -= 1;
+                Value::Dict(d?)
             } else {
                 Value::Tokens(self.tokens(&sub)?)
             };
@@ -546,7 +559,7 @@ impl<'a> Parser<'a> {
                 let v = self.ascii_elem(entry, &elem)?;
                 self.expect(b'}', entry)?;
                 // Bound what a uniform list may allocate by what its user may need.
-                if n > (1 << 28) {
+                if n > (1 << 27) {
                     return Err(self.err(entry, format!("uniform list of {n} entries is too long")));
                 }
                 Ok(vec![v; n])

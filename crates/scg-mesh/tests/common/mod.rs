@@ -83,7 +83,14 @@ impl BoxGrid {
         let corner = |x: usize, y: usize, z: usize| [[[0, 4], [3, 7]], [[1, 5], [2, 6]]][x][y][z];
         let mut out = Vec::new();
         for h in &self.hexes {
-            for perm in [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]] {
+            for perm in [
+                [0, 1, 2],
+                [0, 2, 1],
+                [1, 0, 2],
+                [1, 2, 0],
+                [2, 0, 1],
+                [2, 1, 0],
+            ] {
                 let mut b = [0usize; 3];
                 let mut tet = [h[corner(0, 0, 0)]; 4];
                 for (s, &axis) in perm.iter().enumerate() {
@@ -116,7 +123,11 @@ impl BoxGrid {
             .iter()
             .map(|h| cell_faces(12, h).unwrap())
             .collect();
-        split_patches(assemble(self.points.clone(), cells).unwrap(), self.lo, self.hi)
+        split_patches(
+            assemble(self.points.clone(), cells).unwrap(),
+            self.lo,
+            self.hi,
+        )
     }
 
     /// The tetrahedral mesh (6 tets per hexahedron), patches as [`BoxGrid::hex_mesh`].
@@ -126,7 +137,11 @@ impl BoxGrid {
             .iter()
             .map(|t| cell_faces(10, t).unwrap())
             .collect();
-        split_patches(assemble(self.points.clone(), cells).unwrap(), self.lo, self.hi)
+        split_patches(
+            assemble(self.points.clone(), cells).unwrap(),
+            self.lo,
+            self.hi,
+        )
     }
 }
 
@@ -135,7 +150,11 @@ fn split_patches(mut m: PolyMesh, lo: DVec3, hi: DVec3) -> PolyMesh {
     let ni = m.n_internal_faces();
     let mut groups: [Vec<usize>; 3] = Default::default();
     for f in ni..m.n_faces() {
-        let c = m.face(f).iter().map(|&p| m.points[p as usize]).sum::<DVec3>()
+        let c = m
+            .face(f)
+            .iter()
+            .map(|&p| m.points[p as usize])
+            .sum::<DVec3>()
             / m.face(f).len() as f64;
         let g = if (c.z - lo.z).abs() < 1e-12 {
             1
@@ -204,7 +223,11 @@ pub fn affine_field(m: &PolyMesh) -> CellField {
             Some(
                 (p.start..p.start + p.size)
                     .map(|f| {
-                        let c = m.face(f).iter().map(|&i| m.points[i as usize]).sum::<DVec3>()
+                        let c = m
+                            .face(f)
+                            .iter()
+                            .map(|&i| m.points[i as usize])
+                            .sum::<DVec3>()
                             / m.face(f).len() as f64;
                         affine_u(c)
                     })
@@ -269,7 +292,11 @@ pub fn canonical(m: &PolyMesh) -> BTreeMap<Vec<[u64; 3]>, (String, String)> {
     let name = |c: DVec3| format!("{:.9} {:.9} {:.9}", c.x, c.y, c.z);
     let mut out = BTreeMap::new();
     for f in 0..m.n_faces() {
-        let mut k: Vec<[u64; 3]> = m.face(f).iter().map(|&i| key(m.points[i as usize])).collect();
+        let mut k: Vec<[u64; 3]> = m
+            .face(f)
+            .iter()
+            .map(|&i| key(m.points[i as usize]))
+            .collect();
         k.sort_unstable();
         let owner = name(centres[m.owner[f] as usize]);
         let other = if f < m.n_internal_faces() {
