@@ -14,6 +14,7 @@
 //! arithmetic mean of the values at its distinct points, and onto each boundary face as the
 //! mean at the face's points (then the patch values are `Some`).
 
+mod appended;
 mod cells;
 
 use std::path::Path;
@@ -40,15 +41,26 @@ pub fn read(path: impl AsRef<Path>, field_name: &str) -> Result<(PolyMesh, CellF
             format!("extension '.{ext}': expected .vtk (legacy) or .vtu (XML)"),
         ));
     }
-    if let Err(e) = std::fs::metadata(path) {
-        return Err(MeshError::Io {
-            file: path.to_path_buf(),
-            source: e,
-        });
-    }
+    let bytes = std::fs::read(path).map_err(|e| MeshError::Io {
+        file: path.to_path_buf(),
+        source: e,
+    })?;
+    // vtkio reads appended data only base64-encoded: raw appended data (ParaView's
+    // default) is re-encoded inline first.
+    let bytes = if ext == "vtu" {
+        appended::inline_raw_appended(&bytes).map_err(|m| bad("AppendedData", m))?
+    } else {
+        bytes
+    };
     // vtkio is third-party: a panic inside it on malformed input becomes an error here.
-    let imported = std::panic::catch_unwind(|| Vtk::import(path))
-        .map_err(|_| bad("file", "the VTK parser (vtkio) failed on this file".into()))?;
+    let imported = std::panic::catch_unwind(|| {
+        if ext == "vtu" {
+            Vtk::parse_xml(&bytes[..])
+        } else {
+            Vtk::parse_legacy_be(&bytes[..])
+        }
+    })
+    .map_err(|_| bad("file", "the VTK parser (vtkio) failed on this file".into()))?;
     let vtk = imported.map_err(|e| bad("file", format!("cannot parse: {e}")))?;
     let pieces = match vtk.data {
         DataSet::UnstructuredGrid { pieces, .. } => pieces,
