@@ -83,7 +83,7 @@ pub fn read(path: impl AsRef<Path>, field_name: &str) -> Result<(PolyMesh, CellF
             .points
             .cast_into()
             .ok_or_else(|| bad("Points", "coordinates are not numbers".into()))?;
-        if coords.len() % 3 != 0 {
+        if !coords.len().is_multiple_of(3) {
             return Err(bad(
                 "Points",
                 format!("{} coordinates, not a multiple of 3", coords.len()),

@@ -56,11 +56,9 @@ fn ascii_case_matches_check_mesh() {
     assert!(lo.abs_diff_eq(DVec3::ZERO, 1e-15), "{lo}");
     assert!(
         hi.abs_diff_eq(
-            DVec3::new(
-                0.30000000000000004,
-                0.60000000000000009,
-                0.90000000000000024
-            ),
+            // checkMesh's 0.60000000000000009 and 0.90000000000000024 are these f64 values
+            // (the nearest doubles to the printed decimals).
+            DVec3::new(0.30000000000000004, 0.6000000000000001, 0.9000000000000002),
             1e-15
         ),
         "{hi}"

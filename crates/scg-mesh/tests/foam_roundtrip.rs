@@ -276,3 +276,68 @@ fn million_cell_ascii_mesh_reads_in_seconds() {
         assert!(t_all.as_secs_f64() < 10.0);
     }
 }
+
+/// OpenFOAM itself accepts what `write_case` writes: `checkMesh` reports "Mesh OK." with
+/// our counts, and `foamFormatConvert` reads our ASCII case (mesh and U) and rewrites it in
+/// binary, which reads back equal. Needs OpenFOAM on the PATH, so ignored by default:
+/// `source /usr/share/openfoam/etc/bashrc; cargo test --release -p scg-mesh --test
+/// foam_roundtrip -- --ignored openfoam`.
+#[test]
+#[ignore]
+fn openfoam_accepts_written_cases() {
+    let run = |dir: &Path, cmd: &str| -> String {
+        let out = std::process::Command::new(cmd)
+            .arg("-case")
+            .arg(dir)
+            .output()
+            .unwrap_or_else(|e| panic!("{cmd}: {e} (source OpenFOAM's etc/bashrc first)"));
+        let text = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(out.status.success(), "{cmd} failed:\n{text}");
+        text
+    };
+    for (name, mesh) in boxes() {
+        let field = common::affine_field(&mesh);
+        for format in [Format::Ascii, Format::Binary] {
+            let dir =
+                Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("openfoam-{name}-{format:?}"));
+            let _ = std::fs::remove_dir_all(&dir);
+            foam::write_case(&dir, &mesh, Some(("U", &field)), format).unwrap();
+            let log = run(&dir, "checkMesh");
+            assert!(log.contains("Mesh OK."), "{name} {format:?}:\n{log}");
+            assert!(
+                log.contains(&format!("    cells:            {}\n", mesh.n_cells)),
+                "{log}"
+            );
+            assert!(
+                log.contains(&format!("    faces:            {}\n", mesh.n_faces())),
+                "{log}"
+            );
+            assert!(
+                log.contains(&format!(
+                    "    internal faces:   {}\n",
+                    mesh.n_internal_faces()
+                )),
+                "{log}"
+            );
+            assert!(
+                log.contains(&format!("    points:           {}\n", mesh.points.len())),
+                "{log}"
+            );
+            if format == Format::Ascii {
+                // Rewrite in binary with OpenFOAM, then read that back.
+                let cd = dir.join("system/controlDict");
+                let text = std::fs::read_to_string(&cd)
+                    .unwrap()
+                    .replace("writeFormat     ascii;", "writeFormat     binary;");
+                std::fs::write(&cd, text).unwrap();
+                run(&dir, "foamFormatConvert");
+                let faces = std::fs::read(dir.join("constant/polyMesh/faces")).unwrap();
+                assert!(faces.windows(15).any(|w| w == b"faceCompactList"));
+                let back = foam::read_mesh(&dir).unwrap();
+                assert_eq!(back, mesh, "{name}");
+                let u = foam::read_vector_field(&dir, &back, TimeSel::Latest, "U").unwrap();
+                assert_eq!(u, field, "{name}");
+            }
+        }
+    }
+}

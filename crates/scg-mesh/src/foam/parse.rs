@@ -12,7 +12,7 @@ use glam::DVec3;
 use crate::MeshError;
 
 /// What the `FoamFile` header says about the encoding of the data.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(crate) struct Encoding {
     /// `format binary`.
     pub binary: bool,
@@ -22,17 +22,6 @@ pub(crate) struct Encoding {
     pub scalar32: bool,
     /// `MSB` in `arch` (big-endian binary data).
     pub big_endian: bool,
-}
-
-impl Default for Encoding {
-    fn default() -> Self {
-        Encoding {
-            binary: false,
-            label64: false,
-            scalar32: false,
-            big_endian: false,
-        }
-    }
 }
 
 /// One item of an entry's token stream.
