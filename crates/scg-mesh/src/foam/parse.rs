@@ -48,6 +48,9 @@ pub(crate) enum ListData {
     Scalars(Vec<f64>),
     /// `List<label>`.
     Labels(Vec<i64>),
+    /// Lists of tensors (`List<symmTensor>`, …): the number of components and of entries,
+    /// values checked for syntax and dropped.
+    Tuples(usize, usize),
 }
 
 /// A dictionary entry's value.
@@ -390,14 +393,21 @@ impl<'a> Parser<'a> {
                             b"vector" => ListData::Vectors(self.list(entry, VECTOR)?),
                             b"scalar" => ListData::Scalars(self.list(entry, SCALAR)?),
                             b"label" => ListData::Labels(self.list(entry, LABEL)?),
+                            b"sphericalTensor" | b"symmTensor" | b"tensor" | b"vector2D" => {
+                                let k = match ty {
+                                    b"sphericalTensor" => 1,
+                                    b"symmTensor" => 6,
+                                    b"tensor" => 9,
+                                    _ => 2,
+                                };
+                                let v = self.list(entry, Elem::Tuple(k, |v| v))?;
+                                ListData::Tuples(k, v.len())
+                            }
+                            // Lists of words (`inGroups List<word> 1(wall)`) and other
+                            // non-numeric types are text even in binary files.
                             _ => {
-                                return Err(self.err(
-                                    entry,
-                                    format!(
-                                        "unsupported list type '{}'",
-                                        String::from_utf8_lossy(w)
-                                    ),
-                                ));
+                                out.push(Token::Word(String::from_utf8_lossy(w).into_owned()));
+                                continue;
                             }
                         };
                         out.push(Token::List(data));
@@ -555,13 +565,15 @@ impl<'a> Parser<'a> {
             }
             Some(b'(') => {
                 self.pos += 1;
-                let out = if self.enc.binary && elem.contiguous() {
-                    let size = match elem {
-                        Elem::Label(_) => self.label_size(),
-                        Elem::Scalar(_) => self.scalar_size(),
-                        Elem::Vector(_) => 3 * self.scalar_size(),
-                        Elem::Face(_) => unreachable!("faces are not contiguous"),
-                    };
+                let size = match elem {
+                    Elem::Label(_) => Some(self.label_size()),
+                    Elem::Scalar(_) => Some(self.scalar_size()),
+                    Elem::Vector(_) => Some(3 * self.scalar_size()),
+                    Elem::Tuple(k, _) => Some(k * self.scalar_size()),
+                    // Faces are lists themselves: never raw bytes.
+                    Elem::Face(_) => None,
+                };
+                let out = if let (true, Some(size)) = (self.enc.binary, size) {
                     let bytes = self.take(n.saturating_mul(size), entry)?;
                     let mut out = Vec::with_capacity(n);
                     for chunk in bytes.chunks_exact(size) {
@@ -610,6 +622,16 @@ impl<'a> Parser<'a> {
             Elem::Label(f) => f(self.label(entry)?),
             Elem::Scalar(f) => f(self.scalar(entry)?),
             Elem::Vector(f) => f(self.vector(entry)?),
+            Elem::Tuple(1, f) => f(vec![self.scalar(entry)?]),
+            Elem::Tuple(k, f) => {
+                self.expect(b'(', entry)?;
+                let mut v = Vec::with_capacity(*k);
+                for _ in 0..*k {
+                    v.push(self.scalar(entry)?);
+                }
+                self.expect(b')', entry)?;
+                f(v)
+            }
             Elem::Face(f) => {
                 let enc = self.enc;
                 // A face inside an ASCII faceList, or a binary labelListList entry.
@@ -632,7 +654,14 @@ impl<'a> Parser<'a> {
                     self.bin_scalar(&b[2 * s..3 * s]),
                 ))
             }
-            Elem::Face(_) => unreachable!("faces are not contiguous"),
+            Elem::Tuple(k, f) => {
+                let s = self.scalar_size();
+                f((0..*k)
+                    .map(|i| self.bin_scalar(&b[i * s..(i + 1) * s]))
+                    .collect())
+            }
+            // Not reached: faces are read as text lists.
+            Elem::Face(f) => f(Vec::new()),
         }
     }
 }
@@ -643,12 +672,8 @@ pub(crate) enum Elem<T> {
     Scalar(fn(f64) -> T),
     Vector(fn(DVec3) -> T),
     Face(fn(Vec<i64>) -> T),
-}
-
-impl<T> Elem<T> {
-    fn contiguous(&self) -> bool {
-        !matches!(self, Elem::Face(_))
-    }
+    /// A tuple of this many scalars (tensors: `(xx xy ...)`, or a bare scalar for 1).
+    Tuple(usize, fn(Vec<f64>) -> T),
 }
 
 /// Vectors, stored as they are.
@@ -736,6 +761,32 @@ mod tests {
             p.list("l", VECTOR).unwrap(),
             vec![DVec3::new(1.5, -2.0, 3.25)]
         );
+    }
+
+    #[test]
+    fn word_and_tensor_lists() {
+        let src = b"inGroups List<word> 1(wall); R nonuniform List<symmTensor> 2((1 2 3 4 5 6) (1 2 3 4 5 6)); nFaces 3;";
+        let d = parser(src).dict_body("", false).unwrap();
+        assert_eq!(d.number("nFaces"), Some(3.0));
+        assert_eq!(
+            d.get("R"),
+            Some(&Value::Tokens(vec![
+                Token::Word("nonuniform".into()),
+                Token::List(ListData::Tuples(6, 2))
+            ]))
+        );
+        let mut bytes = b"T nonuniform List<tensor> 1(".to_vec();
+        for x in 0..9 {
+            bytes.extend((x as f64).to_le_bytes());
+        }
+        bytes.extend(b"); g List<word> 2(a b);");
+        let mut p = parser(&bytes);
+        p.enc.binary = true;
+        let d = p.dict_body("", false).unwrap();
+        assert!(
+            matches!(d.get("T"), Some(Value::Tokens(t)) if t[1] == Token::List(ListData::Tuples(9, 1)))
+        );
+        assert!(matches!(d.get("g"), Some(Value::Tokens(t)) if t.len() == 6));
     }
 
     #[test]
