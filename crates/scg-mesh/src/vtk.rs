@@ -16,6 +16,7 @@
 
 mod appended;
 mod cells;
+mod guard;
 
 use std::path::Path;
 
@@ -48,8 +49,11 @@ pub fn read(path: impl AsRef<Path>, field_name: &str) -> Result<(PolyMesh, CellF
     // vtkio reads appended data only base64-encoded: raw appended data (ParaView's
     // default) is re-encoded inline first.
     let bytes = if ext == "vtu" {
-        appended::inline_raw_appended(&bytes).map_err(|m| bad("AppendedData", m))?
+        let b = appended::inline_raw_appended(&bytes).map_err(|m| bad("AppendedData", m))?;
+        guard::check_xml(&b).map_err(|m| bad("file", m))?;
+        b
     } else {
+        guard::check_legacy(&bytes).map_err(|m| bad("file", m))?;
         bytes
     };
     // vtkio is third-party: a panic inside it on malformed input becomes an error here.

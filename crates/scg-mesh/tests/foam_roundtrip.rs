@@ -341,3 +341,53 @@ fn openfoam_accepts_written_cases() {
         }
     }
 }
+
+#[test]
+fn patch_groups_and_patterns() {
+    let (_, mesh) = boxes().remove(0);
+    let names: Vec<&str> = mesh.patches.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(names, ["walls", "bottom", "top"]);
+    let dir = tempfile::tempdir().unwrap();
+    foam::write_case(dir.path(), &mesh, None, Format::Ascii).unwrap();
+    std::fs::create_dir(dir.path().join("0")).unwrap();
+    let read = |bf: &str| {
+        let u = format!(
+            "FoamFile {{ format ascii; class volVectorField; object U; }}\n\
+             dimensions [0 1 -1 0 0 0 0];\ninternalField uniform (0 0 0);\n\
+             boundaryField {{\n{bf}\n}}\n"
+        );
+        std::fs::write(dir.path().join("0/U"), u).unwrap();
+        foam::read_vector_field(dir.path(), &mesh, TimeSel::Latest, "U")
+    };
+    let first = |f: &CellField, i: usize| f.patches[i].as_ref().map(|v| v[0]);
+    // `walls` (type wall) through its group `wall`; bottom and top through a pattern; the
+    // catch-all declared first loses to the later, more specific pattern.
+    let f = read(
+        r#"".*" { type fixedValue; value uniform (9 9 9); }
+           wall { type fixedValue; value uniform (1 0 0); }
+           "(bottom|top)" { type fixedValue; value uniform (0 0 1); }"#,
+    )
+    .unwrap();
+    assert_eq!(first(&f, 0), Some(DVec3::X));
+    assert_eq!(first(&f, 1), Some(DVec3::Z));
+    assert_eq!(first(&f, 2), Some(DVec3::Z));
+    // An entry of the patch's own name beats its group and every pattern.
+    let f = read(
+        r#"wall { type fixedValue; value uniform (1 0 0); }
+           walls { type zeroGradient; }
+           ".*" { type fixedValue; value uniform (0 2 0); }"#,
+    )
+    .unwrap();
+    assert_eq!(first(&f, 0), None);
+    assert_eq!(first(&f, 1), Some(2.0 * DVec3::Y));
+    // A bad expression is an error naming it.
+    let e = read(r#""(bottom" { type zeroGradient; }"#).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("\"(bottom\" is not a regular expression"),
+        "{e}"
+    );
+    // No entry for `top`.
+    let e = read("walls { type zeroGradient; } bottom { type zeroGradient; }").unwrap_err();
+    assert!(e.to_string().contains("boundaryField/top: missing"), "{e}");
+}

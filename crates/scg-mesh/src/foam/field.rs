@@ -4,16 +4,16 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::parse::{ListData, Parser, Token, Value};
+use super::parse::{Dict, ListData, Parser, Token, Value};
 use super::{TimeSel, read_maybe_gz, select_time};
-use crate::{CellField, MeshError, PolyMesh};
+use crate::{CellField, MeshError, Patch, PolyMesh};
 
 /// Read the volVectorField `name` (e.g. `U`, in its own units: m/s for a velocity) of the
 /// time directory `time` picks, on `mesh`.
 ///
 /// `internalField` gives the cell values (`uniform (x y z)` or `nonuniform List<vector>`
-/// with one value per cell); each patch of the mesh must have a `boundaryField` entry of its
-/// own name, whose `value` (uniform or one per patch face) becomes
+/// with one value per cell); each patch of the mesh must have a `boundaryField` entry (of
+/// its name, of its group such as `wall`, or a quoted regular expression such as `".*"`), whose `value` (uniform or one per patch face) becomes
 /// [`CellField::patches`]`[i]`, or `None` when the entry has no `value` (zeroGradient,
 /// empty, …). Every value must be finite.
 pub fn read_vector_field(
@@ -64,12 +64,15 @@ pub(crate) fn parse_vector_field(
     let mut patches = Vec::with_capacity(mesh.patches.len());
     for patch in &mesh.patches {
         let entry = format!("boundaryField/{}", patch.name);
-        let Some(Value::Dict(d)) = bf.get(&patch.name) else {
-            return Err(bad(
-                &entry,
-                "missing: every mesh patch needs an entry of its own name (patterns and groups are not expanded)"
-                    .into(),
-            ));
+        let d = match patch_entry(bf, patch).map_err(|m| bad("boundaryField", m))? {
+            Some(Value::Dict(d)) => d,
+            Some(_) => return Err(bad(&entry, "expected a dictionary { ... }".into())),
+            None => {
+                return Err(bad(
+                    &entry,
+                    "missing: no entry of this name, of its group or matching a pattern".into(),
+                ));
+            }
         };
         if d.word("type").is_none() {
             return Err(bad(&format!("{entry}/type"), "missing".into()));
@@ -86,6 +89,36 @@ pub(crate) fn parse_vector_field(
         });
     }
     Ok(CellField { cells, patches })
+}
+
+/// The boundaryField entry of `patch`, found as OpenFOAM finds it: by the patch's name,
+/// else by its group (the patch type for types other than plain `patch`, e.g. `wall`), else
+/// by the last quoted keyword whose regular expression matches the whole name.
+fn patch_entry<'a>(bf: &'a Dict, patch: &Patch) -> Result<Option<&'a Value>, String> {
+    let plain = |key: &str| {
+        bf.entries
+            .iter()
+            .zip(&bf.quoted)
+            .rev()
+            .find(|((k, _), q)| !**q && k == key)
+            .map(|((_, v), _)| v)
+    };
+    if let Some(v) = plain(&patch.name) {
+        return Ok(Some(v));
+    }
+    if patch.kind != "patch"
+        && let Some(v) = plain(&patch.kind)
+    {
+        return Ok(Some(v));
+    }
+    for ((key, v), _) in bf.entries.iter().zip(&bf.quoted).rev().filter(|(_, q)| **q) {
+        let re = regex::Regex::new(&format!("^(?:{key})$"))
+            .map_err(|e| format!("\"{key}\" is not a regular expression: {e}"))?;
+        if re.is_match(&patch.name) {
+            return Ok(Some(v));
+        }
+    }
+    Ok(None)
 }
 
 /// `uniform (x y z)` or `nonuniform List<vector> N (...)`, as `n` finite values.

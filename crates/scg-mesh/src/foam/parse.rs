@@ -66,6 +66,8 @@ pub(crate) enum Value {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub(crate) struct Dict {
     pub entries: Vec<(String, Value)>,
+    /// Whether each entry's keyword was quoted (OpenFOAM reads those as regular expressions).
+    pub quoted: Vec<bool>,
 }
 
 impl Dict {
@@ -309,6 +311,8 @@ impl<'a> Parser<'a> {
                 }
                 _ => {}
             }
+            self.skip_ws();
+            let quoted = self.peek() == Some(b'"');
             let key = self.keyword(here)?;
             if key.starts_with('$') {
                 return Err(self.err(
@@ -335,6 +339,7 @@ impl<'a> Parser<'a> {
                 Value::Tokens(self.tokens(&sub)?)
             };
             d.entries.push((key, value));
+            d.quoted.push(quoted);
         }
     }
 

@@ -33,8 +33,9 @@ pub fn inline_raw_appended(bytes: &[u8]) -> Result<Vec<u8>, String> {
     let compressed = attr(root, "compressor").is_some_and(|c| !c.is_empty());
     let hs = if header64 { 8 } else { 4 };
     let num = |at: usize| -> Result<usize, String> {
-        let b = raw
-            .get(at..at + hs)
+        let b = at
+            .checked_add(hs)
+            .and_then(|end| raw.get(at..end))
             .ok_or("a block header runs past the end of the appended data")?;
         let v = match (header64, big) {
             (true, false) => u64::from_le_bytes(b.try_into().unwrap_or_default()),
@@ -51,19 +52,16 @@ pub fn inline_raw_appended(bytes: &[u8]) -> Result<Vec<u8>, String> {
                 .ok_or_else(|| format!("the block at offset {off} runs past the end of the data"))
         };
         if compressed {
-            let nb = num(off)?;
-            if nb > raw.len() / hs {
-                return Err(format!(
-                    "the block at offset {off} claims {nb} compressed blocks"
-                ));
-            }
-            let header_len = hs * (3 + nb);
-            let mut total = 0usize;
-            for i in 0..nb {
-                total = total.saturating_add(num(off + hs * (3 + i))?);
-            }
+            let limit = 10_000usize.saturating_mul(bytes.len()).saturating_add(1024);
+            let (n_head, total) = super::guard::check_block_header(
+                |i| num(off.saturating_add(hs.saturating_mul(i))),
+                limit,
+                raw.len() / hs,
+            )
+            .map_err(|m| format!("the block at offset {off}: {m}"))?;
+            let header_len = hs * n_head;
             let header = slice(off, header_len)?;
-            let data = slice(off + header_len, total)?;
+            let data = slice(off.saturating_add(header_len), total)?;
             Ok(format!("{}{}", base64(header), base64(data)))
         } else {
             let n = num(off)?;
@@ -103,12 +101,12 @@ pub fn inline_raw_appended(bytes: &[u8]) -> Result<Vec<u8>, String> {
     Ok(out.into_bytes())
 }
 
-fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
+pub(super) fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
     hay.windows(needle.len()).position(|w| w == needle)
 }
 
 /// The value of attribute `name` in a tag (`name="v"` or `name='v'`).
-fn attr(tag: &str, name: &str) -> Option<String> {
+pub(super) fn attr(tag: &str, name: &str) -> Option<String> {
     let mut from = 0;
     while let Some(i) = tag[from..].find(name) {
         let at = from + i;
