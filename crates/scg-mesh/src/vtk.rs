@@ -1,5 +1,8 @@
-//! VTK unstructured grids: legacy `.vtk` (ASCII and binary) and XML `.vtu` (ASCII, inline
-//! base64 and appended data, zlib-compressed or not), read through the `vtkio` crate.
+//! VTK unstructured grids: legacy `.vtk` (ASCII and binary, versions up to 5.1) and XML
+//! `.vtu` (ASCII, inline base64, appended base64 or raw, zlib-compressed or not), read
+//! through the `vtkio` crate. vtkio reads no raw appended data, so that is moved inline as
+//! base64 first; declared counts and compressed block headers are bounded by the file size
+//! before vtkio allocates, and a panic inside vtkio becomes an error.
 //!
 //! Volumetric cells (tetra 10, voxel 11, hexahedron 12, wedge 13, pyramid 14, and polyhedron
 //! 42 in legacy files, where the connectivity holds the face stream) become faces with
