@@ -5,6 +5,7 @@
 //! (hexahedra, tetrahedra, prisms, pyramids, arbitrary polyhedra). Lengths are in metres,
 //! velocities in m/s.
 
+pub mod build;
 pub mod error;
 pub mod polymesh;
 
