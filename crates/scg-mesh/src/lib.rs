@@ -7,6 +7,7 @@
 
 pub mod build;
 pub mod error;
+pub mod geometry;
 pub mod polymesh;
 
 pub use error::MeshError;
