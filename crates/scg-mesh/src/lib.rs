@@ -8,6 +8,7 @@
 pub mod build;
 pub mod error;
 pub mod geometry;
+pub mod locate;
 pub mod polymesh;
 
 pub use error::MeshError;
