@@ -8,6 +8,7 @@
 pub mod build;
 pub mod error;
 pub mod geometry;
+pub mod interp;
 pub mod locate;
 pub mod polymesh;
 
