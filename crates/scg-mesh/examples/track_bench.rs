@@ -7,11 +7,12 @@
 //! ```
 //!
 //! The flow is the paper's vortex about the box's z axis (u = ω(ẑ × r − k r), ω = 100
-//! rad/s, k = 0.1) sampled at the cell centres; τ = 1 ms; dt is set so that the fastest
+//! rad/s, k = 0.1) sampled at the cell centres, interpolated by linear-exact cell-point; τ = 1 ms; dt is set so that the fastest
 //! particle moves 0.3 cell sizes per step (a Courant number of 0.3 on every mesh).
 //! Particles start at random in the box, ordered by cell, then move with
 //! `track_from` → `Interpolator::at` → v += (u − v)·dt/τ, x += v·dt; one leaving the box
-//! is put back at its previous position with the fluid's velocity.
+//! is put back at its previous position with the fluid's velocity. Each case runs three
+//! rounds of `steps` steps and reports the fastest (the machine may be shared).
 
 use std::time::Instant;
 
@@ -87,25 +88,31 @@ fn main() {
                 })
                 .collect();
             ps.sort_by_key(|p| p.hit.cell);
-            let steps = (20_000_000 / n).clamp(10, 200);
+            // three rounds, the fastest reported (the machine is shared)
+            let steps = (10_000_000 / n).clamp(10, 100);
+            let mut best = f64::INFINITY;
             let mut same = 0u64;
-            let t = Instant::now();
-            for _ in 0..steps {
-                for p in ps.iter_mut() {
-                    let u = it.at(&p.hit);
-                    p.v += (u - p.v) * (dt / tau).min(1.0);
-                    let x = p.x + p.v * dt;
-                    match loc.track_from(&p.hit, x) {
-                        Location::Inside(h) => {
-                            same += (h.cell == p.hit.cell && h.face == p.hit.face) as u64;
-                            p.hit = h;
-                            p.x = x;
+            for _round in 0..3 {
+                same = 0;
+                let t = Instant::now();
+                for _ in 0..steps {
+                    for p in ps.iter_mut() {
+                        let u = it.at(&p.hit);
+                        p.v += (u - p.v) * (dt / tau).min(1.0);
+                        let x = p.x + p.v * dt;
+                        match loc.track_from(&p.hit, x) {
+                            Location::Inside(h) => {
+                                same += (h.cell == p.hit.cell && h.face == p.hit.face) as u64;
+                                p.hit = h;
+                                p.x = x;
+                            }
+                            _ => p.v = u,
                         }
-                        _ => p.v = u,
                     }
                 }
+                best = best.min(t.elapsed().as_secs_f64());
             }
-            let secs = t.elapsed().as_secs_f64();
+            let secs = best;
             let total = (n * steps) as f64;
             println!(
                 "{:>9} {:>9} {:>7} {:>9.1} {:>10.3e} {:>8.1} {:>7.0}%",

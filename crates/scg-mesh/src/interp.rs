@@ -187,7 +187,7 @@ pub fn point_values_linear_exact(
         }
         let scale = (m.x_axis.x + m.y_axis.y + m.z_axis.z) / 3.0;
         let det = m.determinant();
-        if !(det.abs() > 1e-9 * scale * scale * scale) {
+        if det.is_nan() || det.abs() <= 1e-9 * scale * scale * scale {
             continue;
         }
         let lambda = -(m.inverse() * r);

@@ -4,6 +4,15 @@
 //! neighbour, boundary patches); every reader produces one, whatever the cell shapes
 //! (hexahedra, tetrahedra, prisms, pyramids, arbitrary polyhedra). Lengths are in metres,
 //! velocities in m/s.
+//!
+//! * [`build`]: box meshes for tests and benchmarks (hexahedra, tetrahedra, polyhedra with
+//!   hanging nodes; patches by side or inlet/outlet/walls; seeded perturbation).
+//! * [`geometry`]: [`MeshGeometry`], derived once (face centres and areas, cell centres and
+//!   volumes by OpenFOAM's formulas, bounding boxes, cell–face and point–cell lists).
+//! * [`locate`]: [`Locator`]: first location through a bin grid, tracking by walking
+//!   across faces, boundary crossings reported with their patch.
+//! * [`interp`]: [`Interpolator`]: cell value and cell-point interpolation of a
+//!   [`CellField`].
 
 pub mod build;
 pub mod error;
@@ -13,4 +22,7 @@ pub mod locate;
 pub mod polymesh;
 
 pub use error::MeshError;
+pub use geometry::MeshGeometry;
+pub use interp::{Interpolation, Interpolator};
+pub use locate::{Hit, Location, Locator};
 pub use polymesh::{CellField, Patch, PolyMesh};

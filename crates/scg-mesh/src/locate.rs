@@ -268,59 +268,86 @@ impl<'a> Locator<'a> {
     }
 
     /// Probe cell `c` for x (see the module documentation).
+    ///
+    /// The face whose plane the ray from the centre meets first (largest
+    /// `d·A_f / ((x_f − cc)·A_f)`, exact for convex cells with planar faces) is tried
+    /// first; only if none of its triangles takes the ray are all faces scanned.
     pub fn probe(&self, c: u32, x: DVec3) -> Probe {
         let ci = c as usize;
         let cc = self.geom.cell_centres[ci];
         let d = x - cc;
-        let mesh = self.mesh;
-        for &f in self.geom.faces_of(ci) {
-            let fi = f as usize;
-            let pts = mesh.face(fi);
-            let flip = mesh.owner[fi] != c;
-            if pts.len() == 3 {
-                let (a, b) = if flip {
-                    (pts[2], pts[1])
-                } else {
-                    (pts[1], pts[2])
-                };
-                let nodes = [pts[0], a, b];
-                if let Some(p) = self.tet(c, cc, d, f, nodes) {
-                    return p;
-                }
-                continue;
+        let faces = self.geom.faces_of(ci);
+        let (mut best, mut best_ratio) = (u32::MAX, f64::NEG_INFINITY);
+        for &f in faces {
+            let a = self.geom.face_areas[f as usize];
+            let den = (self.geom.face_centres[f as usize] - cc).dot(a);
+            // den ≠ 0 and of either sign: the ratio does not depend on the orientation
+            let ratio = d.dot(a) / den;
+            if ratio > best_ratio {
+                best_ratio = ratio;
+                best = f;
             }
-            let fc = self.geom.face_centres[fi];
-            let v1 = fc - cc;
-            let n = pts.len();
-            // s_i = d · (v1 × (p_i − cc)): the side of the plane (cc, fc, p_i) x is on
-            let side = |i: usize| {
-                let p = mesh.points[pts[i] as usize] - cc;
-                let cr = v1.cross(p);
-                (d.dot(cr), cr.length_squared())
-            };
-            let first = side(0);
-            let mut prev = first;
-            for i in 0..n {
-                let next = if i + 1 == n { first } else { side(i + 1) };
-                // triangle (fc, p_i, p_i+1) out of the owner: the ray crosses it when
-                // s_i ≥ 0 ≥ s_i+1 (owner) or s_i ≤ 0 ≤ s_i+1 (neighbour)
-                let scale = |s: (f64, f64)| TOL * (s.1 * d.length_squared()).sqrt();
-                let ok = if flip {
-                    prev.0 <= scale(prev) && next.0 >= -scale(next)
-                } else {
-                    prev.0 >= -scale(prev) && next.0 <= scale(next)
-                };
-                if ok {
-                    let (pa, pb) = (pts[i], pts[(i + 1) % n]);
-                    let (a, b) = if flip { (pb, pa) } else { (pa, pb) };
-                    if let Some(p) = self.tet(c, cc, d, f, [self.n_points + f, a, b]) {
-                        return p;
-                    }
-                }
-                prev = next;
+        }
+        if best != u32::MAX
+            && let Some(p) = self.probe_face(c, cc, d, best)
+        {
+            return p;
+        }
+        for &f in faces {
+            if f != best
+                && let Some(p) = self.probe_face(c, cc, d, f)
+            {
+                return p;
             }
         }
         Probe::Fail
+    }
+
+    /// The triangles of face `f` of cell `c`: `Some` when one takes the ray from `cc`
+    /// along `d`.
+    #[inline]
+    fn probe_face(&self, c: u32, cc: DVec3, d: DVec3, f: u32) -> Option<Probe> {
+        let mesh = self.mesh;
+        let fi = f as usize;
+        let pts = mesh.face(fi);
+        let flip = mesh.owner[fi] != c;
+        if pts.len() == 3 {
+            let (a, b) = if flip {
+                (pts[2], pts[1])
+            } else {
+                (pts[1], pts[2])
+            };
+            return self.tet(c, cc, d, f, [pts[0], a, b]);
+        }
+        let fc = self.geom.face_centres[fi];
+        let v1 = fc - cc;
+        let n = pts.len();
+        let d2 = d.length_squared();
+        let sign = if flip { -1.0 } else { 1.0 };
+        // t_i = ±d · (v1 × (p_i − cc)): the side of the plane (cc, fc, p_i) x is on,
+        // signed so that the ray crosses triangle (fc, p_i, p_i+1) out of c when
+        // t_i ≥ 0 ≥ t_i+1 (up to the tolerance, without a square root)
+        let side = |i: usize| {
+            let p = mesh.points[pts[i] as usize] - cc;
+            let cr = v1.cross(p);
+            let t = sign * d.dot(cr);
+            let slack = TOL * TOL * cr.length_squared() * d2;
+            (t >= 0.0 || t * t <= slack, t <= 0.0 || t * t <= slack)
+        };
+        let first = side(0);
+        let mut prev = first;
+        for i in 0..n {
+            let next = if i + 1 == n { first } else { side(i + 1) };
+            if prev.0 && next.1 {
+                let (pa, pb) = (pts[i], pts[(i + 1) % n]);
+                let (a, b) = if flip { (pb, pa) } else { (pa, pb) };
+                if let Some(p) = self.tet(c, cc, d, f, [self.n_points + f, a, b]) {
+                    return Some(p);
+                }
+            }
+            prev = next;
+        }
+        None
     }
 
     /// Coordinates of `d = x − cc` in the tetrahedron (cc, nodes); `Some` when the ray

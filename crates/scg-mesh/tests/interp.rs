@@ -209,8 +209,8 @@ fn lamb_oseen_convergence() {
 /// exponential scheme v ← u + (v − u)e^{−dt/τ}, x ← x + v·dt, in the given field; returns
 /// the positions at every step. `field` gives u at x, tracking the particle as needed.
 fn trajectory(x0: DVec3, mut field: impl FnMut(DVec3) -> DVec3) -> Vec<DVec3> {
-    let (tau, dt, steps) = (0.05, 1e-3, 1500);
-    let decay = (-dt / tau as f64).exp();
+    let (tau, dt, steps): (f64, f64, usize) = (0.05, 1e-3, 1500);
+    let decay = (-dt / tau).exp();
     let mut x = x0;
     let mut v = field(x);
     let mut out = Vec::with_capacity(steps);
