@@ -30,8 +30,9 @@
 //! what a wall crossing means; in a convex domain with planar boundary faces a walk never
 //! reaches the boundary while x is inside, so `Crossed` does not occur there.
 //!
-//! The walk is capped ([`Locator::max_steps`]); past the cap, or when no face triangle
-//! takes the ray (a degenerate cell), the grid decides.
+//! The walk is capped ([`Locator::max_steps`]); past the cap, when it steps back into the
+//! cell it came from (a two-cell cycle), or when no face triangle takes the ray (a
+//! degenerate cell), the grid decides.
 
 use glam::DVec3;
 
@@ -81,6 +82,15 @@ pub enum Location {
     },
     /// The walk failed and the grid finds the point in no cell.
     Outside,
+}
+
+/// How a walk of [`Locator::track_walk`] went.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Walk {
+    /// Cells probed.
+    pub cells: u32,
+    /// Whether the grid had to decide (bad hint, step cap, cycle, degenerate cell).
+    pub grid: bool,
 }
 
 /// What one probe of a cell finds.
@@ -406,39 +416,58 @@ impl<'a> Locator<'a> {
 
     /// Walk from cell `hint` (the particle's last cell) to x.
     pub fn track(&self, hint: u32, x: DVec3) -> Location {
+        self.track_walk(hint, x).0
+    }
+
+    /// [`Locator::track`], also telling how the walk went.
+    pub fn track_walk(&self, hint: u32, x: DVec3) -> (Location, Walk) {
+        let mut walk = Walk {
+            cells: 0,
+            grid: true,
+        };
+        let grid = |walk: Walk| match self.find(x) {
+            Some(h) => (Location::Inside(h), walk),
+            None => (Location::Outside, walk),
+        };
         if hint as usize >= self.mesh.n_cells || !x.is_finite() {
-            return match self.find(x) {
-                Some(h) => Location::Inside(h),
-                None => Location::Outside,
-            };
+            return grid(walk);
         }
         let ni = self.mesh.n_internal_faces() as u32;
         let mut c = hint;
+        let mut from = u32::MAX;
         for _ in 0..self.max_steps {
+            walk.cells += 1;
             match self.probe(c, x) {
-                Probe::Inside(h) => return Location::Inside(h),
+                Probe::Inside(h) => {
+                    walk.grid = false;
+                    return (Location::Inside(h), walk);
+                }
                 Probe::Exit { face, .. } => {
                     if face < ni {
                         let (o, n) = (
                             self.mesh.owner[face as usize],
                             self.mesh.neighbour[face as usize],
                         );
-                        c = if o == c { n } else { o };
+                        let next = if o == c { n } else { o };
+                        if next == from {
+                            // back where it came from: a two-cell cycle
+                            break;
+                        }
+                        from = c;
+                        c = next;
                     } else {
                         let patch = self.patch_of(face);
+                        walk.grid = false;
                         return match self.find(x) {
-                            None => Location::Left { face, patch },
-                            Some(hit) => Location::Crossed { face, patch, hit },
+                            None => (Location::Left { face, patch }, walk),
+                            Some(hit) => (Location::Crossed { face, patch, hit }, walk),
                         };
                     }
                 }
                 Probe::Fail => break,
             }
         }
-        match self.find(x) {
-            Some(h) => Location::Inside(h),
-            None => Location::Outside,
-        }
+        grid(walk)
     }
 
     /// Like [`Locator::track`] from a previous [`Hit`], trying its tetrahedron first (a
@@ -490,6 +519,13 @@ mod tests {
         // leaving through x max
         match loc.track(57, DVec3::new(1.5, 0.6, 0.9)) {
             Location::Left { patch, .. } => assert_eq!(m.patches[patch as usize].name, "xmax"),
+            other => panic!("{other:?}"),
+        }
+        // a walk cut short by the cap falls back to the grid
+        let mut short = loc.clone();
+        short.max_steps = 1;
+        match short.track(0, x) {
+            Location::Inside(h) => assert_eq!(h.cell, 57),
             other => panic!("{other:?}"),
         }
         // bad hints do not panic

@@ -125,7 +125,7 @@ fn tracking_agrees_with_brute_force_and_reports_the_patch() {
         let loc = Locator::new(&m, &g);
         let [lo, hi] = g.bounds();
         let h = (hi - lo).max_element() / 6.0;
-        let (mut inside, mut left) = (0, 0);
+        let (mut inside, mut left, mut probed, mut grid) = (0, 0, 0, 0);
         let mut x = random_point(&mut rng, lo, hi);
         let mut cell = loc.find_cell(x).unwrap();
         for _ in 0..600 {
@@ -136,7 +136,10 @@ fn tracking_agrees_with_brute_force_and_reports_the_patch() {
             );
             let y = x + dir * h * rng.random_range(0.0..4.0);
             let outside_box = y.cmplt(lo).any() || y.cmpgt(hi).any();
-            match loc.track(cell, y) {
+            let (location, walk) = loc.track_walk(cell, y);
+            probed += walk.cells;
+            grid += walk.grid as u32;
+            match location {
                 Location::Inside(hit) => {
                     assert!(
                         !outside_box,
@@ -166,7 +169,11 @@ fn tracking_agrees_with_brute_force_and_reports_the_patch() {
                 other => panic!("{name}: {other:?} for {y}"),
             }
         }
-        println!("{name}: {inside} moves inside, {left} boundary crossings");
+        println!(
+            "{name}: {inside} moves inside, {left} boundary crossings, {:.1} cells probed per walk, {grid} grid fallbacks",
+            probed as f64 / 600.0
+        );
+        assert_eq!(grid, 0, "{name}: every walk ends by itself");
         assert!(inside > 100 && left > 20, "{name}: both cases exercised");
     }
 }
