@@ -309,3 +309,53 @@ fn lamb_oseen_trajectories() {
         }
     }
 }
+
+/// Cell-point is continuous across faces: at random points on the triangles of internal
+/// faces of a perturbed polyhedral mesh, the value interpolated in the owner and in the
+/// neighbour agree to rounding (they share the face's nodes and their values), while cell
+/// values jump by O(h·|∇u|).
+#[test]
+fn cell_point_is_continuous_across_faces() {
+    let (lo, hi) = (DVec3::new(-1.0, -1.0, 0.0), DVec3::new(1.0, 1.0, 0.5));
+    let m = mesh(CellShape::Poly { refine: 0.3 }, 3, 0.2, lo, hi);
+    let g = MeshGeometry::new(&m);
+    let loc = Locator::new(&m, &g);
+    let f = sample(&m, &g, lamb_oseen);
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    for scheme in [
+        Interpolation::CellPoint,
+        Interpolation::CellPointLinearExact,
+        Interpolation::CellValue,
+    ] {
+        let it = Interpolator::new(&loc, &f, scheme).unwrap();
+        let mut worst = 0.0f64;
+        for _ in 0..2000 {
+            let face = rng.random_range(0..m.n_internal_faces());
+            let pts = m.face(face);
+            let i = rng.random_range(0..pts.len());
+            let a = m.points[pts[i] as usize];
+            let b = m.points[pts[(i + 1) % pts.len()] as usize];
+            let c = if pts.len() == 3 {
+                m.points[pts[(i + 2) % 3] as usize]
+            } else {
+                g.face_centres[face]
+            };
+            let (s, t) = (rng.random::<f64>(), rng.random::<f64>());
+            let (s, t) = if s + t > 1.0 {
+                (1.0 - s, 1.0 - t)
+            } else {
+                (s, t)
+            };
+            let x = c + s * (a - c) + t * (b - c);
+            let uo = it.velocity(m.owner[face], x);
+            let un = it.velocity(m.neighbour[face], x);
+            worst = worst.max((uo - un).length());
+        }
+        println!("{scheme:?}: largest jump across a face {worst:.2e} m/s");
+        if scheme == Interpolation::CellValue {
+            assert!(worst > 1e-2, "cell values do jump");
+        } else {
+            assert!(worst < 1e-12, "{scheme:?}: {worst}");
+        }
+    }
+}
