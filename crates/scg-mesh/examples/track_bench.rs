@@ -58,8 +58,8 @@ fn main() {
     for target in [10_000usize, 100_000, 1_000_000] {
         let t0 = Instant::now();
         let mesh = build(shape, target, lo, hi);
-        let geom = MeshGeometry::new(&mesh);
-        let loc = Locator::new(&mesh, &geom);
+        let geom = MeshGeometry::new(&mesh).unwrap();
+        let loc = Locator::new(&mesh, &geom).unwrap();
         let field = CellField {
             cells: geom.cell_centres.iter().map(|&c| vortex(c)).collect(),
             patches: mesh

@@ -5,7 +5,7 @@
 
 use glam::DVec3;
 
-use crate::PolyMesh;
+use crate::{MeshError, PolyMesh};
 
 /// Face centre and area vector of a polygon by OpenFOAM's method
 /// (`primitiveMeshFaceCentresAndAreas`): a fan of triangles about the point average; the
@@ -93,8 +93,9 @@ pub struct MeshGeometry {
 }
 
 impl MeshGeometry {
-    /// Derive the geometry of `mesh`, which must pass [`PolyMesh::check`].
-    pub fn new(mesh: &PolyMesh) -> Self {
+    /// Derive the geometry of `mesh`; an error if it fails [`PolyMesh::check`].
+    pub fn new(mesh: &PolyMesh) -> Result<Self, MeshError> {
+        mesh.check(std::path::Path::new("<mesh>"))?;
         let nf = mesh.n_faces();
         let nc = mesh.n_cells;
         let mut face_centres = Vec::with_capacity(nf);
@@ -190,7 +191,7 @@ impl MeshGeometry {
                 fill[p] += 1;
             });
         }
-        MeshGeometry {
+        Ok(MeshGeometry {
             face_centres,
             face_areas,
             cell_centres,
@@ -200,7 +201,7 @@ impl MeshGeometry {
             cell_faces,
             point_cell_offsets,
             point_cells,
-        }
+        })
     }
 
     /// Faces of cell `c`.
@@ -267,7 +268,7 @@ mod tests {
         let m = BoxMesh::new(DVec3::ZERO, DVec3::new(3.0, 2.0, 1.0), [3, 2, 2])
             .build()
             .unwrap();
-        let g = MeshGeometry::new(&m);
+        let g = MeshGeometry::new(&m).unwrap();
         for c in 0..m.n_cells {
             assert!((g.cell_volumes[c] - 0.5).abs() < 1e-14);
             let [lo, hi] = g.cell_bounds[c];
@@ -296,7 +297,7 @@ mod tests {
                 .perturbed(0.25, 11)
                 .build()
                 .unwrap();
-            let g = MeshGeometry::new(&m);
+            let g = MeshGeometry::new(&m).unwrap();
             let total: f64 = g.cell_volumes.iter().sum();
             assert!((total - 6.0).abs() < 1e-12, "{shape:?}: {total}");
             assert!(g.cell_volumes.iter().all(|&v| v > 0.0));

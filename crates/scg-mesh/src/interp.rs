@@ -78,8 +78,13 @@ pub fn check_field(mesh: &PolyMesh, field: &CellField) -> Result<(), MeshError> 
 /// `volPointInterpolation`: an interior point takes Σ u_c/|x_p − x_c| / Σ 1/|x_p − x_c|
 /// over the cells using it; a point on the boundary the same over the boundary faces using
 /// it, with the patch's face value where the field gives one and the owner cell's value
-/// otherwise (zero gradient). `field` must pass [`check_field`].
-pub fn point_values(mesh: &PolyMesh, geom: &MeshGeometry, field: &CellField) -> Vec<DVec3> {
+/// otherwise (zero gradient). An error if `field` fails [`check_field`].
+pub fn point_values(
+    mesh: &PolyMesh,
+    geom: &MeshGeometry,
+    field: &CellField,
+) -> Result<Vec<DVec3>, MeshError> {
+    check_field(mesh, field)?;
     let np = mesh.points.len();
     let mut sum = vec![DVec3::ZERO; np];
     let mut wsum = vec![0.0; np];
@@ -117,7 +122,7 @@ pub fn point_values(mesh: &PolyMesh, geom: &MeshGeometry, field: &CellField) -> 
         }
         sum[p] = if ws > 0.0 { s / ws } else { DVec3::ZERO };
     }
-    sum
+    Ok(sum)
 }
 
 /// Point values by inverse-distance weights corrected to be exact for affine fields, the
@@ -127,13 +132,13 @@ pub fn point_values(mesh: &PolyMesh, geom: &MeshGeometry, field: &CellField) -> 
 /// R_i = x_i − x_p, λ chosen so that Σ w_i R_i = 0. Where the 3×3 system is singular or
 /// the weights would be wild (Σ|w_i| > 10 Σw_i; a box corner with one cell and three faces
 /// has 5), the point keeps
-/// its [`point_values`] value. `field` must pass [`check_field`].
+/// its [`point_values`] value. An error if `field` fails [`check_field`].
 pub fn point_values_linear_exact(
     mesh: &PolyMesh,
     geom: &MeshGeometry,
     field: &CellField,
-) -> Vec<DVec3> {
-    let mut out = point_values(mesh, geom, field);
+) -> Result<Vec<DVec3>, MeshError> {
+    let mut out = point_values(mesh, geom, field)?;
     let np = mesh.points.len();
     // boundary faces of every point (CSR)
     let ni = mesh.n_internal_faces();
@@ -202,7 +207,7 @@ pub fn point_values_linear_exact(
             *value = s / ws;
         }
     }
-    out
+    Ok(out)
 }
 
 /// Values at the face centres from point values, exact for fields affine in space.
@@ -243,9 +248,9 @@ impl<'a> Interpolator<'a> {
             Interpolation::CellValue => Vec::new(),
             Interpolation::CellPoint | Interpolation::CellPointLinearExact => {
                 let mut nodes = if scheme == Interpolation::CellPoint {
-                    point_values(mesh, loc.geometry(), field)
+                    point_values(mesh, loc.geometry(), field)?
                 } else {
-                    point_values_linear_exact(mesh, loc.geometry(), field)
+                    point_values_linear_exact(mesh, loc.geometry(), field)?
                 };
                 let fc = face_centre_values(mesh, &nodes);
                 nodes.extend(fc);
@@ -421,8 +426,8 @@ mod tests {
             .perturbed(0.2, 1)
             .build()
             .unwrap();
-        let g = MeshGeometry::new(&m);
-        let loc = Locator::new(&m, &g);
+        let g = MeshGeometry::new(&m).unwrap();
+        let loc = Locator::new(&m, &g).unwrap();
         let u = DVec3::new(1.0, -2.0, 0.5);
         let field = CellField {
             cells: vec![u; m.n_cells],

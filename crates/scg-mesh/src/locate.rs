@@ -36,8 +36,8 @@
 
 use glam::DVec3;
 
-use crate::PolyMesh;
 use crate::geometry::MeshGeometry;
+use crate::{MeshError, PolyMesh};
 
 /// Relative tolerance of the inside tests (barycentric coordinates may be this negative).
 pub(crate) const TOL: f64 = 1e-9;
@@ -220,8 +220,19 @@ pub struct Locator<'a> {
 }
 
 impl<'a> Locator<'a> {
-    /// A locator over `mesh` (which must pass [`PolyMesh::check`]) and its geometry.
-    pub fn new(mesh: &'a PolyMesh, geom: &'a MeshGeometry) -> Self {
+    /// A locator over `mesh` and its geometry (an error if `geom` is not `mesh`'s).
+    pub fn new(mesh: &'a PolyMesh, geom: &'a MeshGeometry) -> Result<Self, MeshError> {
+        if geom.cell_centres.len() != mesh.n_cells
+            || geom.face_centres.len() != mesh.n_faces()
+            || geom.point_cell_offsets.len() != mesh.points.len() + 1
+            || mesh.face_offsets.len() != mesh.n_faces() + 1
+        {
+            return Err(MeshError::invalid(
+                "<mesh>",
+                "geometry",
+                "the geometry was derived from another mesh",
+            ));
+        }
         let ni = mesh.n_internal_faces();
         let mut face_patch = vec![u32::MAX; mesh.n_faces() - ni];
         for (i, p) in mesh.patches.iter().enumerate() {
@@ -231,14 +242,14 @@ impl<'a> Locator<'a> {
                 }
             }
         }
-        Locator {
+        Ok(Locator {
             mesh,
             geom,
             grid: BinGrid::new(geom),
             n_points: mesh.points.len() as u32,
             face_patch,
             max_steps: 256,
-        }
+        })
     }
 
     /// The mesh.
@@ -495,8 +506,8 @@ mod tests {
         let m = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [4, 4, 4])
             .build()
             .unwrap();
-        let g = MeshGeometry::new(&m);
-        let loc = Locator::new(&m, &g);
+        let g = MeshGeometry::new(&m).unwrap();
+        let loc = Locator::new(&m, &g).unwrap();
         let x = DVec3::new(0.3, 0.6, 0.9);
         // cells are numbered i + 4 (j + 4 k)
         assert_eq!(loc.find_cell(x), Some(1 + 4 * (2 + 4 * 3)));
@@ -528,6 +539,14 @@ mod tests {
             Location::Inside(h) => assert_eq!(h.cell, 57),
             other => panic!("{other:?}"),
         }
+        // a geometry of another mesh, a broken mesh: errors
+        let other = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [2, 2, 2])
+            .build()
+            .unwrap();
+        assert!(Locator::new(&other, &g).is_err());
+        let mut broken = m.clone();
+        broken.owner[3] = 10_000;
+        assert!(MeshGeometry::new(&broken).is_err());
         // bad hints do not panic
         assert!(matches!(loc.track(9999, x), Location::Inside(_)));
         assert_eq!(loc.track(3, DVec3::NAN), Location::Outside);

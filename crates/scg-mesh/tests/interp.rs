@@ -102,8 +102,8 @@ fn paper_vortex_affine() {
     for (name, shape) in SHAPES {
         for perturb in [0.0, 0.2] {
             let m = mesh(shape, 6, perturb, lo, hi);
-            let g = MeshGeometry::new(&m);
-            let loc = Locator::new(&m, &g);
+            let g = MeshGeometry::new(&m).unwrap();
+            let loc = Locator::new(&m, &g).unwrap();
             let f = sample(&m, &g, paper_vortex);
             let exact = Interpolator::new(&loc, &f, Interpolation::CellPointLinearExact).unwrap();
             let idw = Interpolator::new(&loc, &f, Interpolation::CellPoint).unwrap();
@@ -122,8 +122,8 @@ fn paper_vortex_affine() {
         let mut prev = f64::NAN;
         for n in [6, 12, 24] {
             let m = mesh(shape, n, 0.2, lo, hi);
-            let g = MeshGeometry::new(&m);
-            let loc = Locator::new(&m, &g);
+            let g = MeshGeometry::new(&m).unwrap();
+            let loc = Locator::new(&m, &g).unwrap();
             let f = sample(&m, &g, paper_vortex);
             let it = Interpolator::new(&loc, &f, Interpolation::CellPoint).unwrap();
             let (max, rms) = errors(&loc, &it, paper_vortex, ilo, ihi, 2000);
@@ -165,8 +165,8 @@ fn lamb_oseen_convergence() {
             let mut prev = (f64::NAN, f64::NAN);
             for n in ns {
                 let m = mesh(shape, n, perturb, lo, hi);
-                let g = MeshGeometry::new(&m);
-                let loc = Locator::new(&m, &g);
+                let g = MeshGeometry::new(&m).unwrap();
+                let loc = Locator::new(&m, &g).unwrap();
                 let f = sample(&m, &g, lamb_oseen);
                 let it = Interpolator::new(&loc, &f, scheme).unwrap();
                 let (max, rms) = errors(&loc, &it, lamb_oseen, ilo, ihi, 4000);
@@ -277,8 +277,8 @@ fn lamb_oseen_trajectories() {
         let mut prev = f64::NAN;
         for n in [2, 4, 8] {
             let m = mesh(shape, n, perturb, lo, hi);
-            let g = MeshGeometry::new(&m);
-            let loc = Locator::new(&m, &g);
+            let g = MeshGeometry::new(&m).unwrap();
+            let loc = Locator::new(&m, &g).unwrap();
             let f = sample(&m, &g, lamb_oseen);
             let it = Interpolator::new(&loc, &f, scheme).unwrap();
             let mut err = 0.0f64;
@@ -318,8 +318,8 @@ fn lamb_oseen_trajectories() {
 fn cell_point_is_continuous_across_faces() {
     let (lo, hi) = (DVec3::new(-1.0, -1.0, 0.0), DVec3::new(1.0, 1.0, 0.5));
     let m = mesh(CellShape::Poly { refine: 0.3 }, 3, 0.2, lo, hi);
-    let g = MeshGeometry::new(&m);
-    let loc = Locator::new(&m, &g);
+    let g = MeshGeometry::new(&m).unwrap();
+    let loc = Locator::new(&m, &g).unwrap();
     let f = sample(&m, &g, lamb_oseen);
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     for scheme in [

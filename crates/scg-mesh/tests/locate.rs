@@ -91,8 +91,8 @@ fn random_point(rng: &mut ChaCha8Rng, lo: DVec3, hi: DVec3) -> DVec3 {
 fn find_cell_agrees_with_brute_force() {
     let mut rng = ChaCha8Rng::seed_from_u64(42);
     for (name, m) in meshes() {
-        let g = MeshGeometry::new(&m);
-        let loc = Locator::new(&m, &g);
+        let g = MeshGeometry::new(&m).unwrap();
+        let loc = Locator::new(&m, &g).unwrap();
         let [lo, hi] = g.bounds();
         let mut checked = 0;
         for _ in 0..400 {
@@ -121,8 +121,8 @@ fn find_cell_agrees_with_brute_force() {
 fn tracking_agrees_with_brute_force_and_reports_the_patch() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     for (name, m) in meshes() {
-        let g = MeshGeometry::new(&m);
-        let loc = Locator::new(&m, &g);
+        let g = MeshGeometry::new(&m).unwrap();
+        let loc = Locator::new(&m, &g).unwrap();
         let [lo, hi] = g.bounds();
         let h = (hi - lo).max_element() / 6.0;
         let (mut inside, mut left, mut probed, mut grid) = (0, 0, 0, 0);
@@ -189,8 +189,8 @@ fn concave_boundary_crossing_is_reported() {
         .perturbed(0.1, 5)
         .build()
         .unwrap();
-    let g = MeshGeometry::new(&m);
-    let loc = Locator::new(&m, &g);
+    let g = MeshGeometry::new(&m).unwrap();
+    let loc = Locator::new(&m, &g).unwrap();
     // from the left of the notch to its right, straight through it
     let a = DVec3::new(0.1, 0.5, 0.1);
     let b = DVec3::new(0.9, 0.5, 0.1);
