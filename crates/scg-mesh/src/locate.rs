@@ -262,14 +262,16 @@ impl<'a> Locator<'a> {
         self.geom
     }
 
-    /// Position of node `n` (a point, or a face centre past the points), m.
+    /// Position of node `n` (a point, or a face centre past the points), m; NaN when out
+    /// of range.
     #[inline]
     pub fn node(&self, n: u32) -> DVec3 {
-        if n < self.n_points {
-            self.mesh.points[n as usize]
+        let p = if n < self.n_points {
+            self.mesh.points.get(n as usize)
         } else {
-            self.geom.face_centres[(n - self.n_points) as usize]
-        }
+            self.geom.face_centres.get((n - self.n_points) as usize)
+        };
+        p.copied().unwrap_or(DVec3::NAN)
     }
 
     /// Number of nodes (points, then face centres).
@@ -295,7 +297,9 @@ impl<'a> Locator<'a> {
     /// first; only if none of its triangles takes the ray are all faces scanned.
     pub fn probe(&self, c: u32, x: DVec3) -> Probe {
         let ci = c as usize;
-        let cc = self.geom.cell_centres[ci];
+        let Some(&cc) = self.geom.cell_centres.get(ci) else {
+            return Probe::Fail;
+        };
         let d = x - cc;
         let faces = self.geom.faces_of(ci);
         let (mut best, mut best_ratio) = (u32::MAX, f64::NEG_INFINITY);
@@ -548,6 +552,10 @@ mod tests {
         broken.owner[3] = 10_000;
         assert!(MeshGeometry::new(&broken).is_err());
         // bad hints do not panic
+        assert_eq!(loc.probe(9999, x), Probe::Fail);
+        let mut bad = loc.find(x).unwrap();
+        bad.nodes[1] = u32::MAX;
+        assert!(matches!(loc.track_from(&bad, x), Location::Inside(h) if h.cell == 57));
         assert!(matches!(loc.track(9999, x), Location::Inside(_)));
         assert_eq!(loc.track(3, DVec3::NAN), Location::Outside);
     }
