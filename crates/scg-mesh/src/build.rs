@@ -286,6 +286,44 @@ impl BoxMesh {
     }
 }
 
+/// A box of `n` hexahedra between `lo` and `hi` (m), patches named by `naming`.
+pub fn hex_box(
+    lo: DVec3,
+    hi: DVec3,
+    n: [usize; 3],
+    naming: PatchNaming,
+) -> Result<PolyMesh, MeshError> {
+    BoxMesh::new(lo, hi, n).naming(naming).build()
+}
+
+/// A box of `n` hexahedra each split into 6 tetrahedra (conforming).
+pub fn tet_box(
+    lo: DVec3,
+    hi: DVec3,
+    n: [usize; 3],
+    naming: PatchNaming,
+) -> Result<PolyMesh, MeshError> {
+    BoxMesh::new(lo, hi, n)
+        .naming(naming)
+        .shape(CellShape::Tet)
+        .build()
+}
+
+/// A box of `n` coarse hexahedra of which the fraction `refine` is refined into 8, the
+/// others polyhedra with hanging nodes.
+pub fn poly_box(
+    lo: DVec3,
+    hi: DVec3,
+    n: [usize; 3],
+    naming: PatchNaming,
+    refine: f64,
+) -> Result<PolyMesh, MeshError> {
+    BoxMesh::new(lo, hi, n)
+        .naming(naming)
+        .shape(CellShape::Poly { refine })
+        .build()
+}
+
 fn cube2() -> impl Iterator<Item = (usize, usize, usize)> {
     (0..8).map(|c| (c & 1, (c >> 1) & 1, c >> 2))
 }
@@ -572,9 +610,17 @@ mod tests {
 
     #[test]
     fn hex_box_counts_and_patches() {
-        let m = BoxMesh::new(DVec3::ZERO, DVec3::new(3.0, 2.0, 1.0), [3, 2, 1])
-            .build()
-            .unwrap();
+        let m = hex_box(
+            DVec3::ZERO,
+            DVec3::new(3.0, 2.0, 1.0),
+            [3, 2, 1],
+            PatchNaming::Sides,
+        )
+        .unwrap();
+        let t = tet_box(DVec3::ZERO, DVec3::ONE, [1, 1, 1], PatchNaming::Sides).unwrap();
+        assert_eq!(t.n_cells, 6);
+        let p = poly_box(DVec3::ZERO, DVec3::ONE, [2, 2, 2], PatchNaming::Sides, 1.0).unwrap();
+        assert_eq!(p.n_cells, 64);
         m.check("t".as_ref()).unwrap();
         assert_eq!(m.n_cells, 6);
         assert_eq!(m.points.len(), 4 * 3 * 2);
