@@ -1,7 +1,7 @@
 //! Mesh generators for tests and benchmarks: boxes of hexahedra, of tetrahedra (each hex
 //! split into 6, conforming), and of polyhedra with hanging nodes like snappyHexMesh output.
 //!
-//! Every generator goes through [`assemble`], which matches the faces of the cells into
+//! Every generator goes through `assemble`, which matches the faces of the cells into
 //! OpenFOAM's layout: internal faces in upper-triangular order (by owner, then neighbour),
 //! oriented out of the lower-numbered cell; boundary faces patch by patch.
 
