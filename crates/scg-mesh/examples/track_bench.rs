@@ -13,9 +13,7 @@
 //! Courant number of 0.3 on every mesh, or the third argument; DEM steps limited by
 //! contacts are often much shorter).
 //! Particles start at random in the box, ordered by cell, then move with
-//! `track_from` → `Interpolator::at` → v += (u − v)·dt/τ, x += v·dt (method `hit`), or
-//! with `Interpolator::follow` and `TetFrame::velocity` (method `frame`, which reads
-//! nothing from the mesh while a particle stays in its tetrahedron); one leaving the box
+//! `track_from` → `Interpolator::at` → v += (u − v)·dt/τ, x += v·dt; one leaving the box
 //! is put back at its previous position with the fluid's velocity. Each case runs three
 //! rounds of `steps` steps and reports the fastest (the machine may be shared).
 
@@ -26,7 +24,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use scg_mesh::build::{BoxMesh, CellShape};
 use scg_mesh::geometry::MeshGeometry;
-use scg_mesh::interp::{Interpolation, Interpolator, TetFrame};
+use scg_mesh::interp::{Interpolation, Interpolator};
 use scg_mesh::locate::{Hit, Location, Locator};
 use scg_mesh::{CellField, PolyMesh};
 
@@ -52,8 +50,8 @@ fn main() {
     let (lo, hi) = (DVec3::new(-0.1, -0.1, 0.0), DVec3::new(0.1, 0.1, 0.2));
     println!("shape {shape}, Courant number {cfl}; particle-steps/s, one thread");
     println!(
-        "{:>9} {:>9} {:>7} {:>9} {:>7} {:>10} {:>8} {:>8}",
-        "cells", "particles", "steps", "setup s", "method", "steps/s", "ns/step", "same tet"
+        "{:>9} {:>9} {:>7} {:>9} {:>10} {:>8} {:>8}",
+        "cells", "particles", "steps", "setup s", "steps/s", "ns/step", "same tet"
     );
     for target in [10_000usize, 100_000, 1_000_000] {
         let t0 = Instant::now();
@@ -93,20 +91,18 @@ fn main() {
             let steps = (10_000_000 / n).clamp(10, 100);
             let total = (n * steps) as f64;
             let kick = (dt / tau).min(1.0);
-            let report = |method: &str, secs: f64, same: u64| {
+            let report = |secs: f64, same: u64| {
                 println!(
-                    "{:>9} {:>9} {:>7} {:>9.1} {:>7} {:>10.3e} {:>8.1} {:>7.0}%",
+                    "{:>9} {:>9} {:>7} {:>9.1} {:>10.3e} {:>8.1} {:>7.0}%",
                     mesh.n_cells,
                     n,
                     steps,
                     setup,
-                    method,
                     total / secs,
                     secs / total * 1e9,
                     100.0 * same as f64 / total
                 );
             };
-            // Hit: track_from → Interpolator::at
             let mut ps: Vec<Particle> = start
                 .iter()
                 .map(|&(x, hit)| Particle {
@@ -136,46 +132,9 @@ fn main() {
                 }
                 best = best.min(t.elapsed().as_secs_f64());
             }
-            report("hit", best, same);
-            // TetFrame: follow → frame.velocity
-            let mut ps: Vec<Framed> = start
-                .iter()
-                .map(|&(x, hit)| Framed {
-                    x,
-                    v: vortex(x),
-                    frame: it.frame(&hit),
-                })
-                .collect();
-            let (mut best, mut same) = (f64::INFINITY, 0u64);
-            for _round in 0..3 {
-                same = 0;
-                let t = Instant::now();
-                for _ in 0..steps {
-                    for p in ps.iter_mut() {
-                        let u = p.frame.velocity(p.x);
-                        p.v += (u - p.v) * kick;
-                        let x = p.x + p.v * dt;
-                        let before = (p.frame.hit.cell, p.frame.hit.nodes);
-                        match it.follow(&mut p.frame, x) {
-                            Location::Inside(_) => {
-                                same += (before == (p.frame.hit.cell, p.frame.hit.nodes)) as u64;
-                                p.x = x;
-                            }
-                            _ => p.v = u,
-                        }
-                    }
-                }
-                best = best.min(t.elapsed().as_secs_f64());
-            }
-            report("frame", best, same);
+            report(best, same);
         }
     }
-}
-
-struct Framed {
-    x: DVec3,
-    v: DVec3,
-    frame: TetFrame,
 }
 
 fn build(shape: &str, target: usize, lo: DVec3, hi: DVec3) -> PolyMesh {

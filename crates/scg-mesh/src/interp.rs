@@ -12,10 +12,10 @@
 //!   fields where the point values are (interior points of meshes whose cells surround
 //!   each point evenly; see the tests for what is measured).
 
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 
 use crate::geometry::{MeshGeometry, face_centre_weights};
-use crate::locate::{Hit, Location, Locator, Probe, TOL};
+use crate::locate::{Hit, Locator, Probe};
 use crate::{CellField, MeshError, PolyMesh};
 
 /// The interpolation scheme.
@@ -314,107 +314,6 @@ impl<'a> Interpolator<'a> {
     }
 }
 
-/// A particle's current tetrahedron with the inside test and the affine velocity there
-/// precomputed, so that a particle staying in it needs no access to the mesh: the common
-/// case when particles move a fraction of a cell per step.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TetFrame {
-    /// Where the particle was found.
-    pub hit: Hit,
-    /// The cell centre, m.
-    origin: DVec3,
-    /// Maps x − origin to the barycentric coordinates on the three face-side nodes.
-    to_bary: DMat3,
-    /// Velocity at the origin, m/s.
-    u0: DVec3,
-    /// Velocity gradient in the tetrahedron, 1/s.
-    grad: DMat3,
-}
-
-impl TetFrame {
-    /// Whether x is in the frame's tetrahedron (to the locator's tolerance).
-    #[inline]
-    pub fn contains(&self, x: DVec3) -> bool {
-        let b = self.to_bary * (x - self.origin);
-        b.min_element() >= -TOL && b.element_sum() <= 1.0 + TOL
-    }
-
-    /// The interpolated velocity at x (linear on the tetrahedron, extrapolated outside
-    /// it), m/s.
-    #[inline]
-    pub fn velocity(&self, x: DVec3) -> DVec3 {
-        self.u0 + self.grad * (x - self.origin)
-    }
-}
-
-impl Interpolator<'_> {
-    /// The frame of the tetrahedron of `hit`.
-    pub fn frame(&self, hit: &Hit) -> TetFrame {
-        let geom = self.loc.geometry();
-        let origin = geom
-            .cell_centres
-            .get(hit.cell as usize)
-            .copied()
-            .unwrap_or(DVec3::NAN);
-        let m = DMat3::from_cols(
-            self.loc.node(hit.nodes[0]) - origin,
-            self.loc.node(hit.nodes[1]) - origin,
-            self.loc.node(hit.nodes[2]) - origin,
-        );
-        let det = m.determinant();
-        let to_bary = if det > 0.0 {
-            m.inverse()
-        } else {
-            DMat3::from_cols(DVec3::NAN, DVec3::NAN, DVec3::NAN)
-        };
-        let cell = self
-            .cells
-            .get(hit.cell as usize)
-            .copied()
-            .unwrap_or(DVec3::NAN);
-        let (u0, grad) = match self.scheme {
-            Interpolation::CellValue => (cell, DMat3::ZERO),
-            _ if det > 0.0 => {
-                let node = |k: usize| {
-                    self.nodes
-                        .get(hit.nodes[k] as usize)
-                        .copied()
-                        .unwrap_or(DVec3::NAN)
-                        - cell
-                };
-                (cell, DMat3::from_cols(node(0), node(1), node(2)) * to_bary)
-            }
-            _ => (self.at(hit), DMat3::ZERO),
-        };
-        TetFrame {
-            hit: *hit,
-            origin,
-            to_bary,
-            u0,
-            grad,
-        }
-    }
-
-    /// Move a particle to x: if x is still in `frame`'s tetrahedron nothing is read from
-    /// the mesh; otherwise [`Locator::track`] walks from the frame's cell and, when x is
-    /// in the mesh (`Inside` or `Crossed`), the frame is renewed there. The velocity at x
-    /// is then `frame.velocity(x)`.
-    #[inline]
-    pub fn follow(&self, frame: &mut TetFrame, x: DVec3) -> Location {
-        if frame.contains(x) {
-            let b = frame.to_bary * (x - frame.origin);
-            let mut hit = frame.hit;
-            hit.weights = [1.0 - b.element_sum(), b.x, b.y, b.z];
-            return Location::Inside(hit);
-        }
-        let location = self.loc.track(frame.hit.cell, x);
-        if let Location::Inside(h) | Location::Crossed { hit: h, .. } = location {
-            *frame = self.frame(&h);
-        }
-        location
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -439,30 +338,6 @@ mod tests {
             assert!((it.velocity(c, x) - u).length() < 1e-14);
         }
         assert!(it.velocity(1000, DVec3::ZERO).is_nan());
-        // a frame reproduces the direct interpolation, inside and after a move
-        let lin = CellField {
-            cells: g
-                .cell_centres
-                .iter()
-                .map(|c| DVec3::new(c.y * c.z, c.x, 1.0))
-                .collect(),
-            patches: vec![],
-        };
-        let it = Interpolator::new(&loc, &lin, Interpolation::CellPoint).unwrap();
-        let x = DVec3::new(0.4, 0.45, 0.5);
-        let hit = loc.find(x).unwrap();
-        let mut frame = it.frame(&hit);
-        assert!(frame.contains(x));
-        assert!((frame.velocity(x) - it.at(&hit)).length() < 1e-13);
-        for y in [DVec3::new(0.41, 0.45, 0.5), DVec3::new(0.9, 0.1, 0.2)] {
-            match it.follow(&mut frame, y) {
-                Location::Inside(h) => {
-                    assert!((frame.velocity(y) - it.at(&h)).length() < 1e-13);
-                    assert!((frame.velocity(y) - it.velocity(h.cell, y)).length() < 1e-13);
-                }
-                other => panic!("{other:?}"),
-            }
-        }
         let short = CellField {
             cells: vec![u; 3],
             patches: vec![],

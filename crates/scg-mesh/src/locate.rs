@@ -40,7 +40,7 @@ use crate::geometry::MeshGeometry;
 use crate::{MeshError, PolyMesh};
 
 /// Relative tolerance of the inside tests (barycentric coordinates may be this negative).
-pub(crate) const TOL: f64 = 1e-9;
+const TOL: f64 = 1e-9;
 
 /// Where a point is: its cell, the tetrahedron of the cell's decomposition holding it, and
 /// its barycentric coordinates there.
