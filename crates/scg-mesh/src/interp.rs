@@ -9,8 +9,16 @@
 //!   cell the value is linear on the tetrahedron (cell centre, face triangle) of the
 //!   [`crate::locate`] decomposition holding the point. Continuous across faces (the
 //!   neighbours share the face triangle and its values), and second order on smooth
-//!   fields where the point values are (interior points of meshes whose cells surround
-//!   each point evenly; see the tests for what is measured).
+//!   fields where the point values are: at interior points of meshes whose cells surround
+//!   each point symmetrically (unperturbed hex and tet boxes). Elsewhere (perturbed
+//!   meshes, hanging nodes, box edges) IDW point values are off by O(h·|∇u|) and the
+//!   scheme tends to first order (tests/interp.rs measures 1.3–1.4 on h/2 → h/4).
+//! * [`Interpolation::CellPointLinearExact`]: the same with point values by linear-exact
+//!   weights ([`point_values_linear_exact`]): affine fields are reproduced to rounding on
+//!   every mesh and the measured order is 1.9–2.1 on all of them.
+//!
+//! The point and face-centre values are computed once in [`Interpolator::new`]; a query
+//! reads the cell value and three node values and allocates nothing.
 
 use glam::DVec3;
 
