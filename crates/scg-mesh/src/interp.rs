@@ -283,6 +283,19 @@ impl<'a> Interpolator<'a> {
         &self.nodes[..self.nodes.len().min(self.loc.mesh().points.len())]
     }
 
+    /// Prefetch what [`Interpolator::at`] reads for `hit` (the cell value and the three
+    /// node values), and what the locator reads ([`Locator::prefetch`]).
+    #[inline]
+    pub fn prefetch(&self, hit: &Hit) {
+        self.loc.prefetch(hit);
+        crate::locate::prefetch(&self.cells, hit.cell);
+        if !self.nodes.is_empty() {
+            for &n in &hit.nodes {
+                crate::locate::prefetch(&self.nodes, n);
+            }
+        }
+    }
+
     /// The value where the locator found a point.
     #[inline]
     pub fn at(&self, hit: &Hit) -> DVec3 {
