@@ -17,7 +17,8 @@
 //! `track_from` → `Interpolator::at` → v += (u − v)·dt/τ, x += v·dt; one leaving the box
 //! is put back at its previous position with the fluid's velocity. With `--prefetch` the
 //! loop calls `Interpolator::prefetch` eight particles ahead. Each case runs three rounds
-//! of `steps` steps and reports the fastest (the machine may be shared).
+//! of `steps` steps and reports the fastest (the machine may be shared: the last column is
+//! the 1-minute load average after the case).
 
 use std::time::Instant;
 
@@ -55,8 +56,8 @@ fn main() {
         "shape {shape}, Courant number {cfl}, prefetch {prefetch}; particle-steps/s, one thread"
     );
     println!(
-        "{:>9} {:>9} {:>7} {:>9} {:>10} {:>8} {:>8}",
-        "cells", "particles", "steps", "setup s", "steps/s", "ns/step", "same tet"
+        "{:>9} {:>9} {:>7} {:>9} {:>10} {:>8} {:>8} {:>6}",
+        "cells", "particles", "steps", "setup s", "steps/s", "ns/step", "same tet", "load"
     );
     for target in [10_000usize, 100_000, 1_000_000] {
         let t0 = Instant::now();
@@ -98,14 +99,15 @@ fn main() {
             let kick = (dt / tau).min(1.0);
             let report = |secs: f64, same: u64| {
                 println!(
-                    "{:>9} {:>9} {:>7} {:>9.1} {:>10.3e} {:>8.1} {:>7.0}%",
+                    "{:>9} {:>9} {:>7} {:>9.1} {:>10.3e} {:>8.1} {:>7.0}% {:>6}",
                     mesh.n_cells,
                     n,
                     steps,
                     setup,
                     total / secs,
                     secs / total * 1e9,
-                    100.0 * same as f64 / total
+                    100.0 * same as f64 / total,
+                    load()
                 );
             };
             let mut ps: Vec<Particle> = start
@@ -144,6 +146,14 @@ fn main() {
             report(best, same);
         }
     }
+}
+
+/// The 1-minute load average of the machine (Linux), to judge the figures by.
+fn load() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|s| s.split_whitespace().next().map(str::to_owned))
+        .unwrap_or_else(|| "?".into())
 }
 
 /// How many particles ahead `--prefetch` prefetches.
