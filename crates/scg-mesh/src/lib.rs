@@ -5,6 +5,15 @@
 //! (hexahedra, tetrahedra, prisms, pyramids, arbitrary polyhedra). Lengths are in metres,
 //! velocities in m/s.
 //!
+//! * [`build`]: box meshes for tests and benchmarks (hexahedra, tetrahedra, polyhedra with
+//!   hanging nodes; patches by side or inlet/outlet/walls; seeded perturbation).
+//! * [`geometry`]: [`MeshGeometry`], derived once (face centres and areas, cell centres and
+//!   volumes by OpenFOAM's formulas, bounding boxes, cell–face and point–cell lists).
+//! * [`locate`]: [`Locator`]: first location through a bin grid, tracking by walking
+//!   across faces, boundary crossings reported with their patch.
+//! * [`interp`]: [`Interpolator`]: cell value and cell-point interpolation of a
+//!   [`CellField`].
+//!
 //! Readers and writers:
 //! * [`foam`]: OpenFOAM cases — [`foam::read_mesh`], [`foam::read_vector_field`] (a time
 //!   directory chosen by [`foam::TimeSel`], listed by [`foam::time_dirs`]),
@@ -12,10 +21,17 @@
 //! * [`vtk`]: VTK unstructured grids — [`vtk::read`] (legacy `.vtk`, XML `.vtu`) and
 //!   [`vtk::write_legacy`].
 
+pub mod build;
 pub mod error;
 pub mod foam;
+pub mod geometry;
+pub mod interp;
+pub mod locate;
 pub mod polymesh;
 pub mod vtk;
 
 pub use error::MeshError;
+pub use geometry::MeshGeometry;
+pub use interp::{Interpolation, Interpolator};
+pub use locate::{Hit, Location, Locator};
 pub use polymesh::{CellField, Patch, PolyMesh};

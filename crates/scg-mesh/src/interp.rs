@@ -1,0 +1,374 @@
+//! Interpolation of a cell-centred field to any point of the mesh.
+//!
+//! * [`Interpolation::CellValue`]: the value of the cell holding the point (OpenFOAM's
+//!   `cell` scheme) — first order.
+//! * [`Interpolation::CellPoint`]: OpenFOAM's `cellPoint` scheme. Point values come from
+//!   the cell values once, by inverse-distance weighting ([`point_values`], OpenFOAM's
+//!   `volPointInterpolation`); face-centre values from the point values with the weights
+//!   that place the face centre ([`crate::geometry::face_centre_weights`]); then inside a
+//!   cell the value is linear on the tetrahedron (cell centre, face triangle) of the
+//!   [`crate::locate`] decomposition holding the point. Continuous across faces (the
+//!   neighbours share the face triangle and its values), and second order on smooth
+//!   fields where the point values are: at interior points of meshes whose cells surround
+//!   each point symmetrically (unperturbed hex and tet boxes). Elsewhere (perturbed
+//!   meshes, hanging nodes, box edges) IDW point values are off by O(h·|∇u|) and the
+//!   scheme tends to first order (tests/interp.rs measures 1.3–1.4 on h/2 → h/4).
+//! * [`Interpolation::CellPointLinearExact`]: the same with point values by linear-exact
+//!   weights ([`point_values_linear_exact`]): affine fields are reproduced to rounding on
+//!   every mesh and the measured order is 1.9–2.1 on all of them.
+//!
+//! The point and face-centre values are computed once in [`Interpolator::new`]; a query
+//! reads the cell value and three node values and allocates nothing.
+
+use glam::DVec3;
+
+use crate::geometry::{MeshGeometry, face_centre_weights};
+use crate::locate::{Hit, Locator, Probe};
+use crate::{CellField, MeshError, PolyMesh};
+
+/// The interpolation scheme.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interpolation {
+    /// The value of the cell (OpenFOAM `cell`).
+    CellValue,
+    /// Linear on the cell's tetrahedra from cell, face-centre and point values (OpenFOAM
+    /// `cellPoint`), point values by inverse-distance weighting ([`point_values`]).
+    CellPoint,
+    /// As `CellPoint`, but with point values by linear-exact weights
+    /// ([`point_values_linear_exact`]; not in OpenFOAM): exact for affine fields on any
+    /// mesh, so second order also on distorted meshes and at hanging nodes.
+    CellPointLinearExact,
+}
+
+/// Check that `field` fits `mesh`: one finite value per cell, and per patch either no
+/// values or one finite value per face.
+pub fn check_field(mesh: &PolyMesh, field: &CellField) -> Result<(), MeshError> {
+    let bad = |entry: String, message: String| Err(MeshError::invalid("<field>", entry, message));
+    if field.cells.len() != mesh.n_cells {
+        return bad(
+            "internalField".into(),
+            format!("{} values for {} cells", field.cells.len(), mesh.n_cells),
+        );
+    }
+    if let Some(c) = field.cells.iter().position(|v| !v.is_finite()) {
+        return bad(format!("internalField[{c}]"), "not finite".into());
+    }
+    if !field.patches.is_empty() && field.patches.len() != mesh.patches.len() {
+        return bad(
+            "boundaryField".into(),
+            format!(
+                "{} patches for {} in the mesh",
+                field.patches.len(),
+                mesh.patches.len()
+            ),
+        );
+    }
+    for (p, vals) in mesh.patches.iter().zip(&field.patches) {
+        if let Some(v) = vals {
+            if v.len() != p.size {
+                return bad(
+                    format!("boundaryField/{}", p.name),
+                    format!("{} values for {} faces", v.len(), p.size),
+                );
+            }
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                return bad(
+                    format!("boundaryField/{}[{i}]", p.name),
+                    "not finite".into(),
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Point values of a cell field by inverse-distance weighting, as OpenFOAM's
+/// `volPointInterpolation`: an interior point takes Σ u_c/|x_p − x_c| / Σ 1/|x_p − x_c|
+/// over the cells using it; a point on the boundary the same over the boundary faces using
+/// it, with the patch's face value where the field gives one and the owner cell's value
+/// otherwise (zero gradient). An error if `field` fails [`check_field`].
+pub fn point_values(
+    mesh: &PolyMesh,
+    geom: &MeshGeometry,
+    field: &CellField,
+) -> Result<Vec<DVec3>, MeshError> {
+    check_field(mesh, field)?;
+    let np = mesh.points.len();
+    let mut sum = vec![DVec3::ZERO; np];
+    let mut wsum = vec![0.0; np];
+    // boundary points first
+    let ni = mesh.n_internal_faces();
+    for (pi, patch) in mesh.patches.iter().enumerate() {
+        let vals = field.patches.get(pi).and_then(|v| v.as_ref());
+        for (i, f) in (patch.start..patch.start + patch.size).enumerate() {
+            if f < ni || f >= mesh.n_faces() {
+                continue;
+            }
+            let u = match vals {
+                Some(v) => v[i],
+                None => field.cells[mesh.owner[f] as usize],
+            };
+            let fc = geom.face_centres[f];
+            for &p in mesh.face(f) {
+                let w = 1.0 / (mesh.points[p as usize] - fc).length().max(1e-300);
+                sum[p as usize] += w * u;
+                wsum[p as usize] += w;
+            }
+        }
+    }
+    for p in 0..np {
+        if wsum[p] > 0.0 {
+            sum[p] /= wsum[p];
+            continue;
+        }
+        let x = mesh.points[p];
+        let (mut s, mut ws) = (DVec3::ZERO, 0.0);
+        for &c in geom.cells_of_point(p) {
+            let w = 1.0 / (x - geom.cell_centres[c as usize]).length().max(1e-300);
+            s += w * field.cells[c as usize];
+            ws += w;
+        }
+        sum[p] = if ws > 0.0 { s / ws } else { DVec3::ZERO };
+    }
+    Ok(sum)
+}
+
+/// Point values by inverse-distance weights corrected to be exact for affine fields, the
+/// pseudo-Laplacian of Holmes & Connell (1989) applied to inverse-distance base weights:
+/// over the neighbours i of a point p (the cells using it, and the boundary faces using
+/// it with the values [`point_values`] gives them), w_i = (1 + λ·R_i)/|R_i| with
+/// R_i = x_i − x_p, λ chosen so that Σ w_i R_i = 0. Where the 3×3 system is singular or
+/// the weights would be wild (Σ|w_i| > 10 Σw_i; a box corner with one cell and three faces
+/// has 5), the point keeps
+/// its [`point_values`] value. An error if `field` fails [`check_field`].
+pub fn point_values_linear_exact(
+    mesh: &PolyMesh,
+    geom: &MeshGeometry,
+    field: &CellField,
+) -> Result<Vec<DVec3>, MeshError> {
+    let mut out = point_values(mesh, geom, field)?;
+    let np = mesh.points.len();
+    // boundary faces of every point (CSR)
+    let ni = mesh.n_internal_faces();
+    let mut offs = vec![0u32; np + 1];
+    for f in ni..mesh.n_faces() {
+        for &p in mesh.face(f) {
+            offs[p as usize + 1] += 1;
+        }
+    }
+    for p in 0..np {
+        offs[p + 1] += offs[p];
+    }
+    let mut fill = offs.clone();
+    let mut pfaces = vec![0u32; offs[np] as usize];
+    for f in ni..mesh.n_faces() {
+        for &p in mesh.face(f) {
+            pfaces[fill[p as usize] as usize] = f as u32;
+            fill[p as usize] += 1;
+        }
+    }
+    let mut face_value = vec![DVec3::ZERO; mesh.n_faces() - ni];
+    for (pi, patch) in mesh.patches.iter().enumerate() {
+        let vals = field.patches.get(pi).and_then(|v| v.as_ref());
+        for (i, f) in (patch.start..patch.start + patch.size).enumerate() {
+            if f >= ni && f < mesh.n_faces() {
+                face_value[f - ni] = match vals {
+                    Some(v) => v[i],
+                    None => field.cells[mesh.owner[f] as usize],
+                };
+            }
+        }
+    }
+    let mut nb: Vec<(DVec3, DVec3)> = Vec::new();
+    for (p, value) in out.iter_mut().enumerate() {
+        let x = mesh.points[p];
+        nb.clear();
+        for &c in geom.cells_of_point(p) {
+            nb.push((geom.cell_centres[c as usize] - x, field.cells[c as usize]));
+        }
+        for &f in &pfaces[offs[p] as usize..offs[p + 1] as usize] {
+            nb.push((
+                geom.face_centres[f as usize] - x,
+                face_value[f as usize - ni],
+            ));
+        }
+        let (mut r, mut m) = (DVec3::ZERO, glam::DMat3::ZERO);
+        for &(d, _) in &nb {
+            let w = 1.0 / d.length().max(1e-300);
+            r += w * d;
+            m += glam::DMat3::from_cols(w * d.x * d, w * d.y * d, w * d.z * d);
+        }
+        let scale = (m.x_axis.x + m.y_axis.y + m.z_axis.z) / 3.0;
+        let det = m.determinant();
+        if det.is_nan() || det.abs() <= 1e-9 * scale * scale * scale {
+            continue;
+        }
+        let lambda = -(m.inverse() * r);
+        let (mut s, mut ws, mut wabs) = (DVec3::ZERO, 0.0, 0.0);
+        for &(d, u) in &nb {
+            let w = (1.0 + lambda.dot(d)) / d.length().max(1e-300);
+            s += w * u;
+            ws += w;
+            wabs += w.abs();
+        }
+        if ws > 0.0 && wabs <= 10.0 * ws && s.is_finite() {
+            *value = s / ws;
+        }
+    }
+    Ok(out)
+}
+
+/// Values at the face centres from point values, exact for fields affine in space.
+pub fn face_centre_values(mesh: &PolyMesh, point_values: &[DVec3]) -> Vec<DVec3> {
+    let mut w = Vec::new();
+    (0..mesh.n_faces())
+        .map(|f| {
+            let face = mesh.face(f);
+            face_centre_weights(&mesh.points, face, &mut w);
+            face.iter()
+                .zip(&w)
+                .map(|(&p, &w)| w * point_values[p as usize])
+                .sum()
+        })
+        .collect()
+}
+
+/// A field ready to interpolate: cell values, and for `CellPoint` the values at the nodes
+/// of the decomposition (points, then face centres) computed once.
+#[derive(Clone, Debug)]
+pub struct Interpolator<'a> {
+    loc: &'a Locator<'a>,
+    scheme: Interpolation,
+    cells: Vec<DVec3>,
+    nodes: Vec<DVec3>,
+}
+
+impl<'a> Interpolator<'a> {
+    /// Prepare `field` on the locator's mesh for `scheme`.
+    pub fn new(
+        loc: &'a Locator<'a>,
+        field: &CellField,
+        scheme: Interpolation,
+    ) -> Result<Self, MeshError> {
+        let mesh = loc.mesh();
+        check_field(mesh, field)?;
+        let nodes = match scheme {
+            Interpolation::CellValue => Vec::new(),
+            Interpolation::CellPoint | Interpolation::CellPointLinearExact => {
+                let mut nodes = if scheme == Interpolation::CellPoint {
+                    point_values(mesh, loc.geometry(), field)?
+                } else {
+                    point_values_linear_exact(mesh, loc.geometry(), field)?
+                };
+                let fc = face_centre_values(mesh, &nodes);
+                nodes.extend(fc);
+                nodes
+            }
+        };
+        Ok(Interpolator {
+            loc,
+            scheme,
+            cells: field.cells.clone(),
+            nodes,
+        })
+    }
+
+    /// The scheme.
+    pub fn scheme(&self) -> Interpolation {
+        self.scheme
+    }
+
+    /// Values at the mesh points (`CellPoint`; empty for `CellValue`).
+    pub fn point_values(&self) -> &[DVec3] {
+        &self.nodes[..self.nodes.len().min(self.loc.mesh().points.len())]
+    }
+
+    /// Prefetch what [`Interpolator::at`] reads for `hit` (the cell value and the three
+    /// node values), and what the locator reads ([`Locator::prefetch`]).
+    #[inline]
+    pub fn prefetch(&self, hit: &Hit) {
+        self.loc.prefetch(hit);
+        crate::locate::prefetch(&self.cells, hit.cell);
+        if !self.nodes.is_empty() {
+            for &n in &hit.nodes {
+                crate::locate::prefetch(&self.nodes, n);
+            }
+        }
+    }
+
+    /// The value where the locator found a point.
+    #[inline]
+    pub fn at(&self, hit: &Hit) -> DVec3 {
+        let c = hit.cell as usize;
+        match self.scheme {
+            Interpolation::CellValue => self.cells.get(c).copied().unwrap_or(DVec3::NAN),
+            Interpolation::CellPoint | Interpolation::CellPointLinearExact => {
+                let [w0, w1, w2, w3] = hit.weights;
+                let node = |k: usize| {
+                    self.nodes
+                        .get(hit.nodes[k] as usize)
+                        .copied()
+                        .unwrap_or(DVec3::NAN)
+                };
+                w0 * self.cells.get(c).copied().unwrap_or(DVec3::NAN)
+                    + w1 * node(0)
+                    + w2 * node(1)
+                    + w3 * node(2)
+            }
+        }
+    }
+
+    /// The velocity at x in `cell` (m/s). When x is not in `cell`, `CellPoint` extrapolates
+    /// linearly on the cell's tetrahedron the ray from the cell centre toward x crosses;
+    /// an out-of-range cell gives NaN (which the simulation's guard reports).
+    pub fn velocity(&self, cell: u32, x: DVec3) -> DVec3 {
+        if cell as usize >= self.cells.len() {
+            return DVec3::NAN;
+        }
+        match self.scheme {
+            Interpolation::CellValue => self.cells[cell as usize],
+            _ => match self.loc.probe(cell, x) {
+                Probe::Inside(h) | Probe::Exit { hit: h, .. } => self.at(&h),
+                Probe::Fail => self.cells[cell as usize],
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::build::BoxMesh;
+
+    #[test]
+    fn uniform_field_is_reproduced_and_bad_fields_rejected() {
+        let m = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [3, 3, 3])
+            .perturbed(0.2, 1)
+            .build()
+            .unwrap();
+        let g = MeshGeometry::new(&m).unwrap();
+        let loc = Locator::new(&m, &g).unwrap();
+        let u = DVec3::new(1.0, -2.0, 0.5);
+        let field = CellField {
+            cells: vec![u; m.n_cells],
+            patches: vec![None; m.patches.len()],
+        };
+        let it = Interpolator::new(&loc, &field, Interpolation::CellPoint).unwrap();
+        for x in [DVec3::splat(0.5), DVec3::new(0.01, 0.99, 0.3)] {
+            let c = loc.find_cell(x).unwrap();
+            assert!((it.velocity(c, x) - u).length() < 1e-14);
+        }
+        assert!(it.velocity(1000, DVec3::ZERO).is_nan());
+        let short = CellField {
+            cells: vec![u; 3],
+            patches: vec![],
+        };
+        assert!(Interpolator::new(&loc, &short, Interpolation::CellPoint).is_err());
+        let mut nan = field.clone();
+        nan.cells[4] = DVec3::NAN;
+        assert!(Interpolator::new(&loc, &nan, Interpolation::CellValue).is_err());
+        let mut wrong = field.clone();
+        wrong.patches[0] = Some(vec![u; 1]);
+        assert!(Interpolator::new(&loc, &wrong, Interpolation::CellPoint).is_err());
+    }
+}
