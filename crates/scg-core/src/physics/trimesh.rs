@@ -575,11 +575,11 @@ impl TriMesh {
         (f64::from(reach) - 1.0) * g.h >= radius
     }
 
-    /// Distance (squared, m²) from `x` to triangle `t`.
+    /// Closest point to `x` on triangle `t`, m.
     #[inline]
-    fn dist2(&self, x: DVec3, t: u32) -> f64 {
+    fn closest(&self, x: DVec3, t: u32) -> DVec3 {
         let [a, b, c] = self.triangles[t as usize].map(|i| self.vertices[i as usize]);
-        (closest_point_on_triangle(x, a, b, c).0 - x).length_squared()
+        closest_point_on_triangle(x, a, b, c).0
     }
 
     /// The contacts of a sphere (centre `x`, radius `radius`, m) with the mesh, written to
@@ -587,11 +587,13 @@ impl TriMesh {
     ///
     /// 1. every triangle of the bin cells the sphere's box covers whose closest point is
     ///    nearer than `radius` is a candidate (closest point, feature);
-    /// 2. a face candidate is kept; an edge or vertex candidate is kept only when no
-    ///    triangle sharing that edge or vertex is nearer (by more than 10⁻⁹·radius): a
-    ///    nearer neighbour means the sphere's true contact is on that neighbour (it is a
+    /// 2. a face candidate is kept; an edge or vertex candidate is kept only when every
+    ///    triangle sharing that edge or vertex has its closest point there too (within
+    ///    10⁻⁹·radius): a neighbour whose closest point is elsewhere is nearer (closest
+    ///    points are unique), so the sphere's true contact is on that neighbour (it is a
     ///    candidate too), as when a sphere over one triangle of a flat region also reaches
-    ///    the next triangle's edge;
+    ///    the next triangle's edge, or over two triangles folded very slightly (a quad
+    ///    whose corners were rounded to f32);
     /// 3. a candidate whose closest point equals (within 10⁻⁹·radius) that of a candidate
     ///    already kept is dropped: the triangles around a touched edge or vertex give it
     ///    once. Face candidates are taken first, then the others, each in triangle order.
@@ -643,23 +645,19 @@ impl TriMesh {
         let tol2 = tol * tol;
         for h in &s.hits {
             let d = h.dist2.sqrt();
+            // Another triangle at this edge or vertex whose closest point is elsewhere is
+            // nearer than this point (closest points are unique): not a contact here.
+            let elsewhere =
+                |n: &u32| *n != h.tri && (self.closest(x, *n) - h.point).length_squared() > tol2;
             let dominated = match h.feature {
                 Feature::Face => false,
                 Feature::Edge(k) => {
                     let e = self.tri_edges[h.tri as usize][k as usize] as usize;
-                    let lim = (d - tol).max(0.0);
-                    self.edge_tris
-                        .get(e)
-                        .iter()
-                        .any(|&n| n != h.tri && self.dist2(x, n) < lim * lim)
+                    self.edge_tris.get(e).iter().any(elsewhere)
                 }
                 Feature::Vertex(k) => {
                     let v = self.triangles[h.tri as usize][k as usize] as usize;
-                    let lim = (d - tol).max(0.0);
-                    self.vertex_tris
-                        .get(v)
-                        .iter()
-                        .any(|&n| n != h.tri && self.dist2(x, n) < lim * lim)
+                    self.vertex_tris.get(v).iter().any(elsewhere)
                 }
             };
             if dominated

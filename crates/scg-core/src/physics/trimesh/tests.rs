@@ -221,7 +221,7 @@ proptest::proptest! {
         if m.surely_clear(p, r) {
             proptest::prop_assert!(c.is_empty());
         }
-        let dmin = (0..m.triangle_count() as u32).map(|t| m.dist2(p, t)).fold(f64::INFINITY, f64::min).sqrt();
+        let dmin = (0..m.triangle_count() as u32).map(|t| (m.closest(p, t) - p).length_squared()).fold(f64::INFINITY, f64::min).sqrt();
         if dmin < r * (1.0 - 1e-9) {
             proptest::prop_assert!(!c.is_empty());
             let deepest = c.iter().map(|c| c.overlap).fold(0.0, f64::max);
