@@ -243,10 +243,16 @@ fn rolling_across_a_shared_edge_keeps_one_contact_and_its_history() {
     println!(
         "shared edge: crossed at step {cross} with |ξ| = {at_cross:.3e} m (max {hmax:.3e}); max |ΔF|/F {df:.2e}, |Δv|/v {dv:.2e}, |Δx|/d {dx:.2e}, |Δξ|/ξ_max {dh:.2e}"
     );
-    assert!(
-        at_cross > 1e-3 * hmax,
-        "no history to carry at the crossing"
-    );
+    // Static friction holds a spring of about a nanometre while it rolls; the mesh carries
+    // it over the edge unchanged (a reset would show as |Δξ| ≈ |ξ|).
+    assert!(at_cross > 1e-10, "no history to carry at the crossing");
+    for k in cross - 5..cross + 5 {
+        let (u, w) = (a[k].hist[0].1, b[k].hist[0].1);
+        assert!(
+            (u - w).length() <= 1e-9 * u.length(),
+            "step {k}: {u} vs {w}"
+        );
+    }
     // One key for the whole flat region, before and after the edge.
     assert_eq!(b[cross - 1].hist[0].0, b[cross + 1].hist[0].0);
     assert!(
@@ -518,4 +524,188 @@ fn bad_stl_files_are_errors_naming_file_key_and_line() {
         assert_eq!(out.status.code(), Some(2), "{set}: {err}");
         assert!(err.contains(want), "{set}: {err}");
     }
+}
+
+/// A closed vessel (R = 30 mm, H = 60 mm) as n·rows·2 side triangles and two fans.
+fn vessel(rc: f64, h: f64, n: usize, rows: usize) -> Vec<[DVec3; 3]> {
+    let p = |k: usize, z: f64| {
+        let a = std::f64::consts::TAU * (k % n) as f64 / n as f64;
+        DVec3::new(rc * a.cos(), rc * a.sin(), z)
+    };
+    let z = |j: usize| h * j as f64 / rows as f64;
+    let mut soup = Vec::new();
+    for k in 0..n {
+        for j in 0..rows {
+            soup.push([p(k, z(j)), p(k + 1, z(j)), p(k + 1, z(j + 1))]);
+            soup.push([p(k, z(j)), p(k + 1, z(j + 1)), p(k, z(j + 1))]);
+        }
+        soup.push([DVec3::ZERO, p(k + 1, 0.0), p(k, 0.0)]);
+        soup.push([DVec3::new(0.0, 0.0, h), p(k, h), p(k + 1, h)]);
+    }
+    soup
+}
+
+/// Cost of the wall forces, 10^5 particles (d = 0.3 mm, random in the vessel, random
+/// velocities ±0.5 m/s, friction on) in a vessel of ≈ 10^4 triangles against the same
+/// vessel as an analytic cylinder and two planes: seconds per particle-step of the
+/// forces set (the walls are its only system here). Prints both and their ratio.
+/// `cargo test --release --test mesh_walls -- --ignored --nocapture wall_cost`
+#[test]
+#[ignore = "timing (about a minute): cargo test --release --test mesh_walls -- --ignored --nocapture"]
+fn wall_cost_mesh_vs_analytic() {
+    let (rc, h) = (0.03, 0.06);
+    let soup = vessel(rc, h, 128, 39);
+    let mesh = mesh_f64(&soup);
+    let WallShape::Mesh(m) = &mesh else {
+        unreachable!()
+    };
+    println!(
+        "mesh: {} triangles, grid {:?}",
+        m.triangle_count(),
+        m.grid_shape()
+    );
+    let analytic = vec![
+        WallShape::CylinderInside {
+            center: DVec3::ZERO,
+            axis: DVec3::Z,
+            radius: rc,
+            extent: Some((0.0, h)),
+        },
+        WallShape::Plane {
+            point: DVec3::ZERO,
+            normal: DVec3::Z,
+        },
+        WallShape::Plane {
+            point: DVec3::new(0.0, 0.0, h),
+            normal: -DVec3::Z,
+        },
+    ];
+    let (n, steps, d) = (100_000usize, 200u64, 0.3e-3);
+    let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+    let mut rnd = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut specs = Vec::new();
+    while specs.len() < n {
+        let x = DVec3::new(2.0 * rnd() - 1.0, 2.0 * rnd() - 1.0, rnd());
+        if x.x * x.x + x.y * x.y > 1.0 {
+            continue;
+        }
+        let pos = DVec3::new(x.x * (rc - d), x.y * (rc - d), d + x.z * (h - 2.0 * d));
+        let vel = DVec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5);
+        specs.push((pos, vel));
+    }
+    let unsure = |shapes: &[WallShape]| {
+        specs
+            .iter()
+            .filter(|(x, _)| !shapes.iter().all(|w| w.surely_clear(*x, 0.5 * d)))
+            .count()
+    };
+    println!(
+        "not surely clear at the start: analytic {}, mesh {} of {n}",
+        unsure(&analytic),
+        unsure(std::slice::from_ref(&mesh))
+    );
+    // The pure kernels alone, one thread, 20 passes.
+    let t0 = std::time::Instant::now();
+    let mut clear = 0usize;
+    for _ in 0..20 {
+        for (x, _) in &specs {
+            clear += usize::from(mesh.surely_clear(*x, 0.5 * d));
+        }
+    }
+    let t_clear = t0.elapsed().as_secs_f64() / (20.0 * n as f64);
+    let mut scratch = scg::core::physics::trimesh::MeshScratch::default();
+    let mut found = Vec::new();
+    let t0 = std::time::Instant::now();
+    let mut touching = 0usize;
+    for _ in 0..20 {
+        for (x, _) in &specs {
+            m.contacts(*x, 0.5 * d, &mut scratch, &mut found);
+            touching += found.len();
+        }
+    }
+    let t_query = t0.elapsed().as_secs_f64() / (20.0 * n as f64);
+    let t0 = std::time::Instant::now();
+    let mut clear_a = 0usize;
+    for _ in 0..20 {
+        for (x, _) in &specs {
+            clear_a += usize::from(analytic.iter().all(|w| w.surely_clear(*x, 0.5 * d)));
+        }
+    }
+    let t_clear_a = t0.elapsed().as_secs_f64() / (20.0 * n as f64);
+    let mut sorted: Vec<DVec3> = specs.iter().map(|s| s.0).collect();
+    sorted.sort_by(|a, b| (a.z, a.y, a.x).partial_cmp(&(b.z, b.y, b.x)).unwrap());
+    let t0 = std::time::Instant::now();
+    let mut c2 = 0usize;
+    for _ in 0..20 {
+        for x in &sorted {
+            c2 += usize::from(mesh.surely_clear(*x, 0.5 * d));
+        }
+    }
+    println!(
+        "sorted by z: mesh surely_clear {:.2e} s ({c2})",
+        t0.elapsed().as_secs_f64() / (20.0 * n as f64)
+    );
+    println!(
+        "kernels: mesh surely_clear {t_clear:.2e} s ({clear} clear), full query {t_query:.2e} s ({touching} contacts), analytic surely_clear {t_clear_a:.2e} s ({clear_a})"
+    );
+    let mut best = [f64::INFINITY; 2];
+    for round in 0..3 {
+        for (which, (name, shapes)) in
+            [("analytic", analytic.clone()), ("mesh", vec![mesh.clone()])]
+                .into_iter()
+                .enumerate()
+        {
+            let mat = material(0.8, 0.3);
+            let mut sim = Simulation::new(SimConfig {
+                dt: 1e-6,
+                integrator: Integrator::Exponential,
+                drag: None,
+                fluid: None,
+                flow: FlowField::Still,
+                gravity: None,
+                buoyancy: false,
+                contacts: None,
+                walls: Some(WallSet {
+                    walls: shapes
+                        .into_iter()
+                        .map(|shape| Wall {
+                            name: "w".into(),
+                            shape,
+                        })
+                        .collect(),
+                    law: NormalLaw::hertz(0.8),
+                    material: mat,
+                }),
+                record_every: None,
+                groups: vec!["p".into()],
+            });
+            for (pos, vel) in &specs {
+                sim.spawn(&ParticleSpec {
+                    group: 0,
+                    diameter: d,
+                    density: RHO,
+                    alpha: 1.0,
+                    law: CoarseGrainLaw::Scg,
+                    position: *pos,
+                    velocity: *vel,
+                });
+            }
+            sim.run(steps, |_| true).unwrap();
+            let forces = sim.timers().total[scg::core::step::StepSet::Forces.index()].as_secs_f64();
+            let per = forces / (n as f64 * steps as f64);
+            println!("round {round}, {name}: forces {forces:.3} s, {per:.3e} s per particle-step");
+            best[which] = best[which].min(per);
+        }
+    }
+    println!(
+        "best of 3: analytic {:.3e}, mesh {:.3e} s per particle-step; mesh / analytic {:.2}",
+        best[0],
+        best[1],
+        best[1] / best[0]
+    );
 }

@@ -161,7 +161,28 @@ struct BinGrid {
     /// Chebyshev distance in cells to the nearest non-empty cell (0 = non-empty),
     /// saturated at `u16::MAX`.
     reach: Vec<u16>,
+    /// A lower bound of the distance from each cell's centre to the mesh, m (exact, then
+    /// rounded down to f32, within [`NEAR`] cells of a triangle's box; `NEAR`·h beyond).
+    centre_clear: Vec<f32>,
+    /// Coarse cells of `COARSE`³ cells (a few kilobytes, so that the clearance test of a
+    /// particle far from the mesh touches little memory): cells per axis, and a lower
+    /// bound of the distance from each coarse centre to the mesh, m.
+    coarse_dims: [usize; 3],
+    coarse_clear: Vec<f32>,
 }
+
+/// Cells per coarse cell and axis.
+const COARSE: usize = 4;
+
+/// `d` rounded down to f32, less a relative 1e-9 for the rounding of distances.
+fn down(d: f64) -> f32 {
+    let d = d * (1.0 - 1e-9);
+    let f = d as f32;
+    if f as f64 > d { f.next_down() } else { f }
+}
+
+/// Cells around each triangle's box where the centre distance is computed exactly.
+const NEAR: usize = 2;
 
 /// Most cells a grid may have.
 const MAX_CELLS: usize = 1 << 22;
@@ -175,17 +196,18 @@ impl BinGrid {
         }
         let ext = hi - lo;
         let emax = ext.max_element().max(f64::MIN_POSITIVE);
-        // Cells about half the mean edge length, between 1/512 and 1/8 of the largest
+        // Cells about half the median edge length, between 1/512 and 1/8 of the largest
         // extent, and never more than MAX_CELLS.
-        let mean_edge = triangles
+        let mut lengths: Vec<f64> = triangles
             .iter()
-            .map(|t| {
+            .flat_map(|t| {
                 let [a, b, c] = t.map(|i| vertices[i as usize]);
-                (b - a).length() + (c - b).length() + (a - c).length()
+                [(b - a).length(), (c - b).length(), (a - c).length()]
             })
-            .sum::<f64>()
-            / (3.0 * triangles.len() as f64);
-        let mut h = (0.5 * mean_edge).clamp(emax / 512.0, emax / 8.0);
+            .collect();
+        let mid = lengths.len() / 2;
+        let median_edge = *lengths.select_nth_unstable_by(mid, f64::total_cmp).1;
+        let mut h = (0.5 * median_edge).clamp(emax / 512.0, emax / 8.0);
         // Pad by a cell's hundredth so that points on the bounds fall inside.
         let (origin, dims) = loop {
             let pad = DVec3::splat(0.01 * h);
@@ -265,12 +287,77 @@ impl BinGrid {
             }
             front = next;
         }
+        // Centre distances near the triangles: each triangle updates the cells of its box
+        // widened by NEAR cells. A cell no triangle's widened box reaches is at least
+        // NEAR·h from every triangle, as is its centre.
+        let near = NEAR as f64 * h;
+        let mut centre = vec![near; ncell];
+        for tri in triangles {
+            let [a, b, c] = tri.map(|i| vertices[i as usize]);
+            let (tlo, thi) = (a.min(b).min(c), a.max(b).max(c));
+            let l = [0, 1, 2].map(|k| cell_of(tlo[k], k).saturating_sub(NEAR));
+            let u = [0, 1, 2].map(|k| (cell_of(thi[k], k) + NEAR).min(dims[k] - 1));
+            for k in l[2]..=u[2] {
+                for j in l[1]..=u[1] {
+                    for i in l[0]..=u[0] {
+                        let ctr =
+                            origin + h * DVec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5);
+                        let d = (closest_point_on_triangle(ctr, a, b, c).0 - ctr).length();
+                        let slot = &mut centre[index(i, j, k)];
+                        *slot = slot.min(d);
+                    }
+                }
+            }
+        }
+        // Each fine centre's bound also holds from the reach: every point of the cell is at
+        // least (reach − 1)·h from the mesh.
+        for (c, d) in centre.iter_mut().enumerate() {
+            *d = d.max((f64::from(reach[c]) - 1.0) * h);
+        }
+        // A coarse centre C: d(C) ≥ d(c) − |C − c| for the fine centres c around it
+        // (the distance to the mesh is 1-Lipschitz).
+        let coarse_dims = dims.map(|d| d.div_ceil(COARSE));
+        let hc = COARSE as f64 * h;
+        let mut coarse_clear = Vec::with_capacity(coarse_dims.iter().product());
+        for k in 0..coarse_dims[2] {
+            for j in 0..coarse_dims[1] {
+                for i in 0..coarse_dims[0] {
+                    let cc =
+                        origin + hc * DVec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5);
+                    let around = |m: usize, n: usize| {
+                        let f = (cc[n] - origin[n]) / h - 0.5;
+                        let a = (f.floor().max(0.0) as usize).min(dims[n] - 1);
+                        let _ = m;
+                        a..=(a + 1).min(dims[n] - 1)
+                    };
+                    let mut best = 0.0_f64;
+                    for fk in around(k, 2) {
+                        for fj in around(j, 1) {
+                            for fi in around(i, 0) {
+                                let fc = origin
+                                    + h * DVec3::new(
+                                        fi as f64 + 0.5,
+                                        fj as f64 + 0.5,
+                                        fk as f64 + 0.5,
+                                    );
+                                best = best.max(centre[index(fi, fj, fk)] - (cc - fc).length());
+                            }
+                        }
+                    }
+                    coarse_clear.push(down(best));
+                }
+            }
+        }
+        let centre_clear = centre.into_iter().map(down).collect();
         BinGrid {
+            coarse_dims,
+            coarse_clear,
             origin,
             h,
             dims,
             cells,
             reach,
+            centre_clear,
         }
     }
 
@@ -294,7 +381,9 @@ impl BinGrid {
             return None;
         }
         let c = |x: f64, k: usize| -> usize {
-            (((x - self.origin[k]) / self.h).floor().max(0.0) as usize).min(self.dims[k] - 1)
+            // `as usize` truncates toward zero and saturates negatives (and NaN) to 0: the
+            // floor for the non-negative values that matter, without a libm call.
+            (((x - self.origin[k]) / self.h) as usize).min(self.dims[k] - 1)
         };
         Some((
             [c(lo.x, 0), c(lo.y, 1), c(lo.z, 2)],
@@ -557,7 +646,9 @@ impl TriMesh {
 
     /// True when a sphere of radius `radius` (m) centred at `x` is certainly clear of the
     /// mesh: `x` is at least `radius` from the grid's box, or its cell is at least
-    /// `radius` from every cell holding a triangle. No square root.
+    /// `radius` from every cell holding a triangle, or (the distance being 1-Lipschitz)
+    /// |x − c| ≤ d_c − radius with d_c the stored lower bound of the distance from its
+    /// cell's centre c to the mesh. No square root.
     #[inline]
     pub fn surely_clear(&self, x: DVec3, radius: f64) -> bool {
         let g = &self.grid;
@@ -567,12 +658,29 @@ impl TriMesh {
         if out != DVec3::ZERO {
             return out.length_squared() >= radius * radius;
         }
+        // Inside the box: rel ≥ 0, so `as usize` (truncation, no libm call) is the floor.
         let rel = (x - g.origin) / g.h;
-        let c = [0, 1, 2].map(|k| (rel[k].floor().max(0.0) as usize).min(g.dims[k] - 1));
-        let reach = g.reach[(c[2] * g.dims[1] + c[1]) * g.dims[0] + c[0]];
+        let hc = COARSE as f64 * g.h;
+        let cc = [0, 1, 2]
+            .map(|k| ((rel[k] * (1.0 / COARSE as f64)) as usize).min(g.coarse_dims[k] - 1));
+        let ci = (cc[2] * g.coarse_dims[1] + cc[1]) * g.coarse_dims[0] + cc[0];
+        let room = f64::from(g.coarse_clear[ci]) - radius;
+        if room > 0.0 {
+            let ctr = g.origin + hc * (DVec3::new(cc[0] as f64, cc[1] as f64, cc[2] as f64) + 0.5);
+            if (x - ctr).length_squared() <= room * room {
+                return true;
+            }
+        }
+        let c = [0, 1, 2].map(|k| (rel[k] as usize).min(g.dims[k] - 1));
+        let cell = (c[2] * g.dims[1] + c[1]) * g.dims[0] + c[0];
         // Any point of a cell `reach` cells from the nearest non-empty one is at least
         // (reach − 1) cells from every triangle.
-        (f64::from(reach) - 1.0) * g.h >= radius
+        if (f64::from(g.reach[cell]) - 1.0) * g.h >= radius {
+            return true;
+        }
+        let room = f64::from(g.centre_clear[cell]) - radius;
+        let ctr = g.origin + g.h * (DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) + 0.5);
+        room > 0.0 && (x - ctr).length_squared() <= room * room
     }
 
     /// Closest point to `x` on triangle `t`, m.
