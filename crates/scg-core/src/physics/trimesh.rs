@@ -800,17 +800,41 @@ impl TriMesh {
         }
     }
 
-    /// Line strips drawing the mesh: its feature edges, one two-point strip each.
+    /// Line strips drawing the mesh: its feature edges, chained into polylines (each
+    /// feature edge drawn once).
     pub fn outline(&self) -> Vec<Vec<[f64; 3]>> {
-        self.feature_edges()
-            .into_iter()
-            .map(|[p, q]| {
-                vec![
-                    self.vertices[p as usize].to_array(),
-                    self.vertices[q as usize].to_array(),
-                ]
-            })
-            .collect()
+        let edges = self.feature_edges();
+        let at = Csr::build(
+            self.vertices.len(),
+            edges
+                .iter()
+                .enumerate()
+                .flat_map(|(e, &[p, q])| [(p, e as u32), (q, e as u32)]),
+        );
+        let mut used = vec![false; edges.len()];
+        let mut strips = Vec::new();
+        for start in 0..edges.len() {
+            if used[start] {
+                continue;
+            }
+            used[start] = true;
+            let [p, mut v] = edges[start];
+            let mut strip = vec![p, v];
+            // Walk on while an unused feature edge leaves the last vertex.
+            while let Some(&e) = at.get(v as usize).iter().find(|&&e| !used[e as usize]) {
+                used[e as usize] = true;
+                let [a, b] = edges[e as usize];
+                v = if a == v { b } else { a };
+                strip.push(v);
+            }
+            strips.push(
+                strip
+                    .into_iter()
+                    .map(|i| self.vertices[i as usize].to_array())
+                    .collect(),
+            );
+        }
+        strips
     }
 }
 

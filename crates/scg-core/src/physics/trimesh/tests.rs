@@ -241,3 +241,33 @@ fn the_grid_is_fine_enough_to_clear_most_of_the_inside() {
     assert!(m.surely_clear(DVec3::splat(0.5), 0.5 - 2.0 * h));
     assert!(!m.surely_clear(DVec3::splat(0.5), 0.5 + 1e-9));
 }
+
+/// The outline draws every feature edge exactly once, chained: a cube's 12 edges.
+#[test]
+fn outline_draws_each_feature_edge_once() {
+    for m in [cube(), flat(3, 1.0)] {
+        let strips = m.outline();
+        let mut segs: Vec<[[u64; 3]; 2]> = strips
+            .iter()
+            .flat_map(|s| {
+                s.windows(2).map(|w| {
+                    let k = |p: [f64; 3]| p.map(f64::to_bits);
+                    let (a, b) = (k(w[0]), k(w[1]));
+                    if a < b { [a, b] } else { [b, a] }
+                })
+            })
+            .collect();
+        let n = segs.len();
+        segs.sort();
+        segs.dedup();
+        assert_eq!(
+            (n, segs.len()),
+            (m.feature_edges().len(), m.feature_edges().len())
+        );
+        assert!(
+            strips.len() < n,
+            "chained: {} strips for {n} edges",
+            strips.len()
+        );
+    }
+}
