@@ -215,6 +215,10 @@ impl Scene {
             {
                 size = size.max(2.0 * radius);
             }
+            if let WallShape::Mesh(m) = &w.shape {
+                let (lo, hi) = m.bounds();
+                size = size.max((hi - lo).max_element());
+            }
         }
         if size.is_finite() && size > 0.0 {
             size
