@@ -637,19 +637,6 @@ fn wall_cost_mesh_vs_analytic() {
         }
     }
     let t_clear_a = t0.elapsed().as_secs_f64() / (20.0 * n as f64);
-    let mut sorted: Vec<DVec3> = specs.iter().map(|s| s.0).collect();
-    sorted.sort_by(|a, b| (a.z, a.y, a.x).partial_cmp(&(b.z, b.y, b.x)).unwrap());
-    let t0 = std::time::Instant::now();
-    let mut c2 = 0usize;
-    for _ in 0..20 {
-        for x in &sorted {
-            c2 += usize::from(mesh.surely_clear(*x, 0.5 * d));
-        }
-    }
-    println!(
-        "sorted by z: mesh surely_clear {:.2e} s ({c2})",
-        t0.elapsed().as_secs_f64() / (20.0 * n as f64)
-    );
     println!(
         "kernels: mesh surely_clear {t_clear:.2e} s ({clear} clear), full query {t_query:.2e} s ({touching} contacts), analytic surely_clear {t_clear_a:.2e} s ({clear_a})"
     );

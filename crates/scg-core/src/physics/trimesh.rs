@@ -152,10 +152,12 @@ impl Csr {
 struct BinGrid {
     /// Lower corner, m.
     origin: DVec3,
-    /// Cell edge, m.
+    /// Cell edge, m, and its inverse, 1/m.
     h: f64,
-    /// Cells per axis.
+    inv_h: f64,
+    /// Cells per axis (also as floats).
     dims: [usize; 3],
+    dims_f: DVec3,
     /// Triangles per cell.
     cells: Csr,
     /// Chebyshev distance in cells to the nearest non-empty cell (0 = non-empty),
@@ -350,6 +352,8 @@ impl BinGrid {
         }
         let centre_clear = centre.into_iter().map(down).collect();
         BinGrid {
+            inv_h: 1.0 / h,
+            dims_f: DVec3::new(dims[0] as f64, dims[1] as f64, dims[2] as f64),
             coarse_dims,
             coarse_clear,
             origin,
@@ -652,22 +656,22 @@ impl TriMesh {
     #[inline]
     pub fn surely_clear(&self, x: DVec3, radius: f64) -> bool {
         let g = &self.grid;
-        let below = (g.origin - x).max(DVec3::ZERO);
-        let above = (x - g.upper()).max(DVec3::ZERO);
-        let out = below + above;
-        if out != DVec3::ZERO {
-            return out.length_squared() >= radius * radius;
+        let rel = (x - g.origin) * g.inv_h;
+        if rel.cmplt(DVec3::ZERO).any() || rel.cmpge(g.dims_f).any() {
+            let below = (g.origin - x).max(DVec3::ZERO);
+            let above = (x - g.upper()).max(DVec3::ZERO);
+            return (below + above).length_squared() >= radius * radius;
         }
         // Inside the box: rel ≥ 0, so `as usize` (truncation, no libm call) is the floor.
-        let rel = (x - g.origin) / g.h;
-        let hc = COARSE as f64 * g.h;
         let cc = [0, 1, 2]
             .map(|k| ((rel[k] * (1.0 / COARSE as f64)) as usize).min(g.coarse_dims[k] - 1));
         let ci = (cc[2] * g.coarse_dims[1] + cc[1]) * g.coarse_dims[0] + cc[0];
         let room = f64::from(g.coarse_clear[ci]) - radius;
         if room > 0.0 {
-            let ctr = g.origin + hc * (DVec3::new(cc[0] as f64, cc[1] as f64, cc[2] as f64) + 0.5);
-            if (x - ctr).length_squared() <= room * room {
+            // Offset from the coarse centre, in cells.
+            let off =
+                rel - (DVec3::new(cc[0] as f64, cc[1] as f64, cc[2] as f64) + 0.5) * COARSE as f64;
+            if off.length_squared() * (g.h * g.h) <= room * room {
                 return true;
             }
         }
@@ -679,8 +683,8 @@ impl TriMesh {
             return true;
         }
         let room = f64::from(g.centre_clear[cell]) - radius;
-        let ctr = g.origin + g.h * (DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) + 0.5);
-        room > 0.0 && (x - ctr).length_squared() <= room * room
+        let off = rel - (DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) + 0.5);
+        room > 0.0 && off.length_squared() * (g.h * g.h) <= room * room
     }
 
     /// Closest point to `x` on triangle `t`, m.
@@ -733,6 +737,10 @@ impl TriMesh {
         s.hits.clear();
         for &t in &s.tris {
             let [a, b, c] = self.triangles[t as usize].map(|i| self.vertices[i as usize]);
+            // The triangle's plane is no farther than the triangle: a cheap rejection.
+            if (x - a).dot(self.normals[t as usize]).abs() >= radius {
+                continue;
+            }
             let (q, feature) = closest_point_on_triangle(x, a, b, c);
             let dist2 = (q - x).length_squared();
             if dist2 < r2 {

@@ -113,6 +113,9 @@ pub fn wall_normal_forces(
             let mut sum = DVec3::ZERO;
             for w in &walls.walls {
                 if let WallShape::Mesh(m) = &w.shape {
+                    if m.surely_clear(x, r) {
+                        continue;
+                    }
                     m.contacts(x, r, &mut scratch, &mut found);
                     for c in &found {
                         let vn = v.dot(c.normal);
