@@ -398,6 +398,63 @@ fn faceted_cylinder_rebound_within_the_faceting_error() {
     }
 }
 
+/// Gzip `bytes` with a minimal encoder-free member: a stored (uncompressed) deflate
+/// stream, which every gzip reader accepts.
+fn gzip(bytes: &[u8]) -> Vec<u8> {
+    let mut out = vec![0x1f, 0x8b, 8, 0, 0, 0, 0, 0, 0, 255];
+    let mut chunks = bytes.chunks(65535).peekable();
+    while let Some(c) = chunks.next() {
+        out.push(u8::from(chunks.peek().is_none()));
+        let n = c.len() as u16;
+        out.extend_from_slice(&n.to_le_bytes());
+        out.extend_from_slice(&(!n).to_le_bytes());
+        out.extend_from_slice(c);
+    }
+    // CRC-32 (IEEE) and the size.
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xedb8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    out.extend_from_slice(&(!crc).to_le_bytes());
+    out.extend_from_slice(&(bytes.len() as u32).to_le_bytes());
+    out
+}
+
+/// History keys: analytic wall i → i; mesh walls' flat regions after the last wall.
+#[test]
+fn history_keys_number_mesh_regions_after_the_walls() {
+    use scg::core::stages::walls::history_keys;
+    let p = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    // An open box: 5 flat regions.
+    let text = std::fs::read(FIXTURE.replace(".toml", ".stl")).unwrap();
+    let (v, t) = weld(&stl::parse(&text).unwrap());
+    let open_box = WallShape::Mesh(Arc::new(TriMesh::new(v, t).unwrap()));
+    let one = mesh(
+        &[[p(0.0, 0.0, 0.0), p(1.0, 0.0, 0.0), p(0.0, 1.0, 0.0)]],
+        DVec3::ZERO,
+        DVec3::ZERO,
+    );
+    let plane = WallShape::Plane {
+        point: DVec3::ZERO,
+        normal: DVec3::Z,
+    };
+    let walls: Vec<Wall> = [plane.clone(), open_box, plane, one]
+        .into_iter()
+        .map(|shape| Wall {
+            name: "w".into(),
+            shape,
+        })
+        .collect();
+    assert_eq!(history_keys(&walls), vec![0, 4, 2, 9]);
+}
+
 fn scg() -> Command {
     Command::new(env!("CARGO_BIN_EXE_scg"))
 }
@@ -419,6 +476,24 @@ fn mesh_scene_runs_end_to_end() {
             "wall `box`: mesh of 10 triangles, 8 vertices, 17 edges, open, 5 flat regions"
         ),
         "{text}"
+    );
+    // The same file gzip-compressed (`.stl.gz`) gives the same mesh.
+    let gz_dir = tempfile::tempdir().unwrap();
+    let stl_bytes = std::fs::read(FIXTURE.replace(".toml", ".stl")).unwrap();
+    std::fs::write(gz_dir.path().join("box.stl.gz"), gzip(&stl_bytes)).unwrap();
+    let scene = std::fs::read_to_string(FIXTURE).unwrap();
+    let gz_case = gz_dir.path().join("gz.toml");
+    std::fs::write(&gz_case, scene.replace("mesh-box.stl", "box.stl.gz")).unwrap();
+    let out = scg().arg("check").arg(&gz_case).output().unwrap();
+    let gz_text = String::from_utf8_lossy(&out.stdout);
+    let line = |t: &str| {
+        t.lines()
+            .find(|l| l.starts_with("wall `box`"))
+            .map(str::to_owned)
+    };
+    assert!(
+        out.status.success() && line(&gz_text) == line(&text),
+        "{gz_text}"
     );
     let dir = tempfile::tempdir().unwrap();
     let out = scg()
