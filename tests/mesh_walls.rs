@@ -509,6 +509,13 @@ fn mesh_scene_runs_end_to_end() {
     for ext in ["rrd", "mcap"] {
         assert!(dir.path().join(format!("mesh-box.{ext}")).is_file());
     }
+    // The MCAP keeps the wall's feature edges (12, chained) and its triangles (the .rrd
+    // logs them as `geometry/box` line strips and a `geometry/box/surface` Mesh3D).
+    let rec = scg::record::read_mcap(&dir.path().join("mesh-box.mcap")).unwrap();
+    let o = &rec.meta.outlines[0];
+    let segments: usize = o.strips.iter().map(|s| s.len() - 1).sum();
+    assert_eq!((o.name.as_str(), segments), ("box", 12));
+    assert_eq!((o.vertices.len(), o.triangles.len()), (8, 10));
     // The same scene in a World: after 0.02 s every bead is inside the box (without the
     // mesh each would have fallen below the floor by then).
     let scene = scg::scene::load(std::path::Path::new(FIXTURE), &[]).unwrap();

@@ -168,9 +168,20 @@ impl Scene {
             outlines: self
                 .walls
                 .iter()
-                .map(|w| Outline {
-                    name: w.name.clone(),
-                    strips: w.shape.outline(size),
+                .map(|w| {
+                    let (vertices, triangles) = match &w.shape {
+                        WallShape::Mesh(m) => (
+                            m.vertices().iter().map(|v| v.to_array()).collect(),
+                            m.triangles().to_vec(),
+                        ),
+                        _ => (Vec::new(), Vec::new()),
+                    };
+                    Outline {
+                        name: w.name.clone(),
+                        strips: w.shape.outline(size),
+                        vertices,
+                        triangles,
+                    }
                 })
                 .collect(),
             warnings,
