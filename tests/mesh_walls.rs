@@ -630,11 +630,19 @@ fn vessel(rc: f64, h: f64, n: usize, rows: usize) -> Vec<[DVec3; 3]> {
 /// Cost of the wall forces, 10^5 particles (d = 0.3 mm, random in the vessel, random
 /// velocities ±0.5 m/s, friction on) in a vessel of ≈ 10^4 triangles against the same
 /// vessel as an analytic cylinder and two planes: seconds per particle-step of the
-/// forces set (the walls are its only system here). Prints both and their ratio.
+/// forces set (the walls are its only system here), on one thread, best of three
+/// alternating runs. Prints both and their ratio.
 /// `cargo test --release --test mesh_walls -- --ignored --nocapture wall_cost`
 #[test]
 #[ignore = "timing (about a minute): cargo test --release --test mesh_walls -- --ignored --nocapture"]
 fn wall_cost_mesh_vs_analytic() {
+    // One thread (`SCG_COST_THREADS` to change): per-particle costs, less sensitive to a
+    // shared machine than two threads.
+    let threads = std::env::var("SCG_COST_THREADS").map_or(1, |t| t.parse().unwrap_or(1));
+    scg::core::exec::configure(scg::core::exec::ExecSettings {
+        threads,
+        ..Default::default()
+    });
     let (rc, h) = (0.03, 0.06);
     let soup = vessel(rc, h, 128, 39);
     let mesh = mesh_f64(&soup);
