@@ -216,7 +216,8 @@ impl BinGrid {
             let origin = lo - pad;
             let span = ext + 2.0 * pad;
             let dims = [0, 1, 2].map(|k| ((span[k] / h).ceil() as usize).max(1));
-            if dims.iter().product::<usize>() <= MAX_CELLS {
+            let cells = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
+            if cells.is_some_and(|c| c <= MAX_CELLS) || !h.is_finite() {
                 break (origin, dims);
             }
             h *= 1.25;

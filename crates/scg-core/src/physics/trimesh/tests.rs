@@ -271,3 +271,22 @@ fn outline_draws_each_feature_edge_once() {
         );
     }
 }
+
+/// Extreme but finite coordinates give a mesh or an error, never a panic.
+#[test]
+fn extreme_coordinates_do_not_panic() {
+    for s in [1e-300, 1e-12, 1e12, 1e300, f64::MAX / 4.0] {
+        let v = vec![
+            DVec3::ZERO,
+            DVec3::X * s,
+            DVec3::Y * s,
+            DVec3::new(-s, -s, s),
+        ];
+        let t = vec![[0, 1, 2], [0, 2, 3], [0, 3, 1]];
+        if let Ok(m) = TriMesh::new(v, t) {
+            let _ = contacts(&m, DVec3::splat(0.1 * s), 0.5 * s);
+            let _ = m.surely_clear(DVec3::splat(-0.1 * s), 0.01 * s);
+            let _ = m.outline();
+        }
+    }
+}
