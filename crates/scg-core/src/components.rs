@@ -97,7 +97,9 @@ pub struct StokesFactors {
     pub relax: f64,
 }
 
-/// Tangential history of a particle's wall contacts: (wall index, history displacement, m).
+/// Tangential history of a particle's wall contacts: (history key, history displacement, m);
+/// the key is the wall index, or for a mesh wall its flat region's key
+/// (`stages::walls::history_keys`).
 /// Present with walls; empty while the particle touches no wall.
 #[derive(Component, Clone, Debug, Default, PartialEq)]
 pub struct WallHistory(pub Vec<(u32, DVec3)>);

@@ -71,12 +71,16 @@ pub struct GroupMeta {
 }
 
 /// A static line strip that draws part of the scene's geometry (m).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Default)]
 pub struct Outline {
     /// Name of the geometry item (e.g. `vessel`, `nozzle`, `floor`).
     pub name: String,
     /// Line strips, each a list of points, m.
     pub strips: Vec<Vec<[f64; 3]>>,
+    /// A surface's vertices, m (mesh walls; empty otherwise).
+    pub vertices: Vec<[f64; 3]>,
+    /// The surface's triangles, as indices into `vertices`.
+    pub triangles: Vec<[u32; 3]>,
 }
 
 /// Description of a run, written once at the start of each recording.

@@ -163,6 +163,10 @@ impl From<GroupJson> for GroupMeta {
 pub(crate) struct OutlineJson {
     pub name: String,
     pub strips: Vec<Vec<[f64; 3]>>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub vertices: Vec<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub triangles: Vec<[u32; 3]>,
 }
 
 impl From<&Outline> for OutlineJson {
@@ -170,6 +174,8 @@ impl From<&Outline> for OutlineJson {
         Self {
             name: o.name.clone(),
             strips: o.strips.clone(),
+            vertices: o.vertices.clone(),
+            triangles: o.triangles.clone(),
         }
     }
 }
@@ -179,6 +185,8 @@ impl From<OutlineJson> for Outline {
         Self {
             name: o.name,
             strips: o.strips,
+            vertices: o.vertices,
+            triangles: o.triangles,
         }
     }
 }

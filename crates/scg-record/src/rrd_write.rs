@@ -21,8 +21,9 @@ use rerun::external::re_log_encoding::{Encoder, EncodingOptions};
 use rerun::log::{ChunkBatcherConfig, LogMsg};
 use rerun::sink::{LogSink, SinkFlushError};
 use rerun::{
-    AnyValues, AsComponents, Color, EntityPath, EntityPathPart, LineStrips3D, MediaType, Points3D,
-    RecordingInfo, RecordingStream, Scalars, TextDocument, TextLog, TextLogLevel, ViewCoordinates,
+    AnyValues, AsComponents, Color, EntityPath, EntityPathPart, LineStrips3D, MediaType, Mesh3D,
+    Points3D, RecordingInfo, RecordingStream, Scalars, TextDocument, TextLog, TextLogLevel,
+    ViewCoordinates,
 };
 use scg_core::frame::{Frame, FrameSink, RunMeta};
 
@@ -274,6 +275,27 @@ impl RrdSink {
                 &LineStrips3D::new(strips).with_colors([Color::from_rgb(160, 160, 160)]),
             )
             .map_err(rerun_err)?;
+            if !outline.triangles.is_empty() {
+                // A mesh wall's triangles, translucent, under its feature edges.
+                let path = EntityPath::new(
+                    [ENTITY_GEOMETRY, outline.name.as_str(), "surface"]
+                        .map(EntityPathPart::new)
+                        .to_vec(),
+                );
+                let positions = outline
+                    .vertices
+                    .iter()
+                    .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]);
+                rec.log_static(
+                    path,
+                    &Mesh3D::new(positions)
+                        .with_triangle_indices(outline.triangles.clone())
+                        .with_albedo_factor(rerun::datatypes::Rgba32::from_unmultiplied_rgba(
+                            160, 160, 160, 80,
+                        )),
+                )
+                .map_err(rerun_err)?;
+            }
         }
 
         if !meta.warnings.is_empty() {

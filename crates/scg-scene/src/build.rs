@@ -168,9 +168,20 @@ impl Scene {
             outlines: self
                 .walls
                 .iter()
-                .map(|w| Outline {
-                    name: w.name.clone(),
-                    strips: w.shape.outline(size),
+                .map(|w| {
+                    let (vertices, triangles) = match &w.shape {
+                        WallShape::Mesh(m) => (
+                            m.vertices().iter().map(|v| v.to_array()).collect(),
+                            m.triangles().to_vec(),
+                        ),
+                        _ => (Vec::new(), Vec::new()),
+                    };
+                    Outline {
+                        name: w.name.clone(),
+                        strips: w.shape.outline(size),
+                        vertices,
+                        triangles,
+                    }
                 })
                 .collect(),
             warnings,
@@ -214,6 +225,10 @@ impl Scene {
             | WallShape::CylinderOutside { radius, .. } = w.shape
             {
                 size = size.max(2.0 * radius);
+            }
+            if let WallShape::Mesh(m) = &w.shape {
+                let (lo, hi) = m.bounds();
+                size = size.max((hi - lo).max_element());
             }
         }
         if size.is_finite() && size > 0.0 {

@@ -17,6 +17,7 @@ pub mod error;
 mod model;
 mod overrides;
 mod raw;
+pub mod stl;
 mod validate;
 
 pub use error::SceneError;

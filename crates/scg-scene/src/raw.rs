@@ -152,6 +152,10 @@ pub struct RawWall {
     pub axis: Option<[f64; 3]>,
     pub radius: Option<f64>,
     pub extent: Option<[f64; 2]>,
+    pub file: Option<String>,
+    pub scale: Option<f64>,
+    pub translate: Option<[f64; 3]>,
+    pub rotate: Option<[f64; 3]>,
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -289,6 +293,7 @@ pub enum RawWallKind {
     Plane,
     CylinderInside,
     CylinderOutside,
+    Mesh,
 }
 
 /// `region.kind` (groups and feeders).

@@ -6,7 +6,8 @@
 //! * [`flow`] — the prescribed fluid flow fields;
 //! * [`integrate`] — the exponential and explicit schemes, kicks;
 //! * [`contact`] — normal, tangential and rolling laws, and the pair kernel;
-//! * [`wall_shape`] — wall geometry (planes, cylinders) and touch tests;
+//! * [`wall_shape`] — wall geometry (planes, cylinders, meshes) and touch tests;
+//! * [`trimesh`] — triangle-mesh walls: closest points, topology, bin grid, contacts;
 //! * [`neighbour`] — the Verlet neighbour list;
 //! * [`periodic`] — orthogonal periodic boxes (minimum image).
 pub mod contact;
@@ -16,4 +17,5 @@ pub mod integrate;
 pub mod neighbour;
 pub mod periodic;
 pub mod scaling;
+pub mod trimesh;
 pub mod wall_shape;

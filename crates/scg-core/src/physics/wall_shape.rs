@@ -2,6 +2,9 @@
 
 use glam::DVec3;
 use std::f64::consts::TAU;
+use std::sync::Arc;
+
+use super::trimesh::{MeshScratch, TriMesh};
 
 /// A rigid wall.
 #[derive(Clone, Debug, PartialEq)]
@@ -35,6 +38,10 @@ pub enum WallShape {
         /// Axial extent (from, to) relative to `center` along `axis`, m; `None` = infinite.
         extent: Option<(f64, f64)>,
     },
+    /// A rigid triangle mesh (two-sided; see [`TriMesh::contacts`]). A sphere may touch
+    /// it in several places at once: the wall stage asks the mesh for all its contacts;
+    /// [`WallShape::touch`] gives only the deepest.
+    Mesh(Arc<TriMesh>),
 }
 
 /// Where a sphere touches a wall.
@@ -84,10 +91,12 @@ fn radial(
 
 impl WallShape {
     /// Signed distance from the wall surface to `x`, positive on the domain side, m, with
-    /// the unit normal pointing into the domain; `None` outside a finite cylinder's extent.
+    /// the unit normal pointing into the domain; `None` outside a finite cylinder's extent
+    /// and for a mesh (two-sided: it has no inside).
     #[inline]
     pub fn distance(&self, x: DVec3) -> Option<(f64, DVec3)> {
         match *self {
+            WallShape::Mesh(_) => None,
             WallShape::Plane { point, normal } => Some(((x - point).dot(normal), normal)),
             WallShape::CylinderInside {
                 center,
@@ -108,7 +117,8 @@ impl WallShape {
     /// wall: the cheap test of the particles away from every wall (no square root or
     /// division). Exactly `touch(..).is_none()` for a plane; for a cylinder it answers
     /// `false` (not sure) within a relative 1e-9 of the touching distance, where the caller
-    /// falls back to [`WallShape::touch`].
+    /// falls back to [`WallShape::touch`]. For a mesh, the bin grid's test
+    /// ([`TriMesh::surely_clear`]).
     #[inline]
     pub fn surely_clear(&self, x: DVec3, radius: f64) -> bool {
         const MARGIN: f64 = 1e-9;
@@ -116,6 +126,7 @@ impl WallShape {
             radial_offset(center, axis, extent, x).map(DVec3::length_squared)
         };
         match *self {
+            WallShape::Mesh(ref m) => m.surely_clear(x, radius),
             WallShape::Plane { point, normal } => (x - point).dot(normal) >= radius,
             WallShape::CylinderInside {
                 center,
@@ -138,9 +149,21 @@ impl WallShape {
         }
     }
 
-    /// Contact of a sphere of radius `radius` (m) centred at `x`, if it overlaps the wall.
+    /// Contact of a sphere of radius `radius` (m) centred at `x`, if it overlaps the wall
+    /// (for a mesh: its deepest contact).
     #[inline]
     pub fn touch(&self, x: DVec3, radius: f64) -> Option<WallTouch> {
+        if let WallShape::Mesh(m) = self {
+            let mut out = Vec::new();
+            m.contacts(x, radius, &mut MeshScratch::default(), &mut out);
+            return out
+                .iter()
+                .max_by(|a, b| a.overlap.total_cmp(&b.overlap))
+                .map(|c| WallTouch {
+                    overlap: c.overlap,
+                    normal: c.normal,
+                });
+        }
         let (dist, normal) = self.distance(x)?;
         let overlap = radius - dist;
         (overlap > 0.0).then_some(WallTouch { overlap, normal })
@@ -152,9 +175,11 @@ impl WallShape {
     }
 
     /// Line strips that draw the wall; `size` (m) sets the drawn size of infinite shapes.
+    /// A mesh is drawn by its feature edges ([`TriMesh::outline`]).
     pub fn outline(&self, size: f64) -> Vec<Vec<[f64; 3]>> {
         let p = |v: DVec3| [v.x, v.y, v.z];
         match *self {
+            WallShape::Mesh(ref m) => m.outline(),
             WallShape::Plane { point, normal } => {
                 let (a, b) = normal.any_orthonormal_pair();
                 let h = 0.5 * size;

@@ -5,6 +5,12 @@
 //! (or the contacts effect sets rolling friction) [`wall_contact_forces`] replaces
 //! [`wall_normal_forces`]: the same normal force plus the tangential Mindlin spring with
 //! per-particle history ([`WallHistory`]), the Coulomb limit, and the torque −r·n × F_t.
+//!
+//! A mesh wall ([`WallShape::Mesh`]) may touch a particle in several places (a sphere in
+//! a corner touches two faces): each contact gets the same law. Its tangential history is
+//! keyed by (wall, flat region): a particle sliding from one triangle to the next of a flat
+//! region keeps its spring. History keys ([`history_keys`]): analytic wall `i` has key
+//! `i`; mesh walls' regions take the keys after the last wall, in wall order.
 
 use bevy_ecs::prelude::*;
 use glam::DVec3;
@@ -14,7 +20,8 @@ use crate::components::*;
 use crate::exec::par::for_each_piece;
 use crate::physics::contact::tangential::{rolling_torque, tangential_force};
 use crate::physics::contact::{Material, NormalLaw, TangentialLaw};
-use crate::physics::wall_shape::WallShape;
+use crate::physics::trimesh::{MeshContact, MeshScratch};
+use crate::physics::wall_shape::{WallShape, WallTouch};
 use crate::state::{ContactResolution, SimClock};
 use crate::step::{StepBuilder, StepSet, StepSystem};
 
@@ -104,11 +111,25 @@ pub fn wall_normal_forces(
         return;
     };
     for_each_piece((xs, vs, ds, ms, bypass(fs)), |(xs, vs, ds, ms, fs)| {
+        let (mut scratch, mut found) = (MeshScratch::default(), Vec::new());
         for i in 0..xs.len() {
             let (x, v, r) = (xs[i].0, vs[i].0, 0.5 * ds[i].0);
             let mut sum = DVec3::ZERO;
             for w in &walls.walls {
-                if let Some(t) = w.shape.touch(x, r) {
+                if let WallShape::Mesh(m) = &w.shape {
+                    if m.surely_clear(x, r) {
+                        continue;
+                    }
+                    m.contacts(x, r, &mut scratch, &mut found);
+                    for c in &found {
+                        let vn = v.dot(c.normal);
+                        if vn < 0.0 && c.overlap <= -vn * dt {
+                            resolution.note_wall(walls.law.contact_time(ms[i].0, r, e_eff, -vn));
+                        }
+                        let (fn_, _) = walls.law.force(c.overlap, vn, e_eff, r, ms[i].0);
+                        sum += fn_ * c.normal;
+                    }
+                } else if let Some(t) = w.shape.touch(x, r) {
                     let vn = v.dot(t.normal);
                     if vn < 0.0 && t.overlap <= -vn * dt {
                         // No history here: the contact started within the last step (one
@@ -124,6 +145,24 @@ pub fn wall_normal_forces(
             fs[i].0 = sum;
         }
     });
+}
+
+/// History key of each wall's first contact: analytic wall `i` → `i`; a mesh wall's
+/// region `k` → its entry + `k`, mesh walls' regions numbered from `walls.len()` on.
+pub fn history_keys(walls: &[Wall]) -> Vec<u32> {
+    let mut next = walls.len() as u32;
+    walls
+        .iter()
+        .enumerate()
+        .map(|(i, w)| match &w.shape {
+            WallShape::Mesh(m) => {
+                let k = next;
+                next += m.region_count();
+                k
+            }
+            _ => i as u32,
+        })
+        .collect()
 }
 
 type WallQuery<'w, 's> = Query<
@@ -155,29 +194,30 @@ pub fn wall_contact_forces(
     let dt = clock.dt;
     let resolution = &*resolution;
     let e_eff = walls.material.effective_modulus();
+    let keys = history_keys(&walls.walls);
+    let keys = &keys;
     // One particle: its wall forces and torque, its history updated in place.
     let one = move |x: DVec3,
                     v: DVec3,
                     w: DVec3,
                     d: f64,
                     m: f64,
-                    hist: &mut Vec<(u32, DVec3)>|
+                    hist: &mut Vec<(u32, DVec3)>,
+                    scratch: &mut MeshScratch,
+                    found: &mut Vec<MeshContact>|
           -> (DVec3, DVec3) {
         let r = 0.5 * d;
         let (mut fsum, mut tsum) = (DVec3::ZERO, DVec3::ZERO);
         let old_len = hist.len();
-        for (wi, wall) in walls.walls.iter().enumerate() {
-            let wi = wi as u32;
-            let Some(t) = wall.shape.touch(x, r) else {
-                continue;
-            };
+        // One contact (history key `key`).
+        let mut contact = |t: WallTouch, key: u32, hist: &mut Vec<(u32, DVec3)>| {
             let n = t.normal; // from the wall toward the centre
             // Velocity of the contact point (at −r·n from the centre); the wall is at rest.
             let vc = v + w.cross(-r * n);
             let vn = vc.dot(n);
             let (fn_, kn) = walls.law.force(t.overlap, vn, e_eff, r, m);
             fsum += fn_ * n;
-            let prev = match hist[..old_len].iter().find(|h| h.0 == wi) {
+            let prev = match hist[..old_len].iter().find(|h| h.0 == key) {
                 Some(h) => h.1,
                 None => {
                     // The contact starts: its duration at this approach speed.
@@ -198,7 +238,21 @@ pub fn wall_contact_forces(
             if tl.rolling > 0.0 {
                 tsum += rolling_torque(tl.rolling, fn_.abs(), r, w);
             }
-            hist.push((wi, xi));
+            hist.push((key, xi));
+        };
+        for (wall, &key) in walls.walls.iter().zip(keys) {
+            if let WallShape::Mesh(mesh) = &wall.shape {
+                mesh.contacts(x, r, scratch, found);
+                for c in found.iter() {
+                    let t = WallTouch {
+                        overlap: c.overlap,
+                        normal: c.normal,
+                    };
+                    contact(t, key + c.region, hist);
+                }
+            } else if let Some(t) = wall.shape.touch(x, r) {
+                contact(t, key, hist);
+            }
         }
         // Keep only the contacts of this step (appended after the old entries).
         if old_len > 0 {
@@ -215,12 +269,22 @@ pub fn wall_contact_forces(
     };
     let columns = (xs, vs, ws, ds, ms, bypass(fs), bypass(ts), bypass(hs));
     for_each_piece(columns, |(xs, vs, ws, ds, ms, fs, ts, hs)| {
+        let (mut scratch, mut found) = (MeshScratch::default(), Vec::new());
         for i in 0..xs.len() {
             let r = 0.5 * ds[i].0;
             if hs[i].0.is_empty() && walls.walls.iter().all(|w| w.shape.surely_clear(xs[i].0, r)) {
                 continue;
             }
-            let (f, t) = one(xs[i].0, vs[i].0, ws[i].0, ds[i].0, ms[i].0, &mut hs[i].0);
+            let (f, t) = one(
+                xs[i].0,
+                vs[i].0,
+                ws[i].0,
+                ds[i].0,
+                ms[i].0,
+                &mut hs[i].0,
+                &mut scratch,
+                &mut found,
+            );
             fs[i].0 = f;
             ts[i].0 = t;
         }

@@ -53,10 +53,12 @@ pub fn meta() -> RunMeta {
                     ],
                     vec![[0.0, 0.0, 0.3], [0.1, 0.0, 0.3]],
                 ],
+                ..Default::default()
             },
             Outline {
                 name: "nozzle".into(),
                 strips: vec![vec![[0.05, 0.1, 0.3], [0.05, 0.1, 0.25]]],
+                ..Default::default()
             },
         ],
         warnings: vec![

@@ -37,6 +37,11 @@ pub fn render(scene: &Scene, r: &Report) -> String {
             g.density_ratio
         ));
     }
+    for w in &scene.walls {
+        if let scg_core::physics::wall_shape::WallShape::Mesh(m) = &w.shape {
+            s.push_str(&mesh_line(&w.name, m));
+        }
+    }
     s.push_str(&format!(
         "Stokes number (paper eq. 1): {:.4e}\n",
         r.stokes_number
@@ -49,4 +54,26 @@ pub fn render(scene: &Scene, r: &Report) -> String {
         s.push('\n');
     }
     s
+}
+
+/// One line describing a mesh wall.
+fn mesh_line(name: &str, m: &scg_core::physics::trimesh::TriMesh) -> String {
+    let (lo, hi) = m.bounds();
+    let (h, dims) = m.grid_shape();
+    let f = |v: glam::DVec3| format!("[{:.6e}, {:.6e}, {:.6e}]", v.x, v.y, v.z);
+    format!(
+        "wall `{name}`: mesh of {} triangles, {} vertices, {} edges, {}, {} flat regions, {} feature edges, bounds {} to {} m, bin grid {}×{}×{} cells of {:.4e} m\n",
+        m.triangle_count(),
+        m.vertex_count(),
+        m.edge_count(),
+        if m.is_closed() { "closed" } else { "open" },
+        m.region_count(),
+        m.feature_edges().len(),
+        f(lo),
+        f(hi),
+        dims[0],
+        dims[1],
+        dims[2],
+        h
+    )
 }

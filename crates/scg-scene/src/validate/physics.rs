@@ -6,6 +6,7 @@ use glam::DVec3;
 use scg_core::physics::contact::tangential::TangentialStiffness;
 use scg_core::physics::contact::{Material, NormalLaw};
 use scg_core::physics::flow::{FlowField, Vortex, rpm_to_rad_per_s};
+use scg_core::physics::trimesh::{TriMesh, weld};
 use scg_core::physics::wall_shape::WallShape;
 use scg_core::stages::contacts::ContactConfig;
 use scg_core::stages::outlet::OutletGeometry;
@@ -148,6 +149,7 @@ pub(super) fn wall(w: &RawWall, i: usize, cx: &Ctx) -> Result<Wall, SceneError> 
         }
     };
     let shape = match w.kind {
+        RawWallKind::Mesh => WallShape::Mesh(std::sync::Arc::new(mesh(w, i, cx)?)),
         RawWallKind::Plane => WallShape::Plane {
             point: cx.vec3(&k("point"), cx.need(&k("point"), &w.point)?)?,
             normal: cx.unit(&k("normal"), cx.need(&k("normal"), &w.normal)?)?,
@@ -177,6 +179,26 @@ pub(super) fn wall(w: &RawWall, i: usize, cx: &Ctx) -> Result<Wall, SceneError> 
         name: w.name.clone().unwrap_or_else(|| format!("wall{i}")),
         shape,
     })
+}
+
+/// `walls[i]` of kind `mesh`: the STL file (relative to the scene file's folder), scaled,
+/// rotated and translated: x' = translate + R·(scale·x), R = R_z(rz)·R_y(ry)·R_x(rx) for
+/// `rotate = [rx, ry, rz]` in degrees (about the fixed axes, x first), m.
+fn mesh(w: &RawWall, i: usize, cx: &Ctx) -> Result<TriMesh, SceneError> {
+    let k = |s: &str| format!("walls[{i}].{s}");
+    let file = cx.need(&k("file"), &w.file)?;
+    let scale = cx.positive(&k("scale"), w.scale.unwrap_or(1.0))?;
+    let translate = cx.vec3(&k("translate"), w.translate.unwrap_or([0.0; 3]))?;
+    let rot = cx.vec3(&k("rotate"), w.rotate.unwrap_or([0.0; 3]))?;
+    let path = std::path::Path::new(cx.file)
+        .parent()
+        .unwrap_or(std::path::Path::new(""))
+        .join(&file);
+    let shown = path.display();
+    let soup = crate::stl::read(&path).map_err(|e| cx.err(&k("file"), format!("{shown}: {e}")))?;
+    let (vertices, triangles) = weld(&soup);
+    let vertices = crate::stl::place(vertices, scale, rot, translate);
+    TriMesh::new(vertices, triangles).map_err(|e| cx.err(&k("file"), format!("{shown}: {e}")))
 }
 
 /// `[outlet]` (its interval stays in seconds).
