@@ -133,9 +133,7 @@ impl ContactState {
         ms: &[Mass],
         dt: f64,
     ) -> Result<(), String> {
-        if ParticleId::peel_slice(ids) != r.ids.as_slice() {
-            return Err("the contact arrays do not match the particles".into());
-        }
+        let n = r.ids.len();
         if r.pairs.len() != r.list_pairs.len()
             || r.pairs
                 .iter()
@@ -143,10 +141,43 @@ impl ContactState {
                 .any(|(p, l)| [p.i, p.j] != *l)
             || r.list_pairs
                 .iter()
-                .any(|l| l[0] >= l[1] || l[1] as usize >= ids.len())
-            || (!r.reference.is_empty() && r.reference.len() != ids.len())
+                .any(|l| l[0] >= l[1] || l[1] as usize >= n)
+            || (!r.reference.is_empty() && r.reference.len() != n)
         {
             return Err("the contact list is inconsistent".into());
+        }
+        if ParticleId::peel_slice(ids) != r.ids.as_slice() {
+            // Taken after a feeder or the outlet changed the particle set: the arrays
+            // still describe the rows before the change, and the next neighbour stage
+            // gathers them again and carries the touching pairs' histories over by id.
+            // Only the ids and the pairs' contact state are read on that path.
+            self.ids.clone_from(&r.ids);
+            (self.group, self.radius, self.mass) = (Vec::new(), Vec::new(), Vec::new());
+            (self.kick_v, self.kick_w) = (Vec::new(), Vec::new());
+            self.list.restore(
+                r.list_pairs.clone(),
+                r.reference.clone(),
+                r.builds,
+                r.checks,
+                r.drift_bound,
+            );
+            self.pairs = r
+                .pairs
+                .iter()
+                .map(|p| PairState {
+                    i: p.i,
+                    j: p.j,
+                    touching: p.touching,
+                    shift: p.shift,
+                    history: p.history,
+                    ..Default::default()
+                })
+                .collect();
+            self.slots = Vec::new();
+            self.sparse = r.sparse;
+            self.active = r.active;
+            self.marked = Vec::new();
+            return Ok(());
         }
         gather(self, ids, groups, ds, ms, dt);
         self.list.restore(
