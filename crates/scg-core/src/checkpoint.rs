@@ -14,27 +14,16 @@
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use crate::physics::scaling::CoarseGrainLaw;
+use crate::spawn::ParticleSpec;
 
 /// One particle.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ParticleRecord {
     /// Id.
     pub id: u32,
-    /// Group.
-    pub group: u32,
-    /// Original diameter, m.
-    pub diameter: f64,
-    /// Original density, kg/m³.
-    pub density: f64,
-    /// Coarse-graining ratio α.
-    pub alpha: f64,
-    /// Scaling law.
-    pub law: CoarseGrainLaw,
-    /// Position, m.
-    pub position: DVec3,
-    /// Velocity, m/s.
-    pub velocity: DVec3,
+    /// The original particle and its scaling, with the current position and velocity (the
+    /// coarse-grained properties are derived from it again, exactly, by the spawn path).
+    pub spec: ParticleSpec,
     /// Angular velocity, rad/s (when the scene has it).
     pub omega: Option<DVec3>,
     /// Force, N, and torque, N·m (when the scene has walls or contacts).
@@ -132,7 +121,7 @@ use bevy_ecs::prelude::*;
 
 use crate::components::*;
 use crate::sim::Simulation;
-use crate::spawn::{ParticleSpec, spawn_particle_with_id};
+use crate::spawn::spawn_particle_with_id;
 use crate::stages::contacts::ContactState;
 use crate::stages::feeder::Feeders;
 use crate::stages::outlet::OutletLog;
@@ -162,13 +151,15 @@ impl Simulation {
             .iter(&self.world)
             .map(|(id, g, cg, x, v, w, f, t, h)| ParticleRecord {
                 id: id.0,
-                group: g.0,
-                diameter: cg.original_diameter,
-                density: cg.original_density,
-                alpha: cg.alpha,
-                law: cg.law,
-                position: x.0,
-                velocity: v.0,
+                spec: ParticleSpec {
+                    group: g.0,
+                    diameter: cg.original_diameter,
+                    density: cg.original_density,
+                    alpha: cg.alpha,
+                    law: cg.law,
+                    position: x.0,
+                    velocity: v.0,
+                },
                 omega: w.map(|w| w.0),
                 force_torque: f.zip(t).map(|(f, t)| (f.0, t.0)),
                 wall_history: h.map(|h| h.0.clone()),
@@ -226,7 +217,7 @@ impl Simulation {
                 "the scene has {groups} groups, the checkpoint another count"
             ));
         }
-        if c.particles.iter().any(|p| p.group as usize >= groups) {
+        if c.particles.iter().any(|p| p.spec.group as usize >= groups) {
             return Err("a particle of the checkpoint has no group in the scene".into());
         }
         if c.contacts.is_some() != w.contains_resource::<ContactState>() {
@@ -249,16 +240,7 @@ impl Simulation {
             w.despawn(e);
         }
         for p in &c.particles {
-            let spec = ParticleSpec {
-                group: p.group,
-                diameter: p.diameter,
-                density: p.density,
-                alpha: p.alpha,
-                law: p.law,
-                position: p.position,
-                velocity: p.velocity,
-            };
-            let e = spawn_particle_with_id(w, &spec, p.id);
+            let e = spawn_particle_with_id(w, &p.spec, p.id);
             let mut ent = w.entity_mut(e);
             let mismatch = || format!("particle {}: its components differ from the scene's", p.id);
             match (p.omega, ent.get_mut::<AngularVelocity>()) {

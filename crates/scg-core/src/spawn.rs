@@ -13,7 +13,7 @@ use crate::physics::scaling::{CoarseGrainLaw, coarse_grain};
 use crate::state::{NextParticleId, SimClock};
 
 /// An original particle to spawn; it enters coarse-grained by `law` with ratio `alpha`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ParticleSpec {
     /// Group index.
     pub group: u32,

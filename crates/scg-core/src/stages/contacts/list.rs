@@ -146,40 +146,6 @@ impl ContactState {
         {
             return Err("the contact list is inconsistent".into());
         }
-        if ParticleId::peel_slice(ids) != r.ids.as_slice() {
-            // Taken after a feeder or the outlet changed the particle set: the arrays
-            // still describe the rows before the change, and the next neighbour stage
-            // gathers them again and carries the touching pairs' histories over by id.
-            // Only the ids and the pairs' contact state are read on that path.
-            self.ids.clone_from(&r.ids);
-            (self.group, self.radius, self.mass) = (Vec::new(), Vec::new(), Vec::new());
-            (self.kick_v, self.kick_w) = (Vec::new(), Vec::new());
-            self.list.restore(
-                r.list_pairs.clone(),
-                r.reference.clone(),
-                r.builds,
-                r.checks,
-                r.drift_bound,
-            );
-            self.pairs = r
-                .pairs
-                .iter()
-                .map(|p| PairState {
-                    i: p.i,
-                    j: p.j,
-                    touching: p.touching,
-                    shift: p.shift,
-                    history: p.history,
-                    ..Default::default()
-                })
-                .collect();
-            self.slots = Vec::new();
-            self.sparse = r.sparse;
-            self.active = r.active;
-            self.marked = Vec::new();
-            return Ok(());
-        }
-        gather(self, ids, groups, ds, ms, dt);
         self.list.restore(
             r.list_pairs.clone(),
             r.reference.clone(),
@@ -187,21 +153,48 @@ impl ContactState {
             r.checks,
             r.drift_bound,
         );
-        let reference = r.reference.clone();
+        self.sparse = r.sparse;
+        self.active = r.active;
+        let current = ParticleId::peel_slice(ids) == r.ids.as_slice();
+        if current {
+            gather(self, ids, groups, ds, ms, dt);
+        } else {
+            // Taken after a feeder or the outlet changed the particle set: the arrays
+            // still describe the rows before the change, and the next neighbour stage
+            // gathers them again and carries the touching pairs' histories over by id.
+            // Only the ids and the pairs' contact state are read on that path.
+            self.ids.clone_from(&r.ids);
+            (self.group, self.radius, self.mass) = (Vec::new(), Vec::new(), Vec::new());
+            (self.kick_v, self.kick_w) = (Vec::new(), Vec::new());
+        }
+        let reference = &r.reference;
         self.pairs = r
             .pairs
             .iter()
-            .map(|p| PairState {
-                touching: p.touching,
-                shift: p.shift,
-                history: p.history,
-                ..fresh_pair(self, &reference, p.i, p.j)
+            .map(|p| {
+                let base = if current {
+                    fresh_pair(self, reference, p.i, p.j)
+                } else {
+                    PairState {
+                        i: p.i,
+                        j: p.j,
+                        ..Default::default()
+                    }
+                };
+                PairState {
+                    touching: p.touching,
+                    shift: p.shift,
+                    history: p.history,
+                    ..base
+                }
             })
             .collect();
-        self.slots = layout_slots(&self.list.pairs, self.ids.len());
-        self.sparse = r.sparse;
-        self.active = r.active;
-        self.marked = vec![false; self.ids.len()];
+        self.slots = if current {
+            layout_slots(&self.list.pairs, n)
+        } else {
+            Vec::new()
+        };
+        self.marked = vec![false; if current { n } else { 0 }];
         Ok(())
     }
 }
