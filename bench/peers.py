@@ -4,6 +4,8 @@
                                                         particles), STEPS steps, frames at
                                                         0 and STEPS
   python3 bench/peers.py collide-scene VT              scg scene of the two-sphere twin
+  python3 bench/peers.py wall-scene                    scg scene of the oblique wall bounce
+  python3 bench/peers.py wall FILE                     "VX Z VZ" of the sphere (scg frame CSV)
   python3 bench/peers.py state FILE                    "KE Z ZMEAN N" of a dense-bed state
                                                         (scg frame CSV or LAMMPS/LIGGGHTS
                                                         dump)
@@ -57,6 +59,19 @@ def collide_scene(vt):
         f'[[groups]]\nname = "p"\ndiameter = {D:e}\ndensity = {RHO}\n'
         "positions = [[-5.005e-4, 0.0, 0.0], [5.005e-4, 0.0, 0.0]]\n"
         f"velocities = [[0.5, {vt}, 0.0], [-0.5, {-vt}, 0.0]]\n"
+    )
+
+
+def wall_scene():
+    """One sphere 0.5 µm above the floor z = 0 at (0.5, 0, −1) m/s, 100 steps
+    (bench/*/in.wall)."""
+    return (
+        f'name = "check-wall"\nduration = {100 * DT:e}\ndt = {DT:e}\nrecord_every = 100\n'
+        f"{MATERIAL}"
+        '[[walls]]\nname = "floor"\nkind = "plane"\npoint = [0.0, 0.0, 0.0]\n'
+        "normal = [0.0, 0.0, 1.0]\n"
+        f'[[groups]]\nname = "p"\ndiameter = {D:e}\ndensity = {RHO}\n'
+        "positions = [[0.0, 0.0, 5.005e-4]]\nvelocities = [[0.5, 0.0, -1.0]]\n"
     )
 
 
@@ -151,6 +166,11 @@ def main(argv):
         sys.stdout.write(dense_scene(int(argv[2]), int(argv[3])))
     elif cmd == "collide-scene":
         sys.stdout.write(collide_scene(float(argv[2])))
+    elif cmd == "wall-scene":
+        sys.stdout.write(wall_scene())
+    elif cmd == "wall":
+        r = read_state(argv[2])[0]
+        print(f"{r[4]:.10e} {r[3]:.10e} {r[6]:.10e}")
     elif cmd == "state":
         ke, z, zm, n = state(argv[2])
         print(f"{ke:.6e} {z:.5f} {zm:.6e} {n}")

@@ -14,8 +14,9 @@
 # 1. Installs lammps, liggghts and openmpi-bin with apt when a binary is missing.
 # 2. Physics check (fails the script when a code disagrees with scg):
 #    a two-sphere collision head-on (restitution within 1 %) and oblique (both velocity
-#    components within 1 %), and the dense bed after --check-steps steps (translational
-#    kinetic energy within 3 %, coordination number and mean height within 1 %).
+#    components within 1 %), an oblique bounce on the floor (within 1 %), and the dense bed
+#    after --check-steps steps (translational kinetic energy within 3 %, coordination
+#    number and mean height within 1 %).
 # 3. Timing: per repetition, for 2 and then 1 thread/rank, scg, LIGGGHTS and LAMMPS run one
 #    after another on each scene (alternating); each code's best run of --reps counts.
 #    Throughput = particles × timed steps / the code's own timer of the timed steps: scg's
@@ -27,7 +28,8 @@
 # The last two lines are `dense ratio: X` and `dilute ratio: Y`: scg (2 threads) divided by
 # the fastest peer (2 ranks).
 set -euo pipefail
-cd "$(dirname "$0")/.."
+self=$(realpath "$0")
+cd "$(dirname "$self")/.."
 root=$PWD
 
 N_DENSE=32000
@@ -44,7 +46,7 @@ while [ $# -gt 0 ]; do
     --reps) REPS=$2; shift ;;
     --check-steps) CHECK_STEPS=$2; shift ;;
     --scg) SCG=$2; shift ;;
-    -h|--help) sed -n '2,30p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,29p' "$self"; exit 0 ;;
     *) echo "unknown argument: $1" >&2; exit 2 ;;
   esac
   shift
@@ -80,9 +82,11 @@ py() { python3 "$root/bench/peers.py" "$@"; }
 # The LAMMPS twin: pair granular hertz/material + damping tsuji + tangential mindlin is scg's
 # model when its Tsuji polynomial α(e') is made to equal scg's exact γ(e) and the tangential
 # dashpot is scaled to scg's (η_t/η_n = √(4G*/E*)). LAMMPS 29Sep2021's fix wall/gran
-# hertz/material takes E* = E/(2(1−ν)) instead of E/(2(1−ν²)): E/(1+ν) corrects it.
+# hertz/material takes E* = E/(2(1−ν)) instead of E/(2(1−ν²)): E/(1+ν) corrects it; and its
+# `tangential mindlin NULL` is not 8·G*, so the wall gets k_t = 8·G* explicitly.
 read -r GAMMA EDAMP XGT ALPHA_E < <(py tsuji 0.9)
 EWALL=$(python3 -c "print(repr(1e8/1.3))")
+KTWALL=$(python3 -c "g = 1e8 / 2.6; print(repr(8 / (2 * 1.7 / g)))")
 echo
 echo "physics (all codes): d = 1 mm, ρ = 2500 kg/m³, E = 1e8 Pa, ν = 0.3, e = 0.9, μ = 0.5,"
 echo "  dt = 1e-6 s, Hertz normal + Mindlin tangential spring with history + Coulomb limit,"
@@ -91,7 +95,8 @@ echo "  LIGGGHTS: pair gran model hertz tangential history (its hertz damping is
 echo "  LAMMPS:   pair granular hertz/material ... damping tsuji tangential mindlin NULL x μ:"
 echo "            its Tsuji polynomial gives α(0.9) = $ALPHA_E ≠ γ, so it is handed e' = $EDAMP"
 echo "            (α(e') = γ); x = √(4G*/E*) = $XGT (scg's tangential dashpot);"
-echo "            floor: fix wall/gran with E = $EWALL (= E/(1+ν), see above)"
+echo "            floor: fix wall/gran with E = $EWALL (= E/(1+ν), see above) and"
+echo "            tangential mindlin $KTWALL (= 8·G*) instead of NULL"
 echo "  neighbour lists (peers): neighbor 0.0001 bin (skin 0.1·d, as scg), neigh_modify delay 0"
 echo "            every 1 check yes (rebuilt when an atom moved skin/2, as scg); newton off"
 echo "            (LIGGGHTS's history pair needs it; the same for LAMMPS)"
@@ -151,13 +156,14 @@ dilute_vars=(-var SIDE "$SIDE" -var A "$A" -var J "$J")
 # ---- 2. physics check ----------------------------------------------------------------------
 echo
 echo "== physics check"
-within() { # NAME VALUE REFERENCE TOLERANCE(relative)
+within() { # NAME VALUE REFERENCE TOLERANCE(relative) [info]
   python3 - "$@" <<'EOF'
 import sys
 name, v, r, tol = sys.argv[1], float(sys.argv[2]), float(sys.argv[3]), float(sys.argv[4])
+bad = "differs" if len(sys.argv) > 5 else "FAIL"
 rel = (v - r) / abs(r) if r != 0 else (0.0 if v == 0 else float("inf"))
 ok = abs(rel) <= tol
-print(f"  {name:<44} {v:.6e}  scg {r:.6e}  {100 * rel:+.3f} % (limit {100 * tol:g} %) {'ok' if ok else 'FAIL'}")
+print(f"  {name:<44} {v:.6e}  scg {r:.6e}  {100 * rel:+.3f} % (limit {100 * tol:g} %) {'ok' if ok else bad}")
 sys.exit(0 if ok else 1)
 EOF
 }
@@ -181,13 +187,30 @@ for vt in 0 0.25; do
     read -r a0x _ a1x _ < <(grep '^COLLIDE' "$work/last.log" | awk '{print $2, $3, $4, $5}')
     echo "  (LAMMPS handed e = 0.9 itself, its Tsuji polynomial: restitution $(python3 -c "print(f'{($a1x) - ($a0x):.6e}')"), not used)"
   else
-    echo " oblique: ±(0.5, 0.25, 0) m/s, normal along x (Mindlin spring sticks, then slides):"
+    echo " oblique: ±(0.5, 0.25, 0) m/s, normal along x (sticking regime: the Mindlin spring decides):"
     within "LIGGGHTS vx' of sphere 0" "$g0x" "$s0x" 0.01 || check_fail=1
     within "LIGGGHTS vy' of sphere 0" "$g0y" "$s0y" 0.01 || check_fail=1
     within "LAMMPS vx' of sphere 0" "$l0x" "$s0x" 0.01 || check_fail=1
     within "LAMMPS vy' of sphere 0" "$l0y" "$s0y" 0.01 || check_fail=1
   fi
 done
+
+echo " oblique wall bounce: (0.5, 0, −1) m/s onto the floor z = 0 (the dense bed's floor):"
+py wall-scene > "$work/wall.toml"
+rm -rf "$work/fw"
+"$SCG" run "$work/wall.toml" --out "$work/rec" --frames-csv "$work/fw" > "$work/scg.log" 2>&1 ||
+  { tail "$work/scg.log" >&2; fail "scg wall run failed"; }
+read -r swx swz swvz < <(py wall "$work/fw/check-wall_000000100.csv")
+peer_run liggghts 1 "$root/bench/liggghts/in.wall"
+read -r gwx gwz gwvz < <(grep '^WALL' "$work/last.log" | awk '{print $2, $3, $4}')
+peer_run lammps 1 "$root/bench/lammps/in.wall" "${LMP_MODEL[@]}" -var EWALL "$EWALL" -var KTWALL "$KTWALL"
+read -r lwx lwz lwvz < <(grep '^WALL' "$work/last.log" | awk '{print $2, $3, $4}')
+within "LIGGGHTS vz' (normal restitution)" "$gwvz" "$swvz" 0.01 || check_fail=1
+within "LIGGGHTS z after 100 steps" "$gwz" "$swz" 0.01 || check_fail=1
+within "LIGGGHTS vx' (tangential)" "$gwx" "$swx" 0.01 || check_fail=1
+within "LAMMPS vz' (normal restitution)" "$lwvz" "$swvz" 0.01 || check_fail=1
+within "LAMMPS z after 100 steps (wall E* corrected)" "$lwz" "$swz" 0.01 || check_fail=1
+within "LAMMPS vx' (tangential, k_t = 8·G* given)" "$lwx" "$swx" 0.01 || check_fail=1
 
 echo " dense bed, $N_DENSE particles, $CHECK_STEPS steps from the packing at rest (2 threads/ranks):"
 py dense-scene "$N_DENSE" "$CHECK_STEPS" > "$work/dense.toml"
@@ -202,7 +225,7 @@ for code in liggghts lammps; do
       -var CHECK "$CHECK_STEPS" -var DUMP "$work/$code.dump"
   else
     peer_run lammps 2 "$root/bench/lammps/in.dense" "${dense_vars[@]}" "${LMP_MODEL[@]}" \
-      -var EWALL "$EWALL" -var S 0 -var CHECK "$CHECK_STEPS" -var DUMP "$work/$code.dump"
+      -var EWALL "$EWALL" -var KTWALL "$KTWALL" -var S 0 -var CHECK "$CHECK_STEPS" -var DUMP "$work/$code.dump"
   fi
   peer_rate 2 > /dev/null
   read -r ke z zm n < <(py state "$work/$code.dump")
@@ -229,7 +252,7 @@ for rep in $(seq "$REPS"); do
       for code in liggghts lammps; do
         if [ "$scene" = dense ]; then
           vars=("${dense_vars[@]}")
-          [ "$code" = lammps ] && vars+=("${LMP_MODEL[@]}" -var EWALL "$EWALL")
+          [ "$code" = lammps ] && vars+=("${LMP_MODEL[@]}" -var EWALL "$EWALL" -var KTWALL "$KTWALL")
         else
           vars=("${dilute_vars[@]}")
           [ "$code" = lammps ] && vars+=("${LMP_MODEL[@]}")
