@@ -127,7 +127,10 @@ peer_rate() {
   read -r ave max min < <(echo "$nlocal" | awk '{print $2, $4, $6}')
   awk -v m="$min" 'BEGIN {exit !(m + 0 > 0)}' ||
     fail "a rank holds no atoms (grid $grid, Nlocal ave $ave max $max min $min): one core idles"
-  python3 -c "print(f'{$atoms * $steps / $t:.4e}', '$grid', 'atoms/rank min ${min%.*} max ${max%.*}')"
+  local neighs builds
+  neighs=$(grep '^Total # of neighbors' "$log" | tail -1 | awk '{print $NF}')
+  builds=$(grep '^Neighbor list builds' "$log" | tail -1 | awk '{print $NF}')
+  python3 -c "print(f'{$atoms * $steps / $t:.4e}', '$grid', 'atoms/rank min ${min%.*} max ${max%.*},', 'pairs listed ${neighs:-?}, list builds ${builds:-?}')"
 }
 
 scg_rate() { # NP SCENE N: prints "RATE THREADS"
