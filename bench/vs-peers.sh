@@ -220,7 +220,8 @@ py dense-scene "$N_DENSE" "$CHECK_STEPS" > "$work/dense.toml"
 rm -rf "$work/fd"
 $NICE "$SCG" --threads 2 run "$work/dense.toml" --out "$work/rec" --frames-csv "$work/fd" > "$work/scg.log" 2>&1 ||
   { tail "$work/scg.log" >&2; fail "scg dense check run failed"; }
-read -r ske sz szm sn < <(py state "$(ls "$work"/fd/check-dense_*.csv | sort | tail -1)")
+line=$(py state "$(ls "$work"/fd/check-dense_*.csv | sort | tail -1)")
+read -r ske sz szm sn <<< "$line"
 echo "  scg      KE $ske J, coordination $sz, mean z $szm m, $sn particles"
 for code in liggghts lammps; do
   if [ "$code" = liggghts ]; then
@@ -231,7 +232,8 @@ for code in liggghts lammps; do
       -var EWALL "$EWALL" -var KTWALL "$KTWALL" -var S 0 -var CHECK "$CHECK_STEPS" -var DUMP "$work/$code.dump"
   fi
   peer_rate 2 > /dev/null
-  read -r ke z zm n < <(py state "$work/$code.dump")
+  line=$(py state "$work/$code.dump")
+  read -r ke z zm n <<< "$line"
   [ "$n" = "$sn" ] || fail "$code dumped $n particles, scg $sn"
   within "$code kinetic energy (J)" "$ke" "$ske" 0.03 || check_fail=1
   within "$code coordination number" "$z" "$sz" 0.01 || check_fail=1
@@ -261,7 +263,8 @@ for rep in $(seq "$REPS"); do
           [ "$code" = lammps ] && vars+=("${LMP_MODEL[@]}")
         fi
         peer_run "$code" "$np" "$root/bench/$code/in.$scene" "${vars[@]}" -var S "$STEPS" -var CHECK 0 -var DUMP none
-        read -r r grid rest < <(peer_rate "$np")
+        line=$(peer_rate "$np")  # in a command substitution, so that a FAIL stops the script
+        read -r r grid rest <<< "$line"
         runs[$code,$scene,$np]+="$r "
         printf '  rep %s %s np=%s %-8s %s particle-steps/s  grid %s, %s\n' "$rep" "$scene" "$np" "$code" "$r" "$grid" "$rest"
       done
