@@ -60,8 +60,8 @@ region = {{ kind = "cylinder", radius_max = 5.0e-4, height = [0.0, 1.0e-3] }}
 }
 
 /// Diameter (m), density (kg/m³), Young's modulus (Pa), Poisson ratio, restitution,
-/// friction and time step (s) shared by the contact benchmarks and their LAMMPS twins
-/// (bench/lammps/*.in).
+/// friction and time step (s) shared by the contact benchmarks and their LIGGGHTS and LAMMPS
+/// twins (bench/liggghts/in.*, bench/lammps/in.*, bench/peers.py; run by bench/vs-peers.sh).
 pub const CONTACT_BENCH: (f64, f64, f64, f64, f64, f64, f64) =
     (1e-3, 2500.0, 1e8, 0.3, 0.9, 0.5, 1e-6);
 
