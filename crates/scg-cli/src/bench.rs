@@ -53,12 +53,16 @@ pub fn mesh_scene(n: u64, cells: u64) -> Result<scg_scene::Scene, String> {
     let (w, h) = MESH_BENCH_BOX;
     // 6 tetrahedra per hexahedron, nx × nx × nx/2 hexahedra.
     let nx = ((cells as f64 / 3.0).cbrt().round() as usize).max(2);
-    let mesh = BoxMesh::new(DVec3::new(-w, -w, 0.0), DVec3::new(w, w, h), [nx, nx, (nx / 2).max(1)])
-        .shape(CellShape::Tet)
-        .naming(PatchNaming::Sides)
-        .perturbed(0.2, 11)
-        .build()
-        .map_err(|e| e.to_string())?;
+    let mesh = BoxMesh::new(
+        DVec3::new(-w, -w, 0.0),
+        DVec3::new(w, w, h),
+        [nx, nx, (nx / 2).max(1)],
+    )
+    .shape(CellShape::Tet)
+    .naming(PatchNaming::Sides)
+    .perturbed(0.2, 11)
+    .build()
+    .map_err(|e| e.to_string())?;
     let geom = scg_mesh::MeshGeometry::new(&mesh).map_err(|e| e.to_string())?;
     let vortex = scg_core::physics::flow::Vortex {
         center: DVec3::ZERO,
@@ -67,7 +71,11 @@ pub fn mesh_scene(n: u64, cells: u64) -> Result<scg_scene::Scene, String> {
         inflow_ratio: 0.1,
     };
     let field = scg_mesh::CellField {
-        cells: geom.cell_centres.iter().map(|&c| vortex.velocity(c)).collect(),
+        cells: geom
+            .cell_centres
+            .iter()
+            .map(|&c| vortex.velocity(c))
+            .collect(),
         patches: vec![None; mesh.patches.len()],
     };
     let roles = vec![PatchRole::Wall; mesh.patches.len()];
@@ -95,11 +103,13 @@ region = {{ kind = "cylinder", radius_max = {r:e}, height = [{h0:e}, {h1:e}] }}
         h0 = 0.05 * h,
         h1 = 0.95 * h,
     );
-    let mut scene =
-        scg_scene::parse(&text, "<bench>", "bench", &[]).map_err(|e| e.to_string())?;
+    let mut scene = scg_scene::parse(&text, "<bench>", "bench", &[]).map_err(|e| e.to_string())?;
     scene.mesh_flow = Some(scg_scene::SceneMeshFlow {
         flow: std::sync::Arc::new(flow),
-        source: format!("<generated tet box, {nx}×{nx}×{} hexahedra × 6>", (nx / 2).max(1)),
+        source: format!(
+            "<generated tet box, {nx}×{nx}×{} hexahedra × 6>",
+            (nx / 2).max(1)
+        ),
         field: "U".into(),
     });
     Ok(scene)

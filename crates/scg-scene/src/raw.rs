@@ -148,6 +148,7 @@ pub struct RawPatches {
 pub enum RawInterpolation {
     CellPoint,
     CellValue,
+    CellPointLinearExact,
 }
 
 #[derive(Deserialize, Debug, Clone)]

@@ -8,7 +8,9 @@
 use std::fmt;
 
 use glam::DVec3;
-use scg_mesh::{CellField, Hit, Interpolation, Interpolator, Location, Locator, MeshGeometry, PolyMesh};
+use scg_mesh::{
+    CellField, Hit, Interpolation, Interpolator, Location, Locator, MeshGeometry, PolyMesh,
+};
 
 /// What a particle meeting a boundary patch does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -138,7 +140,10 @@ impl MeshFlow {
     /// Role of patch `p` (an unknown patch is lost).
     #[inline]
     pub fn role(&self, p: u32) -> PatchRole {
-        self.roles.get(p as usize).copied().unwrap_or(PatchRole::Lost)
+        self.roles
+            .get(p as usize)
+            .copied()
+            .unwrap_or(PatchRole::Lost)
     }
 
     /// The cell holding x (grid search), `None` outside the mesh.
@@ -328,7 +333,10 @@ mod tests {
     #[test]
     fn landing_by_role() {
         let u = DVec3::new(0.3, -0.2, 0.1);
-        let f = box_flow(u, &[("walls", PatchRole::Wall), ("outlet", PatchRole::Outlet)]);
+        let f = box_flow(
+            u,
+            &[("walls", PatchRole::Wall), ("outlet", PatchRole::Outlet)],
+        );
         let x0 = DVec3::splat(0.5);
         let h0 = f.find_cell(x0).unwrap();
         let (w, h) = f.velocity(h0, DVec3::new(0.6, 0.55, 0.45));
@@ -367,7 +375,9 @@ mod tests {
         assert!((l.x - DVec3::new(0.5, 0.8, 0.1)).length() < 1e-12, "{l:?}");
         assert!((l.v - DVec3::new(0.0, -1.0, 1.0)).length() < 1e-12);
         // roles must match the patches
-        let m = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [1, 1, 1]).build().unwrap();
+        let m = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [1, 1, 1])
+            .build()
+            .unwrap();
         let field = CellField {
             cells: vec![u; 1],
             patches: vec![None; m.patches.len()],

@@ -27,7 +27,7 @@ use crate::exec::par::for_each_piece;
 use crate::physics::drag::{DragLaw, particle_reynolds};
 use crate::physics::flow::Fluid;
 use crate::physics::integrate::{
-    Integrator, exponential_drift, exponential_factors, explicit_euler, explicit_substeps,
+    Integrator, explicit_euler, explicit_substeps, exponential_drift, exponential_factors,
     linear_kick,
 };
 use crate::physics::mesh_flow::{MeshFlow, hint, land};

@@ -15,11 +15,14 @@ use scg_core::stages::walls::Wall;
 use super::Ctx;
 use crate::error::SceneError;
 use crate::model::{Group, Outlet, SceneMeshFlow};
-use crate::raw::{RawInterpolation, RawTime};
-use scg_core::physics::mesh_flow::{MeshFlow, PatchRole};
-use scg_mesh::{Interpolation, foam::{self, TimeSel}};
 use crate::raw::{
     RawContacts, RawFlow, RawFlowKind, RawMaterial, RawNormalModel, RawOutlet, RawWall, RawWallKind,
+};
+use crate::raw::{RawInterpolation, RawTime};
+use scg_core::physics::mesh_flow::{MeshFlow, PatchRole};
+use scg_mesh::{
+    Interpolation,
+    foam::{self, TimeSel},
 };
 
 /// `[material]`: the contact material and the normal law it gives.
@@ -182,6 +185,7 @@ pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, 
     let scheme = match f.interpolation {
         None | Some(RawInterpolation::CellPoint) => Interpolation::CellPoint,
         Some(RawInterpolation::CellValue) => Interpolation::CellValue,
+        Some(RawInterpolation::CellPointLinearExact) => Interpolation::CellPointLinearExact,
     };
     let scale = cx.positive("flow.scale", f.scale.unwrap_or(1.0))?;
     let translate = cx.vec3("flow.translate", f.translate.unwrap_or([0.0; 3]))?;
@@ -206,8 +210,8 @@ pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, 
                 },
                 Some(RawTime::Number(t)) => TimeSel::Time(cx.finite("flow.time", *t)?),
             };
-            let mesh = foam::read_mesh(&case)
-                .map_err(|e| cx.err("flow.case", format!("{shown}: {e}")))?;
+            let mesh =
+                foam::read_mesh(&case).map_err(|e| cx.err("flow.case", format!("{shown}: {e}")))?;
             let dir = foam::select_time(&case, time)
                 .map_err(|e| cx.err("flow.time", format!("{shown}: {e}")))?;
             let u = foam::read_vector_field(&case, &mesh, time, &field)
@@ -254,7 +258,11 @@ pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, 
             roles[i] = role;
         }
     }
-    let key = if f.kind == RawFlowKind::Vtk { "flow.file" } else { "flow.case" };
+    let key = if f.kind == RawFlowKind::Vtk {
+        "flow.file"
+    } else {
+        "flow.case"
+    };
     let flow = MeshFlow::new(mesh, &cells, scheme, roles)
         .map_err(|e| cx.err(key, format!("{source}: {e}")))?;
     Ok(Some(SceneMeshFlow {
