@@ -256,9 +256,7 @@ fn scg_particles_follow_the_original_on_the_mesh_as_on_the_analytic_field() {
     let vt = load(
         dir.path(),
         &vortex_scene(
-            &format!(
-                "kind = \"vtk\"\nfile = \"u.vtk\"\nfield = \"U\"\n[flow.patches]\nwalls = [\"boundary\"]"
-            ),
+            "kind = \"vtk\"\nfile = \"u.vtk\"\nfield = \"U\"\n[flow.patches]\nwalls = [\"boundary\"]",
             z,
             &groups,
             T,

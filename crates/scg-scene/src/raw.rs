@@ -143,6 +143,7 @@ pub struct RawPatches {
 }
 
 /// `flow.interpolation`.
+#[allow(clippy::enum_variant_names)] // the scene file's names
 #[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum RawInterpolation {
