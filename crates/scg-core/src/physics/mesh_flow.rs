@@ -175,6 +175,34 @@ impl MeshFlow {
         }
     }
 
+    /// Ask the processor to load what locating a particle in cell `c` reads first (the
+    /// cell centre, its face list and its faces' centres and areas), when `deep` also the
+    /// face data (which needs the face list in cache to be addressed). Calling it a few
+    /// particles ahead hides memory latency on large meshes; no effect on results.
+    #[inline]
+    pub fn prefetch(&self, c: u32, deep: bool) {
+        let g = self.loc.geometry();
+        let m = self.loc.mesh();
+        let ci = c as usize;
+        if ci >= g.cell_centres.len() {
+            return;
+        }
+        prefetch(&g.cell_centres, ci);
+        prefetch(&g.cell_face_offsets, ci);
+        if deep {
+            let (a, b) = (
+                g.cell_face_offsets[ci] as usize,
+                g.cell_face_offsets[ci + 1] as usize,
+            );
+            prefetch(&g.cell_faces, a);
+            for &f in g.cell_faces.get(a..b).unwrap_or(&[]) {
+                prefetch(&g.face_areas, f as usize);
+                prefetch(&g.face_centres, f as usize);
+                prefetch(&m.face_offsets, f as usize);
+            }
+        }
+    }
+
     /// Unit outward normal and centre of boundary face `f`, m.
     #[inline]
     pub fn face_plane(&self, f: u32) -> (DVec3, DVec3) {
@@ -182,6 +210,22 @@ impl MeshFlow {
         let n = g.face_areas[f as usize].normalize_or_zero();
         (n, g.face_centres[f as usize])
     }
+}
+
+/// Prefetch `v[i]` into the caches (x86-64 only; out of range is ignored).
+#[inline(always)]
+fn prefetch<T>(v: &[T], i: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(x) = v.get(i) {
+        // SAFETY: a prefetch is a hint that never faults; the pointer is to a live element.
+        unsafe {
+            core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>(
+                (x as *const T).cast::<i8>(),
+            )
+        };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (v, i);
 }
 
 /// Specular reflection of a particle that crossed the plane through `p` with unit

@@ -144,6 +144,14 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
         let mut d2max = 0.0_f64;
         let mut gone = 0u64;
         for i in 0..xs.len() {
+            // Memory latency dominates on large meshes: start loading a later particle's
+            // cell now (the face list 16 ahead, the faces 8 ahead).
+            if let Some(h) = hs.get(i + 16) {
+                flow.prefetch(h.0, false);
+            }
+            if let Some(h) = hs.get(i + 8) {
+                flow.prefetch(h.0, true);
+            }
             let x0 = xs[i].0;
             let mut h0 = hs[i].0;
             if h0 >= n_cells {
