@@ -296,6 +296,24 @@ fn random_particles(n: usize, lo: DVec3, hi: DVec3, speed: f64, seed: u64) -> (S
 /// A closed box of walls: `n` fast particles for `steps` steps, each step crossing
 /// several cells; none escapes, none is lost.
 fn closed_box(n: usize, steps: u64) {
+    let (ps, lost, drained, wall) = run_closed_box(n, steps);
+    let l = 0.01;
+    let outside = ps
+        .iter()
+        .filter(|p| p.position.cmplt(DVec3::ZERO).any() || p.position.cmpgt(DVec3::splat(l)).any())
+        .count();
+    let speed = ps.iter().map(|p| p.velocity.length()).sum::<f64>() / ps.len() as f64;
+    println!(
+        "closed box: {n} particles × {steps} steps in {wall:.2} s: resident {}, lost {lost}, drained {drained}, outside {outside}, mean speed {speed:.3} m/s",
+        ps.len()
+    );
+    assert_eq!(ps.len(), n);
+    assert_eq!((lost, drained, outside), (0, 0, 0));
+    assert!(speed > 0.3, "particles should still move fast: {speed}");
+}
+
+/// Run the closed box: the particles at the end, lost and drained counts, wall time (s).
+fn run_closed_box(n: usize, steps: u64) -> (Vec<scg::core::sim::ParticleState>, usize, usize, f64) {
     let dir = tempfile::tempdir().unwrap();
     let l = 0.01;
     let mesh = BoxMesh::new(DVec3::ZERO, DVec3::splat(l), [8, 8, 8])
@@ -331,18 +349,53 @@ fn closed_box(n: usize, steps: u64) {
     let log = sim.world.resource::<OutletLog>();
     let lost: usize = log.lost.iter().map(Vec::len).sum();
     let drained: usize = log.drained.iter().map(Vec::len).sum();
-    let outside = ps
-        .iter()
-        .filter(|p| p.position.cmplt(DVec3::ZERO).any() || p.position.cmpgt(DVec3::splat(l)).any())
-        .count();
-    let speed = ps.iter().map(|p| p.velocity.length()).sum::<f64>() / ps.len() as f64;
-    println!(
-        "closed box: {n} particles × {steps} steps in {wall:.2} s: resident {}, lost {lost}, drained {drained}, outside {outside}, mean speed {speed:.3} m/s",
-        ps.len()
-    );
-    assert_eq!(ps.len(), n);
-    assert_eq!((lost, drained, outside), (0, 0, 0));
-    assert!(speed > 0.3, "particles should still move fast: {speed}");
+    (ps, lost, drained, wall)
+}
+
+/// Child side of the thread test: a digest of the closed box's final state.
+#[test]
+#[ignore = "run by same_bits_on_one_and_two_threads in a child process"]
+fn child_mesh_digest() {
+    if std::env::var("SCG_MESH_CHILD").is_err() {
+        return;
+    }
+    scg::core::exec::configure(scg::core::exec::ExecSettings::from_env());
+    let (ps, ..) = run_closed_box(3000, 60);
+    let mut h: u64 = 0xcbf29ce484222325;
+    for p in ps {
+        for b in [p.position, p.velocity].iter().flat_map(|v| v.to_array()) {
+            h = (h ^ b.to_bits()).wrapping_mul(0x100000001b3);
+        }
+    }
+    println!("MESH_DIGEST={h:016x}");
+}
+
+#[test]
+fn same_bits_on_one_and_two_threads() {
+    let exe = std::env::current_exe().unwrap();
+    let digest = |threads: &str, parallel_min: &str| {
+        let out = Command::new(&exe)
+            .args([
+                "child_mesh_digest",
+                "--exact",
+                "--ignored",
+                "--nocapture",
+                "--test-threads=1",
+            ])
+            .env("SCG_THREADS", threads)
+            .env("SCG_PARALLEL_MIN", parallel_min)
+            .env("SCG_MESH_CHILD", "1")
+            .output()
+            .unwrap();
+        let s = String::from_utf8_lossy(&out.stdout).into_owned();
+        s.lines()
+            .find_map(|l| l.find("MESH_DIGEST=").map(|k| l[k..].to_string()))
+            .unwrap_or_else(|| panic!("no digest from child: {s}"))
+    };
+    let a = digest("1", "100000000");
+    let b = digest("2", "1");
+    println!("{a} (1 thread), {b} (2 threads, every pass split)");
+    assert_eq!(a, b);
 }
 
 #[test]

@@ -216,7 +216,7 @@ pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, 
                 .map_err(|e| cx.err("flow.time", format!("{shown}: {e}")))?;
             let u = foam::read_vector_field(&case, &mesh, time, &field)
                 .map_err(|e| cx.err("flow.field", format!("{shown}: field `{field}`: {e}")))?;
-            (mesh, u, dir.display().to_string())
+            (mesh, u, format!("{shown} (field from {})", dir.display()))
         }
         RawFlowKind::Vtk => {
             let file = base.join(cx.need("flow.file", &f.file)?);
@@ -235,6 +235,10 @@ pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, 
             *p = translate + scale * *p;
         }
     }
+    let mesh_file = match f.kind {
+        RawFlowKind::Vtk => f.file.clone().unwrap_or_default(),
+        _ => f.case.clone().unwrap_or_default(),
+    };
     let patches = f.patches.clone().unwrap_or_default();
     let mut roles = vec![PatchRole::Lost; mesh.patches.len()];
     for (key, names, role) in [
@@ -247,7 +251,7 @@ pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, 
                 return Err(cx.err(
                     key,
                     format!(
-                        "unknown patch `{name}` in {source}; the mesh has: {}",
+                        "unknown patch `{name}` in {mesh_file}; the mesh has: {}",
                         known.join(", ")
                     ),
                 ));
