@@ -566,6 +566,18 @@ fn scg_check_reports_the_mesh_and_rejects_bad_input() {
         "{out}"
     );
     assert!(out.contains("m/s"), "{out}");
+    // `scg run --plan` lists the mesh-flow systems
+    let out = Command::new(env!("CARGO_BIN_EXE_scg"))
+        .args(["run", "--plan"])
+        .arg(dir.path().join("bad.toml"))
+        .output()
+        .unwrap();
+    let plan = String::from_utf8_lossy(&out.stdout).into_owned();
+    println!("{plan}");
+    assert!(
+        plan.contains("integrate_mesh_flow") && plan.contains("mesh_boundary"),
+        "{plan}"
+    );
     // a particle outside the mesh: a warning
     let outside = good.replace("[3.0e-4, 0.0,", "[3.0e-3, 0.0,");
     let (code, out, _) = check(dir.path(), &outside);
@@ -602,6 +614,7 @@ fn scg_check_reports_the_mesh_and_rejects_bad_input() {
 fn analytic_scenes_have_no_mesh_systems() {
     let s = scg::scene::Scene::embedded(&[]).unwrap();
     let sim = s.build(false);
+    assert!(!sim.plan().render().contains("mesh"));
     assert!(!sim.plan().contains(StepSystem::IntegrateMeshFlow));
     assert!(!sim.plan().contains(StepSystem::MeshBoundary));
 }
