@@ -270,6 +270,56 @@ fn scg_particles_follow_the_original_on_the_mesh_as_on_the_analytic_field() {
     assert!(dv <= 1e-12, "{dv:e}");
 }
 
+/// A uniform field on a mesh is interpolated exactly, so every drag law and integrator
+/// gives the analytic uniform flow's trajectory (explicit and Schiller–Naumann included).
+#[test]
+fn uniform_field_on_a_mesh_matches_the_analytic_flow_for_every_integrator() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = BoxMesh::new(DVec3::ZERO, DVec3::splat(0.01), [6, 6, 6])
+        .shape(CellShape::Poly { refine: 0.3 })
+        .naming(PatchNaming::Sides)
+        .build()
+        .unwrap();
+    let u = DVec3::new(0.3, -0.1, 0.2);
+    write_case(
+        dir.path().join("case"),
+        &mesh,
+        Some(("U", &sample(&mesh, |_| u))),
+        Format::Ascii,
+    )
+    .unwrap();
+    for (law, integrator) in [
+        ("stokes", "exponential"),
+        ("schiller_naumann", "exponential"),
+        ("stokes", "explicit"),
+        ("schiller_naumann", "explicit"),
+    ] {
+        let text = |flow: &str| {
+            format!(
+                "duration = 0.01\ndt = 1.0e-4\nintegrator = \"{integrator}\"\n[fluid]\ndensity = 1.2\nviscosity = 1.8e-5\n[flow]\n{flow}\n[drag]\nlaw = \"{law}\"\n[gravity]\nacceleration = [0.0, 0.0, -9.81]\n[[groups]]\nname = \"a\"\ndiameter = 50e-6\ndensity = 1000.0\npositions = [[0.005, 0.005, 0.006]]\nvelocity = [0.0, 0.0, 0.0]\n"
+            )
+        };
+        let m = load(
+            dir.path(),
+            &text(
+                "kind = \"openfoam\"\ncase = \"case\"\n[flow.patches]\nwalls = [\"xmin\", \"xmax\", \"ymin\", \"ymax\", \"zmin\", \"zmax\"]",
+            ),
+        );
+        let a = load(
+            dir.path(),
+            &text("kind = \"uniform\"\nvelocity = [0.3, -0.1, 0.2]"),
+        );
+        let (tm, ta) = (trajectory(&m, 10), trajectory(&a, 10));
+        let d = max_dev(&tm, &ta, 0, 0);
+        let span = (ta.last().unwrap()[0] - DVec3::new(0.005, 0.005, 0.006)).length();
+        println!(
+            "uniform field, {law}/{integrator}: mesh vs analytic {:.3e} of the displacement",
+            d / span
+        );
+        assert!(d <= 1e-12 * span, "{law}/{integrator}: {d:e}");
+    }
+}
+
 /// Particles at random positions in [lo, hi] with random velocities of up to `speed`.
 fn random_particles(n: usize, lo: DVec3, hi: DVec3, speed: f64, seed: u64) -> (String, String) {
     use rand::{Rng, SeedableRng};

@@ -259,7 +259,8 @@ pub const MAX_REFLECTIONS: usize = 8;
 /// crossing a wall patch reflects (restitution `e`) and locates again, at most
 /// [`MAX_REFLECTIONS`] times, after which the particle goes back to `x0` (its start, in
 /// cell `h0`) with the reflected velocity, so a wall is never passed; crossing an outlet
-/// drains, anything else is lost.
+/// drains, anything else is lost. A boundary face the walk passes on its way to a point
+/// inside the mesh (`Location::Crossed`: a concave boundary) counts as crossed.
 #[inline]
 pub fn land(
     flow: &MeshFlow,
@@ -281,17 +282,10 @@ pub fn land(
                 };
             }
             Location::Crossed { face, patch, hit } => {
-                if flow.role(patch) == PatchRole::Wall {
-                    // A concave wall or a thin baffle passed on the way: reflect.
-                    from = hit.cell;
-                    (face, patch)
-                } else {
-                    return Landing {
-                        x: x1,
-                        v: v1,
-                        hint: hit.cell,
-                    };
-                }
+                // The walk passed a boundary face (a concave boundary, a thin baffle) on
+                // its way to a point inside: the face's role decides, as when leaving.
+                from = hit.cell;
+                (face, patch)
             }
             Location::Left { face, patch } => (face, patch),
             Location::Outside => {
