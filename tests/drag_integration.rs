@@ -27,6 +27,7 @@ fn sim(dt: f64, integrator: Integrator, u: DVec3, v0: DVec3) -> Simulation {
             viscosity: MU,
         }),
         flow: FlowField::Uniform(u),
+        mesh_flow: None,
         gravity: None,
         buoyancy: false,
         walls: None,

@@ -40,6 +40,7 @@ fn bounce(
         drag: None,
         fluid: None,
         flow: FlowField::Still,
+        mesh_flow: None,
         gravity: None,
         buoyancy: false,
         contacts: None,

@@ -17,6 +17,10 @@ pub enum BenchKind {
     /// A dense chute-like bed: simple cubic packing on a floor, gravity tilted by 26°,
     /// periodic in x and y, Hertz–Mindlin contacts everywhere.
     Dense,
+    /// Drag only (Stokes, exponential scheme, cell_point) in the paper's vortex sampled at
+    /// the cell centres of a perturbed tetrahedral box generated in memory (`--cells`),
+    /// walls all round: the engine path of `flow.kind = "openfoam"`.
+    Mesh,
 }
 
 /// Arguments of `scg bench`.
@@ -30,6 +34,85 @@ pub struct BenchArgs {
     /// Number of timed steps (after 5 warm-up steps).
     #[arg(long, default_value_t = 200)]
     pub steps: u64,
+    /// `mesh`: about this many cells (tetrahedra).
+    #[arg(long, default_value_t = 100_000)]
+    pub cells: u64,
+}
+
+/// The mesh benchmark's box: half-width in x and y and height, m (the vortex's axis is z
+/// through the origin).
+pub const MESH_BENCH_BOX: (f64, f64) = (1.0e-3, 1.0e-3);
+
+/// The mesh benchmark: `n` 10 µm particles in a cylinder inside a perturbed tetrahedral
+/// box of about `cells` cells holding the paper's vortex (ω = 31.4 rad/s, k = 0.1) sampled
+/// at the cell centres; every boundary patch a wall.
+pub fn mesh_scene(n: u64, cells: u64) -> Result<scg_scene::Scene, String> {
+    use glam::DVec3;
+    use scg_core::physics::mesh_flow::{MeshFlow, PatchRole};
+    use scg_mesh::build::{BoxMesh, CellShape, PatchNaming};
+    let (w, h) = MESH_BENCH_BOX;
+    // 6 tetrahedra per hexahedron, nx × nx × nx/2 hexahedra.
+    let nx = ((cells as f64 / 3.0).cbrt().round() as usize).max(2);
+    let mesh = BoxMesh::new(
+        DVec3::new(-w, -w, 0.0),
+        DVec3::new(w, w, h),
+        [nx, nx, (nx / 2).max(1)],
+    )
+    .shape(CellShape::Tet)
+    .naming(PatchNaming::Sides)
+    .perturbed(0.2, 11)
+    .build()
+    .map_err(|e| e.to_string())?;
+    let geom = scg_mesh::MeshGeometry::new(&mesh).map_err(|e| e.to_string())?;
+    let vortex = scg_core::physics::flow::Vortex {
+        center: DVec3::ZERO,
+        axis: DVec3::Z,
+        omega: 31.4,
+        inflow_ratio: 0.1,
+    };
+    let field = scg_mesh::CellField {
+        cells: geom
+            .cell_centres
+            .iter()
+            .map(|&c| vortex.velocity(c))
+            .collect(),
+        patches: vec![None; mesh.patches.len()],
+    };
+    let roles = vec![PatchRole::Wall; mesh.patches.len()];
+    let flow = MeshFlow::new(mesh, &field, scg_mesh::Interpolation::CellPoint, roles)
+        .map_err(|e| e.to_string())?;
+    let text = format!(
+        r#"
+name = "bench-mesh"
+duration = 1.0
+dt = 1.0e-5
+seed = 7
+[fluid]
+density = 1.2
+viscosity = 1.8e-5
+[drag]
+law = "stokes"
+[[groups]]
+name = "p"
+diameter = 10.0e-6
+density = 1000.0
+count = {n}
+region = {{ kind = "cylinder", radius_max = {r:e}, height = [{h0:e}, {h1:e}] }}
+"#,
+        r = 0.9 * w,
+        h0 = 0.05 * h,
+        h1 = 0.95 * h,
+    );
+    let mut scene = scg_scene::parse(&text, "<bench>", "bench", &[]).map_err(|e| e.to_string())?;
+    scene.mesh_flow = Some(scg_scene::SceneMeshFlow {
+        flow: std::sync::Arc::new(flow),
+        source: format!(
+            "<generated tet box, {nx}×{nx}×{} hexahedra × 6>",
+            (nx / 2).max(1)
+        ),
+        field: "U".into(),
+    });
+    Ok(scene)
 }
 
 /// The drag benchmark scene: `n` 10 µm particles spread over the paper's vortex vessel.
@@ -164,8 +247,28 @@ pub fn bench(a: BenchArgs) -> i32 {
         BenchKind::Drag => drag_scene(a.particles),
         BenchKind::Dilute => dilute_scene(a.particles, a.steps),
         BenchKind::Dense => dense_scene(a.particles, a.steps),
+        BenchKind::Mesh => String::new(),
     };
-    let scene = match scg_scene::parse(&text, "<bench>", "bench", &[]) {
+    let scene = match a.kind {
+        BenchKind::Mesh => {
+            let t = Instant::now();
+            let s = mesh_scene(a.particles, a.cells);
+            if let Ok(s) = &s
+                && let Some(m) = &s.mesh_flow
+            {
+                println!(
+                    "mesh: {} cells, {} faces, {} points, built in {:.2} s",
+                    m.flow.mesh().n_cells,
+                    m.flow.mesh().n_faces(),
+                    m.flow.mesh().points.len(),
+                    t.elapsed().as_secs_f64()
+                );
+            }
+            s
+        }
+        _ => scg_scene::parse(&text, "<bench>", "bench", &[]).map_err(|e| e.to_string()),
+    };
+    let scene = match scene {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");

@@ -108,3 +108,9 @@ pub struct WallHistory(pub Vec<(u32, DVec3)>);
 /// Present only when the scene declares gravity.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
 pub struct BodyAcceleration(pub DVec3);
+
+/// The mesh cell holding the particle's centre at the end of the last step (mesh flows
+/// only; see [`crate::physics::mesh_flow::hint`] for the markers a value may also be).
+#[derive(Component, Clone, Copy, Debug, PartialEq, Eq, TransparentWrapper)]
+#[repr(transparent)]
+pub struct CellHint(pub u32);

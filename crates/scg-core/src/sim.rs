@@ -13,11 +13,12 @@ use crate::physics::integrate::Integrator;
 use crate::spawn::{ParticleSpec, SpawnRules, spawn_particle};
 use crate::stages::contacts::ContactConfig;
 use crate::stages::feeder::FeederSpec;
+use crate::stages::mesh_flow::MeshFlowSpec;
 use crate::stages::motion::Motion;
 use crate::stages::outlet::OutletSpec;
 use crate::stages::recording::RecordingParams;
 use crate::stages::walls::{WallSet, WallTangential};
-use crate::stages::{contacts, feeder, guard, motion, outlet, recording, walls};
+use crate::stages::{contacts, feeder, guard, mesh_flow, motion, outlet, recording, walls};
 use crate::state::{
     ContactCount, ContactResolution, Health, NextParticleId, NonFinite, SimClock, Tally,
 };
@@ -36,6 +37,9 @@ pub struct SimConfig {
     pub fluid: Option<Fluid>,
     /// Flow field.
     pub flow: FlowField,
+    /// A flow on a CFD mesh; when set it replaces `flow` for the drag (which should then
+    /// be [`FlowField::Still`]).
+    pub mesh_flow: Option<MeshFlowSpec>,
     /// Gravity, m/s²; `None` = no gravity effect.
     pub gravity: Option<DVec3>,
     /// Reduce gravity by the buoyancy of the fluid (ρ_f/ρ_p).
@@ -197,6 +201,7 @@ impl Simulation {
             gravity: cfg.gravity,
             buoyancy: cfg.buoyancy,
             fluid: cfg.fluid,
+            mesh: cfg.mesh_flow.is_some(),
         });
 
         let mut b = StepBuilder::new();
@@ -212,7 +217,10 @@ impl Simulation {
             world.insert_resource(w);
             walls::plugin(&mut world, &mut b, Some(t));
         }
-        motion::plugin(&mut b, &motion_res, rotation);
+        motion::plugin(&mut b, &motion_res, rotation, cfg.mesh_flow.is_some());
+        if let Some(m) = cfg.mesh_flow.clone() {
+            mesh_flow::plugin(&mut world, &mut b, m, ng);
+        }
         if let Some(o) = io.outlet {
             outlet::plugin(&mut world, &mut b, o, ng);
         }

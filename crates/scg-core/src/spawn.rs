@@ -45,6 +45,8 @@ pub struct SpawnRules {
     pub buoyancy: bool,
     /// The fluid, if any (drag response time, buoyancy).
     pub fluid: Option<Fluid>,
+    /// A flow on a mesh: every particle has a [`CellHint`] (spawned unlocated).
+    pub mesh: bool,
 }
 
 /// The simulated quantities of an original particle coarse-grained by `law` with ratio
@@ -87,6 +89,22 @@ impl SpawnRules {
     }
 }
 
+/// `spawner.spawn(bundle)`, with an unlocated [`CellHint`] added when `mesh` (one bundle).
+macro_rules! spawn_opt {
+    ($spawner:expr, $mesh:expr, $bundle:expr) => {
+        if $mesh {
+            $spawner
+                .spawn((
+                    $bundle,
+                    CellHint(crate::physics::mesh_flow::hint::UNLOCATED),
+                ))
+                .id()
+        } else {
+            $spawner.spawn($bundle).id()
+        }
+    };
+}
+
 /// Spawn one particle with every component of the layout in a single bundle (no
 /// archetype moves), through a `World` or `Commands` (both have `spawn`).
 macro_rules! spawn_bundle {
@@ -117,12 +135,12 @@ macro_rules! spawn_bundle {
         );
         let spin = AngularVelocity::default();
         match (rules.forces, rules.spin, rules.gravity.is_some()) {
-            (true, _, false) => $spawner.spawn((base, walls)).id(),
-            (true, _, true) => $spawner.spawn((base, walls, gravity)).id(),
-            (false, true, false) => $spawner.spawn((base, spin)).id(),
-            (false, true, true) => $spawner.spawn((base, spin, gravity)).id(),
-            (false, false, false) => $spawner.spawn(base).id(),
-            (false, false, true) => $spawner.spawn((base, gravity)).id(),
+            (true, _, false) => spawn_opt!($spawner, rules.mesh, (base, walls)),
+            (true, _, true) => spawn_opt!($spawner, rules.mesh, (base, walls, gravity)),
+            (false, true, false) => spawn_opt!($spawner, rules.mesh, (base, spin)),
+            (false, true, true) => spawn_opt!($spawner, rules.mesh, (base, spin, gravity)),
+            (false, false, false) => spawn_opt!($spawner, rules.mesh, base),
+            (false, false, true) => spawn_opt!($spawner, rules.mesh, (base, gravity)),
         }
     }};
 }

@@ -93,12 +93,16 @@ pub enum StepSystem {
     IntegrateDragExponential,
     /// Any drag law, semi-implicit Euler with sub-steps.
     IntegrateDragExplicit,
+    /// Drag through a flow on a CFD mesh (locate, interpolate, move, settle on the mesh).
+    IntegrateMeshFlow,
     /// Angular velocity from the wall torques.
     IntegrateRotation,
     /// Advance the step counter.
     AdvanceClock,
     /// Remove drained and lost particles.
     DrainParticles,
+    /// Remove particles that left a mesh flow through an outlet or lost patch.
+    MeshBoundary,
     /// Spawn fed particles.
     FeedParticles,
     /// Stop on a non-finite state.
@@ -120,9 +124,11 @@ impl StepSystem {
             StepSystem::IntegrateStokesExponential => "integrate_stokes_exponential",
             StepSystem::IntegrateDragExponential => "integrate_drag_exponential",
             StepSystem::IntegrateDragExplicit => "integrate_drag_explicit",
+            StepSystem::IntegrateMeshFlow => "integrate_mesh_flow",
             StepSystem::IntegrateRotation => "integrate_rotation",
             StepSystem::AdvanceClock => "advance_clock",
             StepSystem::DrainParticles => "drain_particles",
+            StepSystem::MeshBoundary => "mesh_boundary",
             StepSystem::FeedParticles => "feed_particles",
             StepSystem::CheckFiniteState => "check_finite_state",
             StepSystem::RecordFrame => "record_frame",

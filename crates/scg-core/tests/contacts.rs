@@ -57,6 +57,7 @@ fn config(dt: f64, contacts: Option<ContactConfig>, walls: Option<WallSet>) -> S
         drag: None,
         fluid: None,
         flow: FlowField::Still,
+        mesh_flow: None,
         gravity: None,
         buoyancy: false,
         walls,

@@ -15,6 +15,7 @@ use scg_core::physics::contact::{Material, NormalLaw};
 use scg_core::physics::wall_shape::WallShape;
 use scg_core::sim::InletOutlet;
 use scg_core::stages::feeder::{FeederSpec, Spin};
+use scg_core::stages::mesh_flow::MeshFlowSpec;
 use scg_core::stages::outlet::OutletSpec;
 use scg_core::stages::walls::WallSet;
 use scg_core::{ParticleSpec, SimConfig, Simulation};
@@ -80,6 +81,10 @@ impl Scene {
             drag: self.drag,
             fluid: self.fluid,
             flow: self.flow,
+            mesh_flow: self.mesh_flow.as_ref().map(|m| MeshFlowSpec {
+                flow: m.flow.clone(),
+                restitution: self.material.map_or(1.0, |m| m.restitution),
+            }),
             gravity: self.gravity,
             buoyancy: self.buoyancy,
             walls: (!self.walls.is_empty()).then(|| WallSet {

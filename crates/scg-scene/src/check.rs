@@ -600,6 +600,7 @@ pub fn check(scene: &Scene) -> Report {
             }
         }
     }
+    findings.extend(mesh_flow_findings(scene));
     for (code, n) in allowed {
         findings.push(Finding {
             level: Level::Note,
@@ -616,4 +617,50 @@ pub fn check(scene: &Scene) -> Report {
         steps: scene.steps(),
         findings,
     }
+}
+
+/// Feeder-region points sampled per feeder to test them against a mesh flow.
+const FEEDER_SAMPLES: usize = 1000;
+
+/// Warnings of a mesh flow: initial particles outside the mesh (they are lost at the first
+/// step) and feeder regions reaching outside it (sampled: [`FEEDER_SAMPLES`] points each,
+/// seeded, so the report is deterministic).
+fn mesh_flow_findings(scene: &Scene) -> Vec<Finding> {
+    use rand::SeedableRng;
+    let Some(m) = &scene.mesh_flow else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    let particles = scene.initial_particles();
+    let outside: Vec<&scg_core::ParticleSpec> = particles
+        .iter()
+        .filter(|p| m.flow.find_cell(p.position).is_none())
+        .collect();
+    if let Some(first) = outside.first() {
+        out.push(Finding {
+            level: Level::Warning,
+            message: format!(
+                "{} of {} initial particles start outside the flow mesh (first: group `{}` at {:?} m); they are removed as lost at the first step",
+                outside.len(),
+                particles.len(),
+                scene.groups[first.group as usize].name,
+                first.position.to_array()
+            ),
+        });
+    }
+    for (i, f) in scene.feeders.iter().enumerate() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(i as u64);
+        let n = (0..FEEDER_SAMPLES)
+            .filter(|_| m.flow.find_cell(f.region.sample(&mut rng)).is_none())
+            .count();
+        if n > 0 {
+            out.push(Finding {
+                level: Level::Warning,
+                message: format!(
+                    "feeders[{i}]: {n} of {FEEDER_SAMPLES} sampled points of the feed region lie outside the flow mesh; particles fed there are removed as lost"
+                ),
+            });
+        }
+    }
+    out
 }

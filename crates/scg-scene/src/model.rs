@@ -99,8 +99,10 @@ pub struct Scene {
     pub integrator: Integrator,
     /// Fluid, if any.
     pub fluid: Option<Fluid>,
-    /// Flow field.
+    /// Flow field (`Still` when the flow is on a mesh).
     pub flow: FlowField,
+    /// A flow read from a CFD case or VTK file (`flow.kind = "openfoam"` or `"vtk"`).
+    pub mesh_flow: Option<SceneMeshFlow>,
     /// Drag law, if the drag effect is declared.
     pub drag: Option<DragLaw>,
     /// Gravity, if declared, m/s².
@@ -174,4 +176,15 @@ pub struct Outlet {
     pub geometry: OutletGeometry,
     /// Time between checks, s (0 = every step).
     pub interval: f64,
+}
+
+/// A flow on a CFD mesh, read once when the scene is loaded.
+#[derive(Clone, Debug)]
+pub struct SceneMeshFlow {
+    /// The flow, shared by every simulation built from the scene.
+    pub flow: std::sync::Arc<scg_core::physics::mesh_flow::MeshFlow>,
+    /// What was read: the case folder or VTK file, and for a case the time folder.
+    pub source: String,
+    /// The field's name.
+    pub field: String,
 }

@@ -110,6 +110,46 @@ pub struct RawFlow {
     pub inflow_ratio: Option<f64>,
     pub nozzle_radius: Option<f64>,
     pub axial_speed: Option<f64>,
+    /// openfoam: the case folder, relative to the scene file.
+    pub case: Option<String>,
+    /// vtk: the file, relative to the scene file.
+    pub file: Option<String>,
+    /// openfoam: `"latest"` or a time, s.
+    pub time: Option<RawTime>,
+    pub field: Option<String>,
+    #[serde(default, deserialize_with = "some_name")]
+    pub interpolation: Option<RawInterpolation>,
+    pub scale: Option<f64>,
+    pub translate: Option<[f64; 3]>,
+    pub patches: Option<RawPatches>,
+}
+
+/// `flow.time`: a name (`"latest"`) or a number.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(untagged)]
+pub enum RawTime {
+    Number(f64),
+    Name(String),
+}
+
+/// `[flow.patches]`: patch names by role; the others are `lost`.
+#[derive(Deserialize, Debug, Clone, Default)]
+#[serde(deny_unknown_fields)]
+pub struct RawPatches {
+    #[serde(default)]
+    pub walls: Vec<String>,
+    #[serde(default)]
+    pub outlets: Vec<String>,
+}
+
+/// `flow.interpolation`.
+#[allow(clippy::enum_variant_names)] // the scene file's names
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum RawInterpolation {
+    CellPoint,
+    CellValue,
+    CellPointLinearExact,
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -284,6 +324,8 @@ pub enum RawFlowKind {
     Uniform,
     Vortex,
     Classifier,
+    Openfoam,
+    Vtk,
 }
 
 /// `walls[i].kind`.

@@ -19,7 +19,7 @@ use crate::model::{DtChoice, Group, Scene};
 use crate::overrides::apply_overrides;
 use crate::raw::{RawDt, RawScene};
 use particles::{feeder, group};
-use physics::{contacts, flow_field, material, outlet, wall};
+use physics::{contacts, flow_field, material, mesh_flow, outlet, wall};
 
 /// The embedded default scene (the paper's vortex case), run by `scg run` with no file.
 pub const DEFAULT_SCENE: &str = include_str!("../../../cases/vortex.toml");
@@ -88,6 +88,10 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
     let flow = match &raw.flow {
         None => FlowField::Still,
         Some(f) => flow_field(f, cx)?,
+    };
+    let mesh_flow = match &raw.flow {
+        Some(f) => mesh_flow(f, cx)?,
+        None => None,
     };
     let drag = match &raw.drag {
         None => None,
@@ -184,6 +188,7 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
         integrator,
         fluid,
         flow,
+        mesh_flow,
         drag,
         gravity,
         buoyancy,

@@ -5,6 +5,7 @@
 pub mod contacts;
 pub mod feeder;
 pub mod guard;
+pub mod mesh_flow;
 pub mod motion;
 pub mod outlet;
 pub mod recording;

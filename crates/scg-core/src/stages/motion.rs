@@ -33,11 +33,13 @@ pub struct Motion {
 }
 
 /// Add the motion systems the scene needs (with `rotation`, the angular velocity is
-/// integrated from the wall torques), and the clock.
-pub fn plugin(b: &mut StepBuilder, motion: &Motion, rotation: bool) {
+/// integrated from the wall torques), and the clock. With `mesh`, the flow is on a CFD
+/// mesh and [`super::mesh_flow`]'s system moves the particles whatever the drag law.
+pub fn plugin(b: &mut StepBuilder, motion: &Motion, rotation: bool, mesh: bool) {
     use StepSystem::*;
     let set = StepSet::Integration;
     match (motion.drag, motion.integrator) {
+        _ if mesh => super::mesh_flow::add_integration(b),
         (None, _) => b.add(set, "motion", IntegrateBallistic, integrate_ballistic),
         (Some(DragLaw::Stokes), Integrator::Exponential) => b.add(
             set,

@@ -42,6 +42,9 @@ pub fn render(scene: &Scene, r: &Report) -> String {
             s.push_str(&mesh_line(&w.name, m));
         }
     }
+    if let Some(m) = &scene.mesh_flow {
+        s.push_str(&mesh_flow_lines(m));
+    }
     s.push_str(&format!(
         "Stokes number (paper eq. 1): {:.4e}\n",
         r.stokes_number
@@ -76,4 +79,38 @@ fn mesh_line(name: &str, m: &scg_core::physics::trimesh::TriMesh) -> String {
         dims[2],
         h
     )
+}
+
+/// The lines describing a flow on a mesh: sizes, bounds, patches with their roles, field
+/// speeds.
+fn mesh_flow_lines(m: &crate::model::SceneMeshFlow) -> String {
+    let f = &m.flow;
+    let mesh = f.mesh();
+    let [lo, hi] = f.geometry().bounds();
+    let v = |v: glam::DVec3| format!("[{:.6e}, {:.6e}, {:.6e}]", v.x, v.y, v.z);
+    let (umin, umax) = f.field_speed();
+    let mut s = format!(
+        "flow mesh {}: {} cells, {} faces ({} internal), {} points, bounds {} to {} m, field `{}` ({:?}), speed {:.4e} to {:.4e} m/s\n",
+        m.source,
+        mesh.n_cells,
+        mesh.n_faces(),
+        mesh.n_internal_faces(),
+        mesh.points.len(),
+        v(lo),
+        v(hi),
+        m.field,
+        f.scheme(),
+        umin,
+        umax
+    );
+    for (p, role) in mesh.patches.iter().zip(f.roles()) {
+        s.push_str(&format!(
+            "  patch `{}` ({}): {} faces, {}\n",
+            p.name,
+            p.kind,
+            p.size,
+            role.name()
+        ));
+    }
+    s
 }

@@ -14,9 +14,15 @@ use scg_core::stages::walls::Wall;
 
 use super::Ctx;
 use crate::error::SceneError;
-use crate::model::{Group, Outlet};
+use crate::model::{Group, Outlet, SceneMeshFlow};
 use crate::raw::{
     RawContacts, RawFlow, RawFlowKind, RawMaterial, RawNormalModel, RawOutlet, RawWall, RawWallKind,
+};
+use crate::raw::{RawInterpolation, RawTime};
+use scg_core::physics::mesh_flow::{MeshFlow, PatchRole};
+use scg_mesh::{
+    Interpolation,
+    foam::{self, TimeSel},
 };
 
 /// `[material]`: the contact material and the normal law it gives.
@@ -115,7 +121,36 @@ pub(super) fn flow_field(f: &RawFlow, cx: &Ctx) -> Result<FlowField, SceneError>
             inflow_ratio: cx.finite("flow.inflow_ratio", f.inflow_ratio.unwrap_or(0.0))?,
         })
     };
+    let mesh_kind = matches!(f.kind, RawFlowKind::Openfoam | RawFlowKind::Vtk);
+    let analytic_keys = [
+        ("flow.velocity", f.velocity.is_some()),
+        ("flow.center", f.center.is_some()),
+        ("flow.axis", f.axis.is_some()),
+        ("flow.rpm", f.rpm.is_some()),
+        ("flow.inflow_ratio", f.inflow_ratio.is_some()),
+        ("flow.nozzle_radius", f.nozzle_radius.is_some()),
+        ("flow.axial_speed", f.axial_speed.is_some()),
+    ];
+    let mesh_keys = [
+        ("flow.case", f.case.is_some()),
+        ("flow.file", f.file.is_some()),
+        ("flow.time", f.time.is_some()),
+        ("flow.field", f.field.is_some()),
+        ("flow.interpolation", f.interpolation.is_some()),
+        ("flow.scale", f.scale.is_some()),
+        ("flow.translate", f.translate.is_some()),
+        ("flow.patches", f.patches.is_some()),
+    ];
+    let (wrong, kinds) = if mesh_kind {
+        (&analytic_keys[..], "still, uniform, vortex or classifier")
+    } else {
+        (&mesh_keys[..], "openfoam or vtk")
+    };
+    if let Some((k, _)) = wrong.iter().find(|(_, given)| *given) {
+        return Err(cx.err(k, format!("is only used by flow.kind = {kinds}")));
+    }
     Ok(match f.kind {
+        RawFlowKind::Openfoam | RawFlowKind::Vtk => FlowField::Still,
         RawFlowKind::Still => FlowField::Still,
         RawFlowKind::Uniform => {
             FlowField::Uniform(cx.vec3("flow.velocity", cx.need("flow.velocity", &f.velocity)?)?)
@@ -133,6 +168,112 @@ pub(super) fn flow_field(f: &RawFlow, cx: &Ctx) -> Result<FlowField, SceneError>
             )?,
         },
     })
+}
+
+/// `[flow]` of kind `openfoam` or `vtk`: the mesh and the field, read once, placed
+/// (x' = translate + scale·x, m), patch roles from `[flow.patches]`; `None` for the
+/// analytic kinds. Errors name the key and carry the mesh reader's message (file, entry).
+pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, SceneError> {
+    let base = std::path::Path::new(cx.file)
+        .parent()
+        .unwrap_or(std::path::Path::new(""))
+        .to_path_buf();
+    let field = f.field.clone().unwrap_or_else(|| "U".to_string());
+    if field.is_empty() {
+        return Err(cx.err("flow.field", "must name a field"));
+    }
+    let scheme = match f.interpolation {
+        None | Some(RawInterpolation::CellPoint) => Interpolation::CellPoint,
+        Some(RawInterpolation::CellValue) => Interpolation::CellValue,
+        Some(RawInterpolation::CellPointLinearExact) => Interpolation::CellPointLinearExact,
+    };
+    let scale = cx.positive("flow.scale", f.scale.unwrap_or(1.0))?;
+    let translate = cx.vec3("flow.translate", f.translate.unwrap_or([0.0; 3]))?;
+    let (mut mesh, cells, source) = match f.kind {
+        RawFlowKind::Openfoam => {
+            let case = base.join(cx.need("flow.case", &f.case)?);
+            let shown = case.display().to_string();
+            if !case.is_dir() {
+                return Err(cx.err("flow.case", format!("{shown}: no such case folder")));
+            }
+            let time = match &f.time {
+                None => TimeSel::Latest,
+                Some(RawTime::Name(n)) if n == "latest" => TimeSel::Latest,
+                Some(RawTime::Name(n)) => match n.trim().parse::<f64>() {
+                    Ok(t) if t.is_finite() => TimeSel::Time(t),
+                    _ => {
+                        return Err(cx.err(
+                            "flow.time",
+                            format!("must be \"latest\" or a time in s, got \"{n}\""),
+                        ));
+                    }
+                },
+                Some(RawTime::Number(t)) => TimeSel::Time(cx.finite("flow.time", *t)?),
+            };
+            let mesh =
+                foam::read_mesh(&case).map_err(|e| cx.err("flow.case", format!("{shown}: {e}")))?;
+            let dir = foam::select_time(&case, time)
+                .map_err(|e| cx.err("flow.time", format!("{shown}: {e}")))?;
+            let u = foam::read_vector_field(&case, &mesh, time, &field)
+                .map_err(|e| cx.err("flow.field", format!("{shown}: field `{field}`: {e}")))?;
+            (mesh, u, format!("{shown} (field from {})", dir.display()))
+        }
+        RawFlowKind::Vtk => {
+            let file = base.join(cx.need("flow.file", &f.file)?);
+            let shown = file.display().to_string();
+            if !file.is_file() {
+                return Err(cx.err("flow.file", format!("{shown}: no such file")));
+            }
+            let (mesh, u) = scg_mesh::vtk::read(&file, &field)
+                .map_err(|e| cx.err("flow.file", format!("{shown}: field `{field}`: {e}")))?;
+            (mesh, u, shown)
+        }
+        _ => return Ok(None),
+    };
+    if scale != 1.0 || translate != DVec3::ZERO {
+        for p in &mut mesh.points {
+            *p = translate + scale * *p;
+        }
+    }
+    let mesh_file = match f.kind {
+        RawFlowKind::Vtk => f.file.clone().unwrap_or_default(),
+        _ => f.case.clone().unwrap_or_default(),
+    };
+    let patches = f.patches.clone().unwrap_or_default();
+    let mut roles = vec![PatchRole::Lost; mesh.patches.len()];
+    for (key, names, role) in [
+        ("flow.patches.walls", &patches.walls, PatchRole::Wall),
+        ("flow.patches.outlets", &patches.outlets, PatchRole::Outlet),
+    ] {
+        for name in names {
+            let Some(i) = mesh.patches.iter().position(|p| &p.name == name) else {
+                let known: Vec<&str> = mesh.patches.iter().map(|p| p.name.as_str()).collect();
+                return Err(cx.err(
+                    key,
+                    format!(
+                        "unknown patch `{name}` in {mesh_file}; the mesh has: {}",
+                        known.join(", ")
+                    ),
+                ));
+            };
+            if roles[i] != PatchRole::Lost {
+                return Err(cx.err(key, format!("patch `{name}` is given two roles")));
+            }
+            roles[i] = role;
+        }
+    }
+    let key = if f.kind == RawFlowKind::Vtk {
+        "flow.file"
+    } else {
+        "flow.case"
+    };
+    let flow = MeshFlow::new(mesh, &cells, scheme, roles)
+        .map_err(|e| cx.err(key, format!("{source}: {e}")))?;
+    Ok(Some(SceneMeshFlow {
+        flow: std::sync::Arc::new(flow),
+        source,
+        field,
+    }))
 }
 
 /// `walls[i]`.

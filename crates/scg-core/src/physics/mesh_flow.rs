@@ -1,0 +1,425 @@
+//! A fluid velocity given on an unstructured CFD mesh (one-way coupling): the mesh, the
+//! point locator and the interpolator of `scg-mesh`, owned together, plus the role of
+//! every boundary patch. Pure functions of positions and cell hints; the systems are in
+//! [`crate::stages::mesh_flow`].
+//!
+//! Velocities are in m/s, lengths in m.
+
+use std::fmt;
+
+use glam::DVec3;
+use scg_mesh::{
+    CellField, Hit, Interpolation, Interpolator, Location, Locator, MeshGeometry, PolyMesh,
+};
+
+/// What a particle meeting a boundary patch does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PatchRole {
+    /// Rebounds (specular reflection, normal velocity × −e).
+    Wall,
+    /// Drains: removed and counted per group.
+    Outlet,
+    /// Removed and counted as lost.
+    Lost,
+}
+
+impl PatchRole {
+    /// Name used in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            PatchRole::Wall => "wall",
+            PatchRole::Outlet => "outlet",
+            PatchRole::Lost => "lost",
+        }
+    }
+}
+
+/// A particle's cell hint (the component stores the `u32`): a cell index, or one of
+/// these markers (all ≥ any cell count a `u32` mesh can hold in practice).
+pub mod hint {
+    /// Not located yet (spawned this step): the locator's grid finds it.
+    pub const UNLOCATED: u32 = u32::MAX - 2;
+    /// Left through an outlet patch this step: the boundary stage drains it.
+    pub const DRAINED: u32 = u32::MAX;
+    /// Left the mesh elsewhere (or was never in it): the boundary stage removes it as lost.
+    pub const LOST: u32 = u32::MAX - 1;
+}
+
+/// A flow field on a mesh, ready for queries.
+///
+/// `scg-mesh`'s [`Locator`] and [`Interpolator`] borrow the mesh and its geometry. To keep
+/// them in an ECS resource without self-references, [`MeshFlow::new`] moves the mesh, its
+/// geometry and the locator to the heap and **leaks** them (`&'static`): this happens once
+/// per loaded flow (a scene load, a benchmark), never per step, and the memory lives until
+/// the process ends. Simulations built from the same scene share one `MeshFlow` (`Arc`).
+pub struct MeshFlow {
+    loc: &'static Locator<'static>,
+    interp: Interpolator<'static>,
+    roles: Vec<PatchRole>,
+    field_speed: (f64, f64),
+}
+
+impl fmt::Debug for MeshFlow {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let m = self.mesh();
+        f.debug_struct("MeshFlow")
+            .field("cells", &m.n_cells)
+            .field("faces", &m.n_faces())
+            .field("points", &m.points.len())
+            .field("scheme", &self.interp.scheme())
+            .field("roles", &self.roles)
+            .finish()
+    }
+}
+
+impl MeshFlow {
+    /// Prepare `field` on `mesh` with `scheme`; `roles` gives one role per patch of
+    /// `mesh.patches` (a length mismatch is an error). Leaks the mesh, its geometry and the
+    /// locator (see the type's documentation).
+    pub fn new(
+        mesh: PolyMesh,
+        field: &CellField,
+        scheme: Interpolation,
+        roles: Vec<PatchRole>,
+    ) -> Result<Self, scg_mesh::MeshError> {
+        if roles.len() != mesh.patches.len() {
+            return Err(scg_mesh::MeshError::invalid(
+                "<mesh>",
+                "patches",
+                format!("{} roles for {} patches", roles.len(), mesh.patches.len()),
+            ));
+        }
+        let geom = MeshGeometry::new(&mesh)?;
+        let mesh: &'static PolyMesh = Box::leak(Box::new(mesh));
+        let geom: &'static MeshGeometry = Box::leak(Box::new(geom));
+        let loc: &'static Locator<'static> = Box::leak(Box::new(Locator::new(mesh, geom)?));
+        let interp = Interpolator::new(loc, field, scheme)?;
+        let (lo, hi) = field
+            .cells
+            .iter()
+            .map(|u| u.length())
+            .fold((f64::INFINITY, 0.0_f64), |(a, b), s| (a.min(s), b.max(s)));
+        Ok(MeshFlow {
+            loc,
+            interp,
+            roles,
+            field_speed: (lo, hi),
+        })
+    }
+
+    /// The mesh, m.
+    pub fn mesh(&self) -> &PolyMesh {
+        self.loc.mesh()
+    }
+
+    /// Its geometry.
+    pub fn geometry(&self) -> &MeshGeometry {
+        self.loc.geometry()
+    }
+
+    /// The locator.
+    pub fn locator(&self) -> &Locator<'static> {
+        self.loc
+    }
+
+    /// The interpolation scheme.
+    pub fn scheme(&self) -> Interpolation {
+        self.interp.scheme()
+    }
+
+    /// Role of every patch (same order as the mesh's patches).
+    pub fn roles(&self) -> &[PatchRole] {
+        &self.roles
+    }
+
+    /// Smallest and largest speed of the cell values, m/s.
+    pub fn field_speed(&self) -> (f64, f64) {
+        self.field_speed
+    }
+
+    /// Role of patch `p` (an unknown patch is lost).
+    #[inline]
+    pub fn role(&self, p: u32) -> PatchRole {
+        self.roles
+            .get(p as usize)
+            .copied()
+            .unwrap_or(PatchRole::Lost)
+    }
+
+    /// The cell holding x (grid search), `None` outside the mesh.
+    pub fn find_cell(&self, x: DVec3) -> Option<u32> {
+        self.loc.find_cell(x)
+    }
+
+    /// Locate x walking from cell `hint` (any value: a marker or a stale cell falls back to
+    /// the grid).
+    #[inline]
+    pub fn track(&self, hint: u32, x: DVec3) -> Location {
+        self.loc.track(hint, x)
+    }
+
+    /// Interpolated velocity where a point was found, m/s.
+    #[inline]
+    pub fn at(&self, hit: &Hit) -> DVec3 {
+        self.interp.at(hit)
+    }
+
+    /// Fluid velocity at x (m/s) for a particle whose last cell is `hint` (x inside the
+    /// mesh or close to it), and the cell to use as the next hint. Where x is outside the
+    /// mesh the value is extrapolated from the hint's cell ([`Interpolator::velocity`]).
+    #[inline]
+    pub fn velocity(&self, hint: u32, x: DVec3) -> (DVec3, u32) {
+        match self.loc.track(hint, x) {
+            Location::Inside(h) | Location::Crossed { hit: h, .. } => (self.interp.at(&h), h.cell),
+            Location::Left { .. } | Location::Outside => (self.interp.velocity(hint, x), hint),
+        }
+    }
+
+    /// Ask the processor to load what locating a particle in cell `c` reads first (the
+    /// cell centre, its face list and its faces' centres and areas), when `deep` also the
+    /// face data (which needs the face list in cache to be addressed). Calling it a few
+    /// particles ahead hides memory latency on large meshes; no effect on results.
+    #[inline]
+    pub fn prefetch(&self, c: u32, deep: bool) {
+        let g = self.loc.geometry();
+        let m = self.loc.mesh();
+        let ci = c as usize;
+        if ci >= g.cell_centres.len() {
+            return;
+        }
+        prefetch(&g.cell_centres, ci);
+        prefetch(&g.cell_face_offsets, ci);
+        if deep {
+            let (a, b) = (
+                g.cell_face_offsets[ci] as usize,
+                g.cell_face_offsets[ci + 1] as usize,
+            );
+            prefetch(&g.cell_faces, a);
+            for &f in g.cell_faces.get(a..b).unwrap_or(&[]) {
+                prefetch(&g.face_areas, f as usize);
+                prefetch(&g.face_centres, f as usize);
+                prefetch(&m.face_offsets, f as usize);
+            }
+        }
+    }
+
+    /// Unit outward normal and centre of boundary face `f`, m.
+    #[inline]
+    pub fn face_plane(&self, f: u32) -> (DVec3, DVec3) {
+        let g = self.loc.geometry();
+        let n = g.face_areas[f as usize].normalize_or_zero();
+        (n, g.face_centres[f as usize])
+    }
+}
+
+/// Prefetch `v[i]` into the caches (x86-64 only; out of range is ignored).
+#[inline(always)]
+fn prefetch<T>(v: &[T], i: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(x) = v.get(i) {
+        // SAFETY: a prefetch is a hint that never faults; the pointer is to a live element.
+        unsafe {
+            core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>(
+                (x as *const T).cast::<i8>(),
+            )
+        };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (v, i);
+}
+
+/// Specular reflection of a particle that crossed the plane through `p` with unit
+/// outward normal `n`: its centre is mirrored back inside (when beyond the plane) and the
+/// outward normal velocity component reversed and scaled by the restitution `e`
+/// (v_n' = −e·v_n); the tangential component is kept. Returns (x', v').
+#[inline]
+pub fn reflect(x: DVec3, v: DVec3, p: DVec3, n: DVec3, e: f64) -> (DVec3, DVec3) {
+    let d = (x - p).dot(n);
+    let x1 = if d > 0.0 { x - 2.0 * d * n } else { x };
+    let vn = v.dot(n);
+    let v1 = if vn > 0.0 { v - (1.0 + e) * vn * n } else { v };
+    (x1, v1)
+}
+
+/// Where a move from `x0` (in cell `h0`) to `x1` ends on the mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Landing {
+    /// Final centre, m.
+    pub x: DVec3,
+    /// Final velocity, m/s.
+    pub v: DVec3,
+    /// Next hint: the cell, or [`hint::DRAINED`] / [`hint::LOST`].
+    pub hint: u32,
+}
+
+/// Most wall reflections tried in one step before the particle is put back at its start.
+pub const MAX_REFLECTIONS: usize = 8;
+
+/// Settle the end of a move on the mesh: locate `x1` from `h_from` (a cell near the path);
+/// crossing a wall patch reflects (restitution `e`) and locates again, at most
+/// [`MAX_REFLECTIONS`] times, after which the particle goes back to `x0` (its start, in
+/// cell `h0`) with the reflected velocity, so a wall is never passed; crossing an outlet
+/// drains, anything else is lost. A boundary face the walk passes on its way to a point
+/// inside the mesh (`Location::Crossed`: a concave boundary) counts as crossed.
+#[inline]
+pub fn land(
+    flow: &MeshFlow,
+    x0: DVec3,
+    h0: u32,
+    h_from: u32,
+    mut x1: DVec3,
+    mut v1: DVec3,
+    e: f64,
+) -> Landing {
+    let mut from = h_from;
+    for _ in 0..MAX_REFLECTIONS {
+        let (face, patch) = match flow.track(from, x1) {
+            Location::Inside(h) => {
+                return Landing {
+                    x: x1,
+                    v: v1,
+                    hint: h.cell,
+                };
+            }
+            Location::Crossed { face, patch, hit } => {
+                // The walk passed a boundary face (a concave boundary, a thin baffle) on
+                // its way to a point inside: the face's role decides, as when leaving.
+                from = hit.cell;
+                (face, patch)
+            }
+            Location::Left { face, patch } => (face, patch),
+            Location::Outside => {
+                return Landing {
+                    x: x1,
+                    v: v1,
+                    hint: hint::LOST,
+                };
+            }
+        };
+        match flow.role(patch) {
+            PatchRole::Wall => {
+                let (n, p) = flow.face_plane(face);
+                (x1, v1) = reflect(x1, v1, p, n, e);
+            }
+            PatchRole::Outlet => {
+                return Landing {
+                    x: x1,
+                    v: v1,
+                    hint: hint::DRAINED,
+                };
+            }
+            PatchRole::Lost => {
+                return Landing {
+                    x: x1,
+                    v: v1,
+                    hint: hint::LOST,
+                };
+            }
+        }
+    }
+    Landing {
+        x: x0,
+        v: v1,
+        hint: h0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use scg_mesh::build::{BoxMesh, CellShape, PatchNaming};
+
+    fn box_flow(u: DVec3, roles: &[(&str, PatchRole)]) -> MeshFlow {
+        let m = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [4, 4, 4])
+            .shape(CellShape::Tet)
+            .naming(PatchNaming::InletOutletWalls { axis: 0 })
+            .build()
+            .unwrap();
+        let field = CellField {
+            cells: vec![u; m.n_cells],
+            patches: vec![None; m.patches.len()],
+        };
+        let r = m
+            .patches
+            .iter()
+            .map(|p| {
+                roles
+                    .iter()
+                    .find(|(n, _)| *n == p.name)
+                    .map_or(PatchRole::Lost, |r| r.1)
+            })
+            .collect();
+        MeshFlow::new(m, &field, Interpolation::CellPoint, r).unwrap()
+    }
+
+    #[test]
+    fn reflection_is_specular() {
+        let (x, v) = reflect(
+            DVec3::new(1.1, 0.5, 0.5),
+            DVec3::new(2.0, 1.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::X,
+            0.5,
+        );
+        assert!((x - DVec3::new(0.9, 0.5, 0.5)).length() < 1e-15);
+        assert_eq!(v, DVec3::new(-1.0, 1.0, 0.0));
+        // moving inward already: velocity kept
+        let (_, v) = reflect(DVec3::ZERO, -DVec3::X, DVec3::ONE, DVec3::X, 0.5);
+        assert_eq!(v, -DVec3::X);
+    }
+
+    #[test]
+    fn landing_by_role() {
+        let u = DVec3::new(0.3, -0.2, 0.1);
+        let f = box_flow(
+            u,
+            &[("walls", PatchRole::Wall), ("outlet", PatchRole::Outlet)],
+        );
+        let x0 = DVec3::splat(0.5);
+        let h0 = f.find_cell(x0).unwrap();
+        let (w, h) = f.velocity(h0, DVec3::new(0.6, 0.55, 0.45));
+        assert!((w - u).length() < 1e-14);
+        assert!((h as usize) < f.mesh().n_cells);
+        // through the outlet (x max)
+        let l = land(&f, x0, h0, h0, DVec3::new(1.2, 0.5, 0.5), DVec3::X, 1.0);
+        assert_eq!(l.hint, hint::DRAINED);
+        // through the inlet (lost)
+        let l = land(&f, x0, h0, h0, DVec3::new(-0.2, 0.5, 0.5), -DVec3::X, 1.0);
+        assert_eq!(l.hint, hint::LOST);
+        // into the y max wall: mirrored back, v_y reversed × e
+        let l = land(
+            &f,
+            x0,
+            h0,
+            h0,
+            DVec3::new(0.5, 1.25, 0.5),
+            DVec3::new(0.0, 2.0, 1.0),
+            0.5,
+        );
+        assert!((l.x - DVec3::new(0.5, 0.75, 0.5)).length() < 1e-12);
+        assert!((l.v - DVec3::new(0.0, -1.0, 1.0)).length() < 1e-12);
+        // the hint is a cell holding the point (on a shared face either side will do)
+        assert!(matches!(f.track(l.hint, l.x), Location::Inside(h) if h.cell == l.hint));
+        // a corner: two reflections
+        let l = land(
+            &f,
+            x0,
+            h0,
+            h0,
+            DVec3::new(0.5, 1.2, -0.1),
+            DVec3::new(0.0, 1.0, -1.0),
+            1.0,
+        );
+        assert!((l.x - DVec3::new(0.5, 0.8, 0.1)).length() < 1e-12, "{l:?}");
+        assert!((l.v - DVec3::new(0.0, -1.0, 1.0)).length() < 1e-12);
+        // roles must match the patches
+        let m = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [1, 1, 1])
+            .build()
+            .unwrap();
+        let field = CellField {
+            cells: vec![u; 1],
+            patches: vec![None; m.patches.len()],
+        };
+        assert!(MeshFlow::new(m, &field, Interpolation::CellValue, vec![]).is_err());
+    }
+}

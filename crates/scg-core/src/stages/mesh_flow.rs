@@ -1,0 +1,290 @@
+//! Flows on CFD meshes: the integration system that moves particles through a
+//! [`MeshFlow`] and the boundary system that removes those that left it.
+//!
+//! Each particle carries a [`CellHint`], the cell holding its centre after the last step.
+//! A step locates the predicted mid-step position by walking from the hint
+//! ([`MeshFlow::velocity`]), interpolates u there, moves the particle with the same drag
+//! laws and integrators as the analytic flows ([`crate::stages::motion`]), then settles the
+//! end position on the mesh ([`land`]): inside, the hint becomes its cell; through a wall
+//! patch it is reflected back (specular, v_n' = −e·v_n with the scene material's
+//! restitution, 1 without a material); through an outlet patch its hint becomes
+//! [`hint::DRAINED`]; anywhere else [`hint::LOST`]. A particle found in no cell when first
+//! located (spawned outside the mesh) is lost too. The boundary system
+//! ([`mesh_boundary`], inlet/outlet stage) removes the marked particles in id order and
+//! counts them per group: drained ones in `Tally::drained` and `OutletLog::drained`,
+//! lost ones in `OutletLog::lost`.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use bevy_ecs::prelude::*;
+use glam::DVec3;
+
+use super::outlet::OutletLog;
+use super::table::{bypass, columns_mut};
+use crate::components::*;
+use crate::exec::par::for_each_piece;
+use crate::physics::drag::{DragLaw, particle_reynolds};
+use crate::physics::flow::Fluid;
+use crate::physics::integrate::{
+    Integrator, explicit_euler, explicit_substeps, exponential_drift, exponential_factors,
+    linear_kick,
+};
+use crate::physics::mesh_flow::{MeshFlow, hint, land};
+use crate::stages::motion::Motion;
+use crate::state::{Health, SimClock, StepDisplacement, Tally};
+use crate::step::{StepBuilder, StepSet, StepSystem};
+
+/// A mesh flow as a scene declares it.
+#[derive(Clone, Debug)]
+pub struct MeshFlowSpec {
+    /// The flow (shared by the simulations built from one scene).
+    pub flow: Arc<MeshFlow>,
+    /// Restitution of wall patches, v_n' = −e·v_n, in (0, 1].
+    pub restitution: f64,
+}
+
+/// The mesh flow of a simulation (resource).
+#[derive(Resource, Debug)]
+pub struct MeshFlowState {
+    /// The flow and its walls.
+    pub spec: MeshFlowSpec,
+    /// Particles marked drained or lost by the last integration (the boundary system
+    /// skips its scan when none was).
+    departures: AtomicU64,
+}
+
+impl MeshFlowState {
+    /// The state for `spec`.
+    pub fn new(spec: MeshFlowSpec) -> Self {
+        MeshFlowState {
+            spec,
+            departures: AtomicU64::new(0),
+        }
+    }
+}
+
+/// Add the mesh-flow boundary system (inlet/outlet stage) and its resources; the
+/// integration system is added by [`crate::stages::motion::plugin`].
+pub fn plugin(world: &mut World, b: &mut StepBuilder, spec: MeshFlowSpec, groups: usize) {
+    world.insert_resource(MeshFlowState::new(spec));
+    if !world.contains_resource::<OutletLog>() {
+        world.insert_resource(OutletLog {
+            drained: vec![Vec::new(); groups],
+            lost: vec![Vec::new(); groups],
+        });
+    }
+    b.add(
+        StepSet::InletOutlet,
+        "mesh_flow",
+        StepSystem::MeshBoundary,
+        mesh_boundary,
+    );
+}
+
+/// Add the integration system of a mesh flow.
+pub(crate) fn add_integration(b: &mut StepBuilder) {
+    b.add(
+        StepSet::Integration,
+        "mesh_flow",
+        StepSystem::IntegrateMeshFlow,
+        integrate_mesh_flow,
+    );
+}
+
+type MeshMoveQuery<'w, 's> = Query<
+    'w,
+    's,
+    (
+        &'static mut Position,
+        &'static mut Velocity,
+        (&'static StokesFactors, &'static FluidCoupling),
+        &'static Mass,
+        Option<&'static Force>,
+        Option<&'static BodyAcceleration>,
+        &'static mut CellHint,
+    ),
+>;
+
+/// What the mesh integration reads besides the particles.
+#[derive(bevy_ecs::system::SystemParam)]
+pub struct MeshInputs<'w> {
+    clock: Res<'w, SimClock>,
+    motion: Res<'w, Motion>,
+    fluid: Option<Res<'w, Fluid>>,
+    health: Res<'w, Health>,
+    disp: Option<Res<'w, StepDisplacement>>,
+    state: Res<'w, MeshFlowState>,
+}
+
+/// Move every particle through the mesh flow (see the module documentation): exponential
+/// midpoint (Stokes with the precomputed factors, other laws with τ from the slip at the
+/// start of the step), or the sub-stepped explicit scheme, with the wall kick and body
+/// acceleration as in [`crate::stages::motion`]; without a drag law, ballistic.
+pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
+    let dt = d.clock.dt;
+    let law = d.motion.drag;
+    let integrator = d.motion.integrator;
+    let fluid = d.fluid.as_deref().copied();
+    let flow: &MeshFlow = &d.state.spec.flow;
+    let e = d.state.spec.restitution;
+    let n_cells = flow.mesh().n_cells as u32;
+    let health = &*d.health;
+    let disp = d.disp.as_deref();
+    let departures = &d.state.departures;
+    departures.store(0, Ordering::Relaxed);
+    let Some((xs, vs, drag, ms, fs, gs, hs)) = columns_mut(&mut q) else {
+        if let Some(dd) = disp {
+            dd.mark_reported();
+        }
+        return;
+    };
+    let columns = (bypass(xs), bypass(vs), drag, ms, fs, gs, bypass(hs));
+    for_each_piece(columns, |(xs, vs, (sfs, fcs), ms, fs, gs, hs)| {
+        let mut d2max = 0.0_f64;
+        let mut gone = 0u64;
+        for i in 0..xs.len() {
+            // Memory latency dominates on large meshes: start loading a later particle's
+            // cell now (the face list 16 ahead, the faces 8 ahead).
+            if let Some(h) = hs.get(i + 16) {
+                flow.prefetch(h.0, false);
+            }
+            if let Some(h) = hs.get(i + 8) {
+                flow.prefetch(h.0, true);
+            }
+            let x0 = xs[i].0;
+            let mut h0 = hs[i].0;
+            if h0 >= n_cells {
+                match flow.find_cell(x0) {
+                    Some(c) => h0 = c,
+                    None => {
+                        hs[i].0 = hint::LOST;
+                        gone += 1;
+                        continue;
+                    }
+                }
+            }
+            let (m, fc, sf) = (ms[i].0, &fcs[i], &sfs[i]);
+            let force = fs.map(|f| f[i].0);
+            let a = gs.map_or(DVec3::ZERO, |g| g[i].0);
+            let v0 = vs[i].0;
+            let (x1, v1, h_end) = match (law, integrator) {
+                (Some(law), Integrator::Explicit) => {
+                    let mut acc = a;
+                    if let Some(f) = force {
+                        acc += f / m;
+                    }
+                    let fl = fluid.unwrap_or(Fluid {
+                        density: 0.0,
+                        viscosity: 1.0,
+                    });
+                    let (mut xi, mut vi, mut h) = (x0, v0, h0);
+                    let (u0, _) = flow.velocity(h, xi);
+                    let tau0 = effective_tau(law, fc, &fl, (u0 - vi).length());
+                    let n = explicit_substeps(tau0, dt);
+                    let step = dt / n as f64;
+                    for _ in 0..n {
+                        let (u, hu) = flow.velocity(h, xi);
+                        h = hu;
+                        let tau = effective_tau(law, fc, &fl, (u - vi).length());
+                        (xi, vi) = explicit_euler(xi, vi, u, acc, tau, step);
+                    }
+                    (xi, vi, h)
+                }
+                _ => {
+                    let vk = match force {
+                        Some(f) => linear_kick(v0, f, m, dt),
+                        None => v0,
+                    };
+                    let (u, hm) = flow.velocity(h0, x0 + vk * (0.5 * dt));
+                    let (x1, v1) = match law {
+                        None => exponential_drift(x0, vk, u, a, f64::INFINITY, 0.0, dt, dt),
+                        Some(DragLaw::Stokes) => {
+                            exponential_drift(x0, vk, u, a, fc.tau, sf.gain, sf.relax, dt)
+                        }
+                        Some(law) => {
+                            let fl = fluid.unwrap_or(Fluid {
+                                density: 0.0,
+                                viscosity: 1.0,
+                            });
+                            let (us, _) = flow.velocity(h0, x0);
+                            let tau = effective_tau(law, fc, &fl, (us - vk).length());
+                            let (gain, relax) = exponential_factors(tau, dt);
+                            exponential_drift(x0, vk, u, a, tau, gain, relax, dt)
+                        }
+                    };
+                    (x1, v1, hm)
+                }
+            };
+            if !(x1 + v1).element_sum().is_finite() {
+                health.raise();
+                xs[i].0 = x1;
+                vs[i].0 = v1;
+                continue;
+            }
+            let l = land(flow, x0, h0, h_end, x1, v1, e);
+            if l.hint >= n_cells {
+                gone += 1;
+            }
+            let d2 = (l.x - x0).length_squared();
+            if d2 > d2max {
+                d2max = d2;
+            }
+            xs[i].0 = l.x;
+            vs[i].0 = l.v;
+            hs[i].0 = l.hint;
+        }
+        if gone > 0 {
+            departures.fetch_add(gone, Ordering::Relaxed);
+        }
+        if let Some(dd) = disp {
+            dd.record(d2max);
+        }
+    });
+    if let Some(dd) = disp {
+        dd.mark_reported();
+    }
+}
+
+/// Response time under `law` for the slip speed `slip` (m/s), s.
+#[inline]
+fn effective_tau(law: DragLaw, fc: &FluidCoupling, fluid: &Fluid, slip: f64) -> f64 {
+    let re = particle_reynolds(fc.drag_diameter, slip, fluid.density, fluid.viscosity);
+    fc.tau / law.correction(re)
+}
+
+/// Remove the particles the integration marked drained or lost, in id order (so the log
+/// is deterministic), counting them per group.
+pub fn mesh_boundary(
+    mut commands: Commands,
+    clock: Res<SimClock>,
+    state: Res<MeshFlowState>,
+    mut log: ResMut<OutletLog>,
+    mut tally: ResMut<Tally>,
+    q: Query<(Entity, &ParticleId, &GroupId, &CellHint)>,
+) {
+    if state.departures.swap(0, Ordering::Relaxed) == 0 {
+        return;
+    }
+    let t = clock.time();
+    let mut gone: Vec<(u32, u32, Entity, u32)> = q
+        .iter()
+        .filter(|(.., h)| h.0 == hint::DRAINED || h.0 == hint::LOST)
+        .map(|(e, id, g, h)| (id.0, g.0, e, h.0))
+        .collect();
+    gone.sort_unstable_by_key(|g| g.0);
+    for (_, g, e, h) in gone {
+        let gi = g as usize;
+        if h == hint::DRAINED {
+            if let Some(c) = tally.drained.get_mut(gi) {
+                *c += 1;
+            }
+            if let Some(v) = log.drained.get_mut(gi) {
+                v.push(t);
+            }
+        } else if let Some(v) = log.lost.get_mut(gi) {
+            v.push(t);
+        }
+        commands.entity(e).despawn();
+    }
+}
