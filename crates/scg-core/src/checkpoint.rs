@@ -4,7 +4,7 @@
 //! What is saved is what the next steps read and cannot re-derive: every particle's
 //! identity, original size and scaling (its coarse-grained properties are derived again by
 //! the spawn path, exactly), position, velocity, angular velocity, force, torque and wall
-//! history, in table order (the order every stage visits them); the clock; the next id;
+//! history and mesh cell, in table order (the order every stage visits them); the clock; the next id;
 //! the tally; the outlet log; each feeder's count and random stream; the contact arrays
 //! that carry over between steps (Verlet list, its reference positions and drift bound,
 //! pair histories); the last step's displacement bound; the measured contact resolution.
@@ -30,6 +30,8 @@ pub struct ParticleRecord {
     pub force_torque: Option<(DVec3, DVec3)>,
     /// Wall contact history (wall key, displacement in m), when the scene has walls.
     pub wall_history: Option<Vec<(u32, DVec3)>>,
+    /// The mesh cell found last step, when the flow is on a mesh.
+    pub cell: Option<u32>,
 }
 
 /// One feeder's state.
@@ -139,6 +141,7 @@ type RecordQuery<'a> = (
     Option<&'a Force>,
     Option<&'a Torque>,
     Option<&'a WallHistory>,
+    Option<&'a CellHint>,
 );
 
 impl Simulation {
@@ -149,7 +152,7 @@ impl Simulation {
         // Table order: the order in which every stage visits the particles.
         let particles = q
             .iter(&self.world)
-            .map(|(id, g, cg, x, v, w, f, t, h)| ParticleRecord {
+            .map(|(id, g, cg, x, v, w, f, t, h, cell)| ParticleRecord {
                 id: id.0,
                 spec: ParticleSpec {
                     group: g.0,
@@ -163,6 +166,7 @@ impl Simulation {
                 omega: w.map(|w| w.0),
                 force_torque: f.zip(t).map(|(f, t)| (f.0, t.0)),
                 wall_history: h.map(|h| h.0.clone()),
+                cell: cell.map(|c| c.0),
             })
             .collect();
         let w = &self.world;
@@ -258,6 +262,11 @@ impl Simulation {
             }
             match (&p.wall_history, ent.get_mut::<WallHistory>()) {
                 (Some(h), Some(mut a)) => a.0.clone_from(h),
+                (None, None) => {}
+                _ => return Err(mismatch()),
+            }
+            match (p.cell, ent.get_mut::<CellHint>()) {
+                (Some(c), Some(mut a)) => a.0 = c,
                 (None, None) => {}
                 _ => return Err(mismatch()),
             }
