@@ -20,18 +20,18 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 
-use super::outlet::OutletLog;
+use super::outlet::{OutletLog, remove_departed};
 use super::table::{bypass, columns_mut};
 use crate::components::*;
 use crate::exec::par::for_each_piece;
-use crate::physics::drag::{DragLaw, particle_reynolds};
+use crate::physics::drag::DragLaw;
 use crate::physics::flow::Fluid;
 use crate::physics::integrate::{
     Integrator, explicit_euler, explicit_substeps, exponential_drift, exponential_factors,
     linear_kick,
 };
 use crate::physics::mesh_flow::{MeshFlow, hint, land};
-use crate::stages::motion::Motion;
+use crate::stages::motion::{Motion, effective_tau};
 use crate::state::{Health, SimClock, StepDisplacement, Tally};
 use crate::step::{StepBuilder, StepSet, StepSystem};
 
@@ -246,13 +246,6 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
     }
 }
 
-/// Response time under `law` for the slip speed `slip` (m/s), s.
-#[inline]
-fn effective_tau(law: DragLaw, fc: &FluidCoupling, fluid: &Fluid, slip: f64) -> f64 {
-    let re = particle_reynolds(fc.drag_diameter, slip, fluid.density, fluid.viscosity);
-    fc.tau / law.correction(re)
-}
-
 /// Remove the particles the integration marked drained or lost, in id order (so the log
 /// is deterministic), counting them per group.
 pub fn mesh_boundary(
@@ -266,25 +259,10 @@ pub fn mesh_boundary(
     if state.departures.swap(0, Ordering::Relaxed) == 0 {
         return;
     }
-    let t = clock.time();
-    let mut gone: Vec<(u32, u32, Entity, u32)> = q
+    let gone = q
         .iter()
         .filter(|(.., h)| h.0 == hint::DRAINED || h.0 == hint::LOST)
-        .map(|(e, id, g, h)| (id.0, g.0, e, h.0))
+        .map(|(e, id, g, h)| (id.0, g.0, e, h.0 == hint::DRAINED))
         .collect();
-    gone.sort_unstable_by_key(|g| g.0);
-    for (_, g, e, h) in gone {
-        let gi = g as usize;
-        if h == hint::DRAINED {
-            if let Some(c) = tally.drained.get_mut(gi) {
-                *c += 1;
-            }
-            if let Some(v) = log.drained.get_mut(gi) {
-                v.push(t);
-            }
-        } else if let Some(v) = log.lost.get_mut(gi) {
-            v.push(t);
-        }
-        commands.entity(e).despawn();
-    }
+    remove_departed(&mut commands, &mut log, &mut tally, clock.time(), gone);
 }

@@ -344,11 +344,11 @@ fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
     }
 }
 
-/// Response time under `law` for the current slip, s.
+/// Response time under `law` for the slip speed `slip` (m/s), s.
 #[inline]
-fn effective_tau(law: DragLaw, tau: f64, fc: &FluidCoupling, fluid: &Fluid, slip: f64) -> f64 {
+pub(crate) fn effective_tau(law: DragLaw, fc: &FluidCoupling, fluid: &Fluid, slip: f64) -> f64 {
     let re = particle_reynolds(fc.drag_diameter, slip, fluid.density, fluid.viscosity);
-    tau / law.correction(re)
+    fc.tau / law.correction(re)
 }
 
 /// What the Reynolds-dependent drag systems read besides the particles.
@@ -382,7 +382,7 @@ pub fn integrate_drag_exponential(d: DragInputs, mut q: MoveQuery<&'static Fluid
         |p, fc: &FluidCoupling| {
             let vk = p.kicked(dt);
             let slip = (flow.velocity(p.x) - vk).length();
-            let tau = effective_tau(law, fc.tau, fc, &fluid, slip);
+            let tau = effective_tau(law, fc, &fluid, slip);
             let (gain, relax) = exponential_factors(tau, dt);
             exponential_midpoint(&flow, p.x, vk, p.a, tau, gain, relax, dt)
         },
@@ -404,11 +404,11 @@ pub fn integrate_drag_explicit(d: DragInputs, mut q: MoveQuery<&'static FluidCou
             }
             let (mut xi, mut vi) = (p.x, p.v);
             let slip0 = (flow.velocity(xi) - vi).length();
-            let n = explicit_substeps(effective_tau(law, fc.tau, fc, &fluid, slip0), dt);
+            let n = explicit_substeps(effective_tau(law, fc, &fluid, slip0), dt);
             let h = dt / n as f64;
             for _ in 0..n {
                 let u = flow.velocity(xi);
-                let tau = effective_tau(law, fc.tau, fc, &fluid, (u - vi).length());
+                let tau = effective_tau(law, fc, &fluid, (u - vi).length());
                 (xi, vi) = explicit_euler(xi, vi, u, a, tau, h);
             }
             (xi, vi)

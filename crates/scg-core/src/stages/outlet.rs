@@ -110,31 +110,38 @@ pub fn drain_particles(
     if !clock.step.is_multiple_of(outlet.0.every.max(1)) {
         return;
     }
-    let t = clock.time();
-    let mut gone: Vec<(u32, u32, Entity, Fate)> = q
+    let gone = q
         .iter()
         .filter_map(|(e, id, g, x)| match outlet.0.geometry.fate(x.0) {
             Fate::Inside => None,
-            f => Some((id.0, g.0, e, f)),
+            f => Some((id.0, g.0, e, f == Fate::Drained)),
         })
         .collect();
+    remove_departed(&mut commands, &mut log, &mut tally, clock.time(), gone);
+}
+
+/// Despawn the particles `gone` (id, group, entity, drained rather than lost) in id order,
+/// so the log is deterministic, logging each at time `t` (s) and counting the drained
+/// ones per group. Shared by the outlet and the mesh-flow boundary.
+pub fn remove_departed(
+    commands: &mut Commands,
+    log: &mut OutletLog,
+    tally: &mut Tally,
+    t: f64,
+    mut gone: Vec<(u32, u32, Entity, bool)>,
+) {
     gone.sort_unstable_by_key(|g| g.0);
-    for (_, g, e, fate) in gone {
+    for (_, g, e, drained) in gone {
         let gi = g as usize;
-        match fate {
-            Fate::Drained => {
-                if let Some(c) = tally.drained.get_mut(gi) {
-                    *c += 1;
-                }
-                if let Some(v) = log.drained.get_mut(gi) {
-                    v.push(t);
-                }
+        if drained {
+            if let Some(c) = tally.drained.get_mut(gi) {
+                *c += 1;
             }
-            _ => {
-                if let Some(v) = log.lost.get_mut(gi) {
-                    v.push(t);
-                }
+            if let Some(v) = log.drained.get_mut(gi) {
+                v.push(t);
             }
+        } else if let Some(v) = log.lost.get_mut(gi) {
+            v.push(t);
         }
         commands.entity(e).despawn();
     }

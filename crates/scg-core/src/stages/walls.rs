@@ -110,41 +110,63 @@ pub fn wall_normal_forces(
     let Some((xs, vs, ds, ms, fs)) = columns_mut(&mut q) else {
         return;
     };
+    let keys = history_keys(&walls.walls);
     for_each_piece((xs, vs, ds, ms, bypass(fs)), |(xs, vs, ds, ms, fs)| {
         let (mut scratch, mut found) = (MeshScratch::default(), Vec::new());
         for i in 0..xs.len() {
-            let (x, v, r) = (xs[i].0, vs[i].0, 0.5 * ds[i].0);
+            let (x, v, r, m) = (xs[i].0, vs[i].0, 0.5 * ds[i].0, ms[i].0);
             let mut sum = DVec3::ZERO;
-            for w in &walls.walls {
-                if let WallShape::Mesh(m) = &w.shape {
-                    if m.surely_clear(x, r) {
-                        continue;
-                    }
-                    m.contacts(x, r, &mut scratch, &mut found);
-                    for c in &found {
-                        let vn = v.dot(c.normal);
-                        if vn < 0.0 && c.overlap <= -vn * dt {
-                            resolution.note_wall(walls.law.contact_time(ms[i].0, r, e_eff, -vn));
-                        }
-                        let (fn_, _) = walls.law.force(c.overlap, vn, e_eff, r, ms[i].0);
-                        sum += fn_ * c.normal;
-                    }
-                } else if let Some(t) = w.shape.touch(x, r) {
-                    let vn = v.dot(t.normal);
-                    if vn < 0.0 && t.overlap <= -vn * dt {
-                        // No history here: the contact started within the last step (one
-                        // step ago, at this speed, the sphere was clear of the wall).
-                        resolution.note_wall(walls.law.contact_time(ms[i].0, r, e_eff, -vn));
-                    }
-                    let (fn_, _) = walls.law.force(t.overlap, vn, e_eff, r, ms[i].0);
-                    sum += fn_ * t.normal;
+            for_each_touch(walls, &keys, x, r, &mut scratch, &mut found, |t, _| {
+                let vn = v.dot(t.normal);
+                if vn < 0.0 && t.overlap <= -vn * dt {
+                    // No history here: the contact started within the last step (one
+                    // step ago, at this speed, the sphere was clear of the wall).
+                    resolution.note_wall(walls.law.contact_time(m, r, e_eff, -vn));
                 }
-            }
+                let (fn_, _) = walls.law.force(t.overlap, vn, e_eff, r, m);
+                sum += fn_ * t.normal;
+            });
             // The walls are the only writer of Force: set, not accumulate (no clearing
             // pass).
             fs[i].0 = sum;
         }
     });
+}
+
+/// Every touch of the sphere at `x` (m) of radius `r` (m) with the walls, with its history
+/// key (`keys` from [`history_keys`]): one per touched analytic wall, one per touched
+/// feature of a mesh wall.
+fn for_each_touch(
+    walls: &WallSet,
+    keys: &[u32],
+    x: DVec3,
+    r: f64,
+    scratch: &mut MeshScratch,
+    found: &mut Vec<MeshContact>,
+    mut f: impl FnMut(WallTouch, u32),
+) {
+    for (wall, &key) in walls.walls.iter().zip(keys) {
+        match &wall.shape {
+            WallShape::Mesh(mesh) => {
+                if mesh.surely_clear(x, r) {
+                    continue;
+                }
+                mesh.contacts(x, r, scratch, found);
+                for c in found.iter() {
+                    let t = WallTouch {
+                        overlap: c.overlap,
+                        normal: c.normal,
+                    };
+                    f(t, key + c.region);
+                }
+            }
+            shape => {
+                if let Some(t) = shape.touch(x, r) {
+                    f(t, key);
+                }
+            }
+        }
+    }
 }
 
 /// History key of each wall's first contact: analytic wall `i` → `i`; a mesh wall's
@@ -240,20 +262,9 @@ pub fn wall_contact_forces(
             }
             hist.push((key, xi));
         };
-        for (wall, &key) in walls.walls.iter().zip(keys) {
-            if let WallShape::Mesh(mesh) = &wall.shape {
-                mesh.contacts(x, r, scratch, found);
-                for c in found.iter() {
-                    let t = WallTouch {
-                        overlap: c.overlap,
-                        normal: c.normal,
-                    };
-                    contact(t, key + c.region, hist);
-                }
-            } else if let Some(t) = wall.shape.touch(x, r) {
-                contact(t, key, hist);
-            }
-        }
+        for_each_touch(walls, keys, x, r, scratch, found, |t, key| {
+            contact(t, key, hist)
+        });
         // Keep only the contacts of this step (appended after the old entries).
         if old_len > 0 {
             hist.drain(..old_len);
