@@ -1,0 +1,279 @@
+"""Helpers of bench/vs-openfoam.sh (standard library only).
+
+  python3 bench/foam.py case DIR N STEPS SEED INTERP   the OpenFOAM case DIR (templates of
+                                                       bench/openfoam/ filled in, 0/U, the
+                                                       N parcel positions) and DIR/scene.toml,
+                                                       scg's scene of the same run; STEPS
+                                                       steps, written at the last one;
+                                                       INTERP is scg's name of OpenFOAM's
+                                                       cellPoint
+  python3 bench/foam.py steps DIR N                    sets endTime to N steps, no write
+  python3 bench/foam.py run LOG CMD...                 runs CMD (stdout and stderr to LOG),
+                                                       noting the wall time of each
+                                                       `ExecutionTime` line in LOG.wall;
+                                                       prints CMD's CPU seconds (user + sys)
+  python3 bench/foam.py rate LOG N SKIP                "CPU_RATE WALL_RATE STEPS": N particles
+                                                       × the steps after the first SKIP /
+                                                       their time, from OpenFOAM's
+                                                       ExecutionTime (CPU) and LOG.wall
+  python3 bench/foam.py compare DIR TIME CSV           the physics check: OpenFOAM's parcels
+                                                       at TIME against scg's frame CSV
+  python3 bench/foam.py params                         the case's parameters, one per line
+
+The case: a box of NX × NX × NZ hexahedra (x, y in [−W, W], z in [0, H]) holding a frozen
+steady flow sampled at the cell centres: the paper's vortex about the z axis (ω = 31.4
+rad/s, inflow ratio k = 0.1: u_θ = ω·r, u_r = −k·ω·r) plus an axial flow
+u_z = W0·(1 − r²/R0²). The side and bottom faces are the wall patch `walls` (particles
+rebound elastically), the top face the patch `outlet` (particles leave). N particles
+(d = 20 µm, ρ = 2500 kg/m³, at rest) uniformly at random in the cylinder r < 0.9·W,
+0.05·H < z < 0.95·H, sorted by their cell (the same memory order for both codes).
+"""
+import math
+import os
+import random
+import re
+import resource
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+W, H = 1.0e-3, 5.0e-3          # half-width in x, y and height, m
+NX, NZ = 40, 100               # 40 × 40 × 100 = 160 000 hexahedra (50 µm cubes)
+OMEGA, K = 31.4, 0.1           # the paper's vortex
+W0, R0 = 0.01, 1.0e-3          # axial flow, m/s, and its radius
+D, RHO_P = 20.0e-6, 2500.0     # particles
+RHO_F, NU = 1.2, 1.5e-5        # fluid: mu = 1.8e-5 Pa s
+DT = 1.0e-5
+
+
+def flow(x, y, z):
+    r2 = x * x + y * y
+    return (-OMEGA * y - K * OMEGA * x, OMEGA * x - K * OMEGA * y, W0 * (1.0 - r2 / (R0 * R0)))
+
+
+def cell_of(x, y, z):
+    h = 2.0 * W / NX
+    i = min(NX - 1, int((x + W) / h))
+    j = min(NX - 1, int((y + W) / h))
+    k = min(NZ - 1, int(z / (H / NZ)))
+    return (k * NX + j) * NX + i  # blockMesh's order: x fastest, then y, then z
+
+
+def header(cls, location, obj):
+    return (
+        "FoamFile\n{\n    version     2.0;\n    format      ascii;\n"
+        f"    class       {cls};\n    location    \"{location}\";\n    object      {obj};\n}}\n\n"
+    )
+
+
+def fill(text, subs):
+    for k, v in subs.items():
+        text = text.replace(f"@{k}@", str(v))
+    left = re.findall(r"@[A-Z_]+@", text)
+    if left:
+        sys.exit(f"unfilled template keys {left}")
+    return text
+
+
+def set_steps(case, steps, write_every):
+    path = os.path.join(case, "system", "controlDict")
+    with open(os.path.join(HERE, "openfoam", "system", "controlDict")) as f:
+        text = f.read()
+    with open(path, "w") as f:
+        f.write(fill(text, {"END_TIME": repr(steps * DT), "DT": repr(DT), "WRITE_EVERY": write_every}))
+
+
+def make_case(case, n, steps, seed, interp):
+    subs = {
+        "W": repr(W * 1e3), "H": repr(H * 1e3), "NX": NX, "NZ": NZ,
+        "RHO_P": RHO_P, "RHO_F": RHO_F, "NU": NU, "MU": repr(RHO_F * NU), "D": repr(D),
+    }
+    for sub in ("system", "constant"):
+        os.makedirs(os.path.join(case, sub), exist_ok=True)
+        for name in os.listdir(os.path.join(HERE, "openfoam", sub)):
+            if name == "controlDict":
+                continue
+            with open(os.path.join(HERE, "openfoam", sub, name)) as f:
+                text = f.read()
+            with open(os.path.join(case, sub, name), "w") as f:
+                f.write(fill(text, subs))
+    set_steps(case, steps, steps)
+    # 0/U: the flow at the cell centres, in blockMesh's cell order.
+    h, hz = 2.0 * W / NX, H / NZ
+    os.makedirs(os.path.join(case, "0"), exist_ok=True)
+    with open(os.path.join(case, "0", "U"), "w") as f:
+        f.write(header("volVectorField", "0", "U"))
+        f.write("dimensions      [0 1 -1 0 0 0 0];\n\n")
+        f.write(f"internalField   nonuniform List<vector>\n{NX * NX * NZ}\n(\n")
+        for k in range(NZ):
+            z = (k + 0.5) * hz
+            for j in range(NX):
+                y = -W + (j + 0.5) * h
+                for i in range(NX):
+                    x = -W + (i + 0.5) * h
+                    f.write("(%.17g %.17g %.17g)\n" % flow(x, y, z))
+        f.write(");\n\nboundaryField\n{\n    walls { type zeroGradient; }\n"
+                "    outlet { type zeroGradient; }\n}\n")
+    # Positions: uniform in the cylinder, sorted by cell.
+    rng = random.Random(seed)
+    ps = []
+    while len(ps) < n:
+        r = 0.9 * W * math.sqrt(rng.random())
+        t = 2.0 * math.pi * rng.random()
+        z = H * (0.05 + 0.9 * rng.random())
+        ps.append((r * math.cos(t), r * math.sin(t), z))
+    ps.sort(key=lambda p: cell_of(*p))
+    with open(os.path.join(case, "constant", "kinematicCloudPositions"), "w") as f:
+        f.write(header("vectorField", "constant", "kinematicCloudPositions"))
+        f.write(f"{n}\n(\n")
+        f.writelines("(%.17g %.17g %.17g)\n" % p for p in ps)
+        f.write(")\n")
+    # scg runs one step more: OpenFOAM v1912 moves a parcel twice in the step that injects
+    # it (once when injecting, once with the cloud), so its step n is scg's step n + 1.
+    pos = ",\n".join("[%.17g, %.17g, %.17g]" % p for p in ps)
+    with open(os.path.join(case, "scene.toml"), "w") as f:
+        f.write(
+            f'name = "vs-openfoam"\nduration = {(steps + 1) * DT!r}\ndt = {DT!r}\n'
+            f"record_every = {steps + 1}\n"
+            f"[fluid]\ndensity = {RHO_F}\nviscosity = {RHO_F * NU!r}\n"
+            '[drag]\nlaw = "schiller_naumann"\n'
+            f'[flow]\nkind = "openfoam"\ncase = "."\ntime = 0\nfield = "U"\n'
+            f'interpolation = "{interp}"\n'
+            '[flow.patches]\nwalls = ["walls"]\noutlets = ["outlet"]\n'
+            f'[[groups]]\nname = "p"\ndiameter = {D!r}\ndensity = {RHO_P}\n'
+            f"positions = [\n{pos}\n]\n"
+        )
+
+
+def foam_list(path, parse):
+    """The entries of an ASCII OpenFOAM list file (`N ( ... )`), one per line."""
+    with open(path) as f:
+        lines = f.read().splitlines()
+    i = 0
+    while i < len(lines) and not re.fullmatch(r"\s*\d+\s*", lines[i]):
+        if re.fullmatch(r"\s*\d+\s*\(.*\)\s*", lines[i]):  # N(...) on one line
+            return []
+        i += 1
+    n = int(lines[i])
+    return [parse(ln) for ln in lines[i + 2:i + 2 + n]]
+
+
+def vec(ln):
+    return tuple(map(float, ln.split(")")[0].strip("( ").split()))
+
+
+def read_foam(case, time):
+    d = os.path.join(case, time, "lagrangian", "kinematicCloud")
+    if not os.path.isdir(d):
+        return {}
+    pos = foam_list(os.path.join(d, "positions"), vec)
+    u = foam_list(os.path.join(d, "U"), vec)
+    ids = foam_list(os.path.join(d, "origId"), lambda ln: int(ln))
+    return {i: (p, v) for i, p, v in zip(ids, pos, u)}
+
+
+def read_scg(path):
+    out = {}
+    with open(path) as f:
+        head = f.readline().strip().split(",")
+        ix = head.index("x")
+        for ln in f:
+            c = ln.split(",")
+            out[int(c[0])] = (tuple(map(float, c[ix:ix + 3])), tuple(map(float, c[ix + 3:ix + 6])))
+    return out
+
+
+def compare(case, time, csv, n):
+    """Prints the agreement; exits 1 when it is worse than the limits below."""
+    fo, sc = read_foam(case, time), read_scg(csv)
+    both = sorted(set(fo) & set(sc))
+    print(f"  particles still in the box: OpenFOAM {len(fo)}, scg {len(sc)} (of {n}); "
+          f"in both {len(both)}")
+    dx, dv, vs = [], [], []
+    for i in both:
+        (p, v), (q, w) = fo[i], sc[i]
+        dx.append(math.dist(p, q))
+        dv.append(math.dist(v, w))
+        vs.append(math.hypot(*w))
+    mean = lambda a: sum(a) / max(1, len(a))
+    zf = mean([fo[i][0][2] for i in both])
+    zs = mean([sc[i][0][2] for i in both])
+    rf = mean([math.hypot(fo[i][0][0], fo[i][0][1]) for i in both])
+    rs = mean([math.hypot(sc[i][0][0], sc[i][0][1]) for i in both])
+    sp_f = mean([math.hypot(*fo[i][1]) for i in both])
+    sp_s = mean(vs)
+    h = 2.0 * W / NX
+    print(f"  position difference / box width 2W: mean {mean(dx) / (2 * W):.3e}, "
+          f"max {max(dx) / (2 * W):.3e}  (/ cell size: mean {mean(dx) / h:.3e}, max {max(dx) / h:.3e})")
+    print(f"  velocity difference / mean speed:   mean {mean(dv) / sp_s:.3e}, max {max(dv) / sp_s:.3e}"
+          f"  (mean speed: OpenFOAM {sp_f:.6e}, scg {sp_s:.6e} m/s)")
+    print(f"  mean radius r: OpenFOAM {rf:.6e}, scg {rs:.6e} m ({(rf - rs) / rs:+.2e})")
+    print(f"  mean height z: OpenFOAM {zf:.6e}, scg {zs:.6e} m ({(zf - zs) / zs:+.2e})")
+    ok = (len(both) >= 0.99 * min(len(fo), len(sc)) and abs(len(fo) - len(sc)) <= 0.01 * n
+          and mean(dx) / (2 * W) < 1e-3 and max(dx) / (2 * W) < 1e-2
+          and mean(dv) / sp_s < 1e-2 and abs(sp_f - sp_s) / sp_s < 1e-2)
+    print(f"  limits: counts within 1 %, position mean < 1e-3 and max < 1e-2 of 2W, velocity "
+          f"mean < 1 % of the mean speed, mean speeds within 1 %: {'ok' if ok else 'FAIL'}")
+    sys.exit(0 if ok else 1)
+
+
+def run(log, cmd):
+    t0 = time.monotonic()
+    with open(log, "w") as f, open(log + ".wall", "w") as w:
+        p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        for ln in p.stdout:  # OpenFOAM flushes every line (std::endl)
+            if ln.startswith("ExecutionTime"):
+                w.write(f"{time.monotonic() - t0:.6f}\n")
+            f.write(ln)
+        rc = p.wait()
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+    print(f"{ru.ru_utime + ru.ru_stime:.4f}")
+    sys.exit(rc)
+
+
+def rate(log, n, skip):
+    """Particle-steps/s from the `ExecutionTime = ... s` lines of an OpenFOAM log (the
+    process's CPU time, printed after every step) and from their wall times (LOG.wall):
+    the steps after the first `skip` (start-up, injection, first location excluded)."""
+    cpu = []
+    with open(log) as f:
+        for ln in f:
+            m = re.match(r"ExecutionTime = ([0-9.eE+-]+) s", ln)
+            if m:
+                cpu.append(float(m.group(1)))
+    with open(log + ".wall") as f:
+        wall = [float(x) for x in f.read().split()]
+    if len(cpu) <= skip + 1 or len(wall) != len(cpu):
+        sys.exit(f"{log}: {len(cpu)} ExecutionTime lines ({len(wall)} timed), need more "
+                 f"than {skip + 1}")
+    steps = len(cpu) - 1 - skip
+    print(f"{n * steps / (cpu[-1] - cpu[skip]):.4e} {n * steps / (wall[-1] - wall[skip]):.4e} {steps}")
+
+
+def main(argv):
+    cmd = argv[1]
+    if cmd == "case":
+        make_case(argv[2], int(argv[3]), int(argv[4]), int(argv[5]), argv[6])
+    elif cmd == "steps":
+        set_steps(argv[2], int(argv[3]), 10 * int(argv[3]) + 10)
+    elif cmd == "run":
+        run(argv[2], argv[3:])
+    elif cmd == "rate":
+        rate(argv[2], int(argv[3]), int(argv[4]))
+    elif cmd == "compare":
+        compare(argv[2], argv[3], argv[4], int(argv[5]))
+    elif cmd == "params":
+        tau = RHO_P * D * D / (18.0 * RHO_F * NU)
+        print(f"box {2 * W:g} x {2 * W:g} x {H:g} m, {NX} x {NX} x {NZ} hexahedra "
+              f"({NX * NX * NZ} cells, {2 * W / NX:g} m)")
+        print(f"flow: vortex about z, omega = {OMEGA} rad/s, inflow ratio {K}, "
+              f"axial u_z = {W0}*(1 - r^2/{R0:g}^2) m/s; fluid rho = {RHO_F}, mu = {RHO_F * NU:g}")
+        print(f"particles: d = {D:g} m, rho = {RHO_P}, at rest; tau = {tau:.3e} s; dt = {DT:g} s")
+    else:
+        sys.exit(f"unknown command {cmd}")
+
+
+if __name__ == "__main__":
+    main(sys.argv)
