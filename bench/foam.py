@@ -1,12 +1,14 @@
 """Helpers of bench/vs-openfoam.sh (standard library only).
 
   python3 bench/foam.py case DIR N STEPS SEED INTERP   the OpenFOAM case DIR (templates of
-                                                       bench/openfoam/ filled in, 0/U, the
-                                                       N parcel positions) and DIR/scene.toml,
+                                                       bench/openfoam/ filled in, the N
+                                                       parcel positions) and DIR/scene.toml,
                                                        scg's scene of the same run; STEPS
                                                        steps, written at the last one;
                                                        INTERP is scg's name of OpenFOAM's
                                                        cellPoint
+  python3 bench/foam.py field DIR                      DIR/0/U from DIR/0/C (the cell centres
+                                                       OpenFOAM's writeCellCentres wrote)
   python3 bench/foam.py steps DIR N                    sets endTime to N steps, no write
   python3 bench/foam.py run LOG CMD...                 runs CMD (stdout and stderr to LOG),
                                                        noting the wall time of each
@@ -22,11 +24,13 @@
                                                        with Stokes drag (the scale)
   python3 bench/foam.py params                         the case's parameters, one per line
 
-The case: a box of NX × NX × NZ hexahedra (x, y in [−W, W], z in [0, H]) holding a frozen
-steady flow sampled at the cell centres: the paper's vortex about the z axis (ω = 31.4
+The case: a box (x, y in [−W, W], z in [0, H]) of NX × NX × NZ hexahedra (blockMesh) or
+of tetrahedra (crates/scg-mesh/examples/write_box_mesh.rs) holding a frozen steady flow
+sampled at the cell centres: the paper's vortex about the z axis (ω = 31.4
 rad/s, inflow ratio k = 0.1: u_θ = ω·r, u_r = −k·ω·r) plus an axial flow
-u_z = W0·(1 − r²/R0²). The side and bottom faces are the wall patch `walls` (particles
-rebound elastically), the top face the patch `outlet` (particles leave). N particles
+u_z = W0·(1 − r²/R0²). The side faces are the wall patch `walls` (particles rebound
+elastically), the top face the patch `outlet` and the bottom face the patch `inlet`
+(particles crossing either leave). N particles
 (d = 20 µm, ρ = 2500 kg/m³, starting at U0 = (0.1, 0, 0.2) m/s: stopping
 distances 0.3 and 0.6 mm, so that some rebound from the wall x = W and some leave) uniformly at random in the cylinder r < 0.9·W,
 0.05·H < z < 0.95·H, sorted by their cell (the same memory order for both codes).
@@ -104,22 +108,6 @@ def make_case(case, n, steps, seed, interp):
             with open(os.path.join(case, sub, name), "w") as f:
                 f.write(fill(text, subs))
     set_steps(case, steps, steps)
-    # 0/U: the flow at the cell centres, in blockMesh's cell order.
-    h, hz = 2.0 * W / NX, H / NZ
-    os.makedirs(os.path.join(case, "0"), exist_ok=True)
-    with open(os.path.join(case, "0", "U"), "w") as f:
-        f.write(header("volVectorField", "0", "U"))
-        f.write("dimensions      [0 1 -1 0 0 0 0];\n\n")
-        f.write(f"internalField   nonuniform List<vector>\n{NX * NX * NZ}\n(\n")
-        for k in range(NZ):
-            z = (k + 0.5) * hz
-            for j in range(NX):
-                y = -W + (j + 0.5) * h
-                for i in range(NX):
-                    x = -W + (i + 0.5) * h
-                    f.write("(%.17g %.17g %.17g)\n" % flow(x, y, z))
-        f.write(");\n\nboundaryField\n{\n    walls { type zeroGradient; }\n"
-                "    outlet { type zeroGradient; }\n}\n")
     # Positions: uniform in the cylinder, sorted by cell.
     rng = random.Random(seed)
     ps = []
@@ -150,6 +138,23 @@ def make_case(case, n, steps, seed, interp):
             f"velocity = [{U0[0]!r}, {U0[1]!r}, {U0[2]!r}]\n"
             f"positions = [\n{pos}\n]\n"
         )
+
+
+def write_field(case):
+    """0/U: the flow at the cell centres that OpenFOAM wrote to 0/C (`postProcess -func
+    writeCellCentres -time 0`), in the mesh's cell order; zeroGradient on every patch."""
+    cc = foam_list(os.path.join(case, "0", "C"), vec)
+    with open(os.path.join(case, "0", "U"), "w") as f:
+        f.write(header("volVectorField", "0", "U"))
+        f.write("dimensions      [0 1 -1 0 0 0 0];\n\n")
+        f.write(f"internalField   nonuniform List<vector>\n{len(cc)}\n(\n")
+        f.writelines("(%.17g %.17g %.17g)\n" % flow(*c) for c in cc)
+        f.write(');\n\nboundaryField\n{\n    ".*" { type zeroGradient; }\n}\n')
+    for name in ("C", "Cx", "Cy", "Cz"):
+        p = os.path.join(case, "0", name)
+        if os.path.exists(p):
+            os.remove(p)
+    print(len(cc))
 
 
 def foam_list(path, parse):
@@ -209,26 +214,26 @@ def compare(case, time, csv, n, csv_stokes):
     sp_f = diffs(sc, fo)[5]
     h = 2.0 * W / NX
     print(f"  particles in the box: OpenFOAM {len(fo)}, scg {len(sc)} (of {n}); in both {nb}")
-    print(f"  position difference: mean {dxm / h:.3e}, max {dxx / h:.3e} cell sizes "
-          f"({dxm / (2 * W):.3e}, {dxx / (2 * W):.3e} of the box width)")
+    print(f"  position difference: mean {dxm / h:.3e}, max {dxx / h:.3e} h "
+          f"(h = {h * 1e6:g} µm, the hex cell; {dxm / (2 * W):.3e}, {dxx / (2 * W):.3e} of the box width)")
     print(f"  velocity difference: mean {dvm / sp_s:.3e}, max {dvx / sp_s:.3e} of the mean speed "
           f"(OpenFOAM {sp_f:.6e}, scg {sp_s:.6e} m/s)")
     both = sorted(set(fo) & set(sc))
     for k, name in ((0, "x"), (2, "z")):
         mf = sum(fo[i][0][k] for i in both) / nb
         ms = sum(sc[i][0][k] for i in both) / nb
-        print(f"  mean {name}: OpenFOAM {mf:.6e}, scg {ms:.6e} m (difference {(mf - ms) / h:+.2e} cells)")
+        print(f"  mean {name}: OpenFOAM {mf:.6e}, scg {ms:.6e} m (difference {(mf - ms) / h:+.2e} h)")
     _, sxm, sxx, svm, _, _ = diffs(st, sc)
     print(f"  scale: scg with Stokes drag instead of Schiller-Naumann moves by {sxm / h:.3e} (mean), "
-          f"{sxx / h:.3e} (max) cells, its velocity by {svm / sp_s:.3e} (mean); "
+          f"{sxx / h:.3e} (max) h, its velocity by {svm / sp_s:.3e} (mean); "
           f"OpenFOAM - scg is {dxm / sxm:.3f} of it")
     print("    (sphereDrag's Cd·Re/24 = 1 + Re^(2/3)/6 lies above Schiller-Naumann's "
           "1 + 0.15·Re^0.687 by about a tenth of the latter's correction)")
     ok = {
         f"counts differ by at most 0.1 % of {n}": abs(len(fo) - len(sc)) <= max(1, n // 1000)
         and nb >= min(len(fo), len(sc)) - max(1, n // 1000),
-        "mean position difference < 0.1 cell": dxm < 0.1 * h,
-        "max position difference < 1 cell": dxx < h,
+        "mean position difference < 0.1 h": dxm < 0.1 * h,
+        "max position difference < 1 h": dxx < h,
         "mean velocity difference < 1 % of the mean speed": dvm < 0.01 * sp_s,
         "mean speeds within 1 %": abs(sp_f - sp_s) < 0.01 * sp_s,
         "OpenFOAM - scg below 1/4 of Stokes - Schiller-Naumann (mean position)": dxm < 0.25 * sxm,
@@ -275,6 +280,8 @@ def main(argv):
     cmd = argv[1]
     if cmd == "case":
         make_case(argv[2], int(argv[3]), int(argv[4]), int(argv[5]), argv[6])
+    elif cmd == "field":
+        write_field(argv[2])
     elif cmd == "steps":
         set_steps(argv[2], int(argv[3]), 10 * int(argv[3]) + 10)
     elif cmd == "run":
@@ -285,8 +292,8 @@ def main(argv):
         compare(argv[2], argv[3], argv[4], int(argv[5]), argv[6])
     elif cmd == "params":
         tau = RHO_P * D * D / (18.0 * RHO_F * NU)
-        print(f"box {2 * W:g} x {2 * W:g} x {H:g} m, {NX} x {NX} x {NZ} hexahedra "
-              f"({NX * NX * NZ} cells, {2 * W / NX:g} m)")
+        print(f"box {2 * W:g} x {2 * W:g} x {H:g} m; hex: {NX} x {NX} x {NZ} hexahedra "
+              f"({NX * NX * NZ} cells of {2 * W / NX:g} m); tet: 20 x 20 x 67 hexahedra x 6")
         print(f"flow: vortex about z, omega = {OMEGA} rad/s, inflow ratio {K}, "
               f"axial u_z = {W0}*(1 - r^2/{R0:g}^2) m/s; fluid rho = {RHO_F}, mu = {RHO_F * NU:g}")
         print(f"particles: d = {D:g} m, rho = {RHO_P}, initial velocity {U0} m/s; tau = {tau:.3e} s; dt = {DT:g} s")

@@ -3,9 +3,14 @@
 # icoUncoupledKinematicParcelFoam: kinematic parcels through a frozen U) on the same mesh,
 # field, particles, drag, interpolation and dt. OpenFOAM runs on one process.
 #
-#   bash bench/vs-openfoam.sh [--particles N] [--steps N] [--reps N] [--check-steps N]
-#                             [--check-particles N] [--scg PATH]
+#   bash bench/vs-openfoam.sh [--mesh hex|tet] [--particles N] [--steps N] [--reps N]
+#                             [--check-steps N] [--check-particles N] [--scg PATH]
 #
+#   --mesh hex|tet       40 × 40 × 100 = 160 000 hexahedra by blockMesh (default), or
+#                        20 × 20 × 67 hexahedra split into 6 tetrahedra each = 160 800
+#                        tetrahedra, interior points perturbed by up to 0.2 spacings (scg's
+#                        generator, crates/scg-mesh/examples/write_box_mesh.rs, built if
+#                        missing)
 #   --particles N        particles of the timed runs (default 100000)
 #   --steps N            steps per timed run (default 60; OpenFOAM's first 2 are excluded)
 #   --reps N             runs per code and thread count; the best counts (default 3)
@@ -14,13 +19,13 @@
 #   --scg PATH           scg binary (default target/release/scg, built if missing)
 #   NICE="nice -n 5" prefixes every run of every code alike (for a shared machine)
 #
-# The case (bench/foam.py, templates in bench/openfoam/): a 2 × 2 × 5 mm box of
-# 40 × 40 × 100 = 160 000 hexahedra (blockMesh) holding the paper's vortex about z
-# (ω = 31.4 rad/s, k = 0.1) plus an axial flow u_z = 0.01·(1 − r²/R²) m/s sampled at the
-# cell centres, frozen; side and bottom faces a wall patch (elastic rebound), the top an
-# outlet (particles leave); particles d = 20 µm, ρ = 2500 kg/m³, at rest, uniformly at
-# random in a cylinder, sorted by cell, starting at (0.1, 0, 0.2) m/s (some rebound
-# from the wall x = W, some leave through the outlet); no gravity; dt = 1e-5 s.
+# The case (bench/foam.py, templates in bench/openfoam/): a 2 × 2 × 5 mm box holding the
+# paper's vortex about z (ω = 31.4 rad/s, k = 0.1) plus an axial flow
+# u_z = 0.01·(1 − r²/R²) m/s sampled at the cell centres (OpenFOAM's writeCellCentres),
+# frozen; the sides a wall patch (elastic rebound), top and bottom patches `outlet` and
+# `inlet` (particles leave); particles d = 20 µm, ρ = 2500 kg/m³, uniformly at random in a
+# cylinder, sorted by cell, starting at (0.1, 0, 0.2) m/s (some rebound from the wall
+# x = W, some leave through the outlet); no gravity; dt = 1e-5 s.
 #
 # 1. Installs openfoam with apt when icoUncoupledKinematicParcelFoam is missing.
 # 2. Physics check (fails the script when the codes disagree): --check-particles particles,
@@ -36,12 +41,16 @@
 #    run's steps, the first step's location of every particle included; scene loading
 #    excluded) and, on one thread, its CPU time (the run's minus a one-step run's).
 # The last lines are `openfoam particle-steps/s: X` (ExecutionTime), `scg 1 thread: Y`,
-# `scg 2 threads: Z` (their own lines) and `ratio (scg 2 threads / openfoam 1 process): R`.
+# `scg 2 threads: Z` (their own lines), the ratios with one timer for both (wall: scg 2
+# threads / OpenFOAM; CPU: scg 1 thread / OpenFOAM), and
+# `ratio (scg 2 threads / openfoam 1 process): R` = Z / X (CPU time against wall time:
+# the same only on a quiet machine, where OpenFOAM's CPU time is its wall time).
 set -euo pipefail
 self=$(realpath "$0")
 cd "$(dirname "$self")/.."
 root=$PWD
 
+MESH=hex
 N=100000
 STEPS=60
 REPS=3
@@ -51,18 +60,20 @@ SCG=""
 NICE=${NICE:-}
 while [ $# -gt 0 ]; do
   case "$1" in
+    --mesh) MESH=$2; shift ;;
     --particles) N=$2; shift ;;
     --steps) STEPS=$2; shift ;;
     --reps) REPS=$2; shift ;;
     --check-steps) CHECK_STEPS=$2; shift ;;
     --check-particles) CHECK_N=$2; shift ;;
     --scg) SCG=$2; shift ;;
-    -h|--help) sed -n '2,36p' "$self"; exit 0 ;;
+    -h|--help) sed -n '2,42p' "$self"; exit 0 ;;
     *) echo "unknown argument: $1" >&2; exit 2 ;;
   esac
   shift
 done
 [ "$STEPS" -ge 5 ] || { echo "--steps must be at least 5" >&2; exit 2; }
+case "$MESH" in hex) CELLS=160000 ;; tet) CELLS=160800 ;; *) echo "--mesh hex|tet" >&2; exit 2 ;; esac
 SKIP=2
 
 fail() { echo "FAIL: $*" >&2; exit 1; }
@@ -85,6 +96,10 @@ if [ -z "$SCG" ]; then
   [ -x "$SCG" ] || cargo build --release --quiet
 fi
 SCG=$(realpath "$SCG")
+BOXMESH=$root/target/release/examples/write_box_mesh
+if [ "$MESH" = tet ] && [ ! -x "$BOXMESH" ]; then
+  cargo build --release --quiet -p scg-mesh --example write_box_mesh
+fi
 echo "scg:      $SCG"
 echo "OpenFOAM: $FOAM ($(dpkg-query -W -f='${Version}' openfoam 2>/dev/null || echo '?'), WM_PROJECT_VERSION=${WM_PROJECT_VERSION:-?})"
 echo "cores: $(nproc)  load: $(cut -d' ' -f1-3 /proc/loadavg)  NICE='${NICE}'"
@@ -103,7 +118,7 @@ fi
 rm -rf "$work/probe"
 
 echo
-echo "case (both codes):"
+echo "case (both codes), mesh: $MESH, $CELLS cells"
 py params | sed 's/^/  /'
 echo "  OpenFOAM: $(basename "$FOAM"), one process; U read once from 0/U, never solved (no"
 echo "            flow equation; laminar turbulence model object only); manualInjection of"
@@ -111,17 +126,28 @@ echo "            one particle per parcel at t = 0 from constant/kinematicCloudP
 echo "            sphereDrag (Cd = 24/Re·(1 + Re^(2/3)/6)); interpolation U cellPoint, rho and"
 echo "            mu cell; integrationSchemes U analytical; maxCo 1 (track to every face);"
 echo "            standardWallInteraction rebound e = 1, mu = 0 on the wall patch, escape"
-echo "            through the outlet; collisionModel, dispersionModel none; coupled false"
+echo "            through the patches outlet and inlet; collisionModel, dispersionModel none;"
+echo "            coupled false"
 echo "  scg:      [flow] kind = \"openfoam\" on the same case folder, interpolation = \"$INTERP\";"
 echo "            [drag] law = \"schiller_naumann\" (Cd = 24/Re·(1 + 0.15·Re^0.687)); the"
 echo "            exponential integrator; flow.patches walls = [\"walls\"] (specular, e = 1),"
-echo "            outlets = [\"outlet\"]; the same positions and initial velocity in [[groups]]"
+echo "            outlets = [\"outlet\"] (inlet: lost); the same positions and initial velocity in [[groups]]"
 
-# foam_case DIR N STEPS: an OpenFOAM case with its mesh, and scg's scene in it.
+# foam_case DIR N STEPS: an OpenFOAM case with its mesh and field, and scg's scene in it.
 foam_case() {
+  if [ "$MESH" = tet ]; then
+    "$BOXMESH" "$1" tet 20 20 67 0.001 0.005 0.2 > /dev/null || fail "write_box_mesh"
+  fi
   py case "$1" "$2" "$3" 7 "$INTERP"
-  (cd "$1" && blockMesh > log.blockMesh 2>&1) || { tail "$1/log.blockMesh" >&2; fail "blockMesh"; }
-  grep -q "nCells: 160000" "$1/log.blockMesh" || fail "blockMesh: not 160000 cells"
+  if [ "$MESH" = hex ]; then
+    (cd "$1" && blockMesh > log.blockMesh 2>&1) || { tail "$1/log.blockMesh" >&2; fail "blockMesh"; }
+  fi
+  mkdir -p "$1/0"
+  (cd "$1" && postProcess -func writeCellCentres -time 0 > log.cc 2>&1) ||
+    { tail "$1/log.cc" >&2; fail "postProcess -func writeCellCentres"; }
+  local n
+  n=$(py field "$1")
+  [ "$n" = "$CELLS" ] || fail "the $MESH mesh has $n cells, not $CELLS"
 }
 
 # ---- 2. physics check ----------------------------------------------------------------------
@@ -186,7 +212,7 @@ F=$(echo "${runs[foam]}" | best); FW=$(echo "${runs[foamwall]}" | best)
 S1=$(echo "${runs[scg1]}" | best); S2=$(echo "${runs[scg2]}" | best)
 SC=$(echo "${runs[scgcpu]}" | best)
 echo
-echo "== best of $REPS (particle-steps/s; $N particles, 160 000 hexahedra; load now $(cut -d' ' -f1-3 /proc/loadavg))"
+echo "== best of $REPS (particle-steps/s; $N particles, $CELLS cells ($MESH); load now $(cut -d' ' -f1-3 /proc/loadavg))"
 printf '  %-26s %14s %14s\n' code "own timer" "other timer"
 printf '  %-26s %14s %14s\n' "OpenFOAM, 1 process" "$F" "$FW"
 printf '  %-26s %14s %14s\n' "scg, 1 thread" "$S1" "$SC"
@@ -196,4 +222,5 @@ echo "   OpenFOAM's wall time of the same steps, scg's CPU time on one thread)"
 echo "openfoam particle-steps/s: $F"
 echo "scg 1 thread: $S1"
 echo "scg 2 threads: $S2"
+python3 -c "print(f'same timer: wall time {$S2 / $FW:.3f} (scg 2 threads / OpenFOAM 1 process), CPU time {$SC / $F:.3f} (scg 1 thread / OpenFOAM)')"
 python3 -c "print(f'ratio (scg 2 threads / openfoam 1 process): {$S2 / $F:.3f}')"
