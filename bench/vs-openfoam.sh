@@ -40,11 +40,11 @@
 #    the log is written). scg: its `done: ... particle-steps/s` line (wall time of the
 #    run's steps, the first step's location of every particle included; scene loading
 #    excluded) and, on one thread, its CPU time (the run's minus a one-step run's).
-# The last lines are `openfoam particle-steps/s: X` (ExecutionTime), `scg 1 thread: Y`,
-# `scg 2 threads: Z` (their own lines), the ratios with one timer for both (wall: scg 2
-# threads / OpenFOAM; CPU: scg 1 thread / OpenFOAM), and
+# After the table, the ratios with one timer for both (wall: scg 2 threads / OpenFOAM;
+# CPU: scg 1 thread / OpenFOAM); the last lines are `openfoam particle-steps/s: X`
+# (ExecutionTime), `scg 1 thread: Y`, `scg 2 threads: Z` (their own lines) and
 # `ratio (scg 2 threads / openfoam 1 process): R` = Z / X (CPU time against wall time:
-# the same only on a quiet machine, where OpenFOAM's CPU time is its wall time).
+# meaningful only on a quiet machine, where OpenFOAM's CPU time is its wall time).
 set -euo pipefail
 self=$(realpath "$0")
 cd "$(dirname "$self")/.."
@@ -219,8 +219,8 @@ printf '  %-26s %14s %14s\n' "scg, 1 thread" "$S1" "$SC"
 printf '  %-26s %14s %14s\n' "scg, 2 threads" "$S2" "-"
 echo "  (own timer: OpenFOAM's ExecutionTime = CPU time, scg's wall time; other timer:"
 echo "   OpenFOAM's wall time of the same steps, scg's CPU time on one thread)"
+python3 -c "print(f'same timer for both: wall time {$S2 / $FW:.3f} (scg 2 threads / OpenFOAM 1 process), CPU time {$SC / $F:.3f} (scg 1 thread / OpenFOAM)')"
 echo "openfoam particle-steps/s: $F"
 echo "scg 1 thread: $S1"
 echo "scg 2 threads: $S2"
-python3 -c "print(f'same timer: wall time {$S2 / $FW:.3f} (scg 2 threads / OpenFOAM 1 process), CPU time {$SC / $F:.3f} (scg 1 thread / OpenFOAM)')"
 python3 -c "print(f'ratio (scg 2 threads / openfoam 1 process): {$S2 / $F:.3f}')"
