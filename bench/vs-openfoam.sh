@@ -67,7 +67,7 @@ while [ $# -gt 0 ]; do
     --check-steps) CHECK_STEPS=$2; shift ;;
     --check-particles) CHECK_N=$2; shift ;;
     --scg) SCG=$2; shift ;;
-    -h|--help) sed -n '2,42p' "$self"; exit 0 ;;
+    -h|--help) sed -n '2,47p' "$self"; exit 0 ;;
     *) echo "unknown argument: $1" >&2; exit 2 ;;
   esac
   shift
