@@ -39,7 +39,8 @@
 #    the first location excluded), and the wall time of the same lines (timestamped as
 #    the log is written). scg: its `done: ... particle-steps/s` line (wall time of the
 #    run's steps, the first step's location of every particle included; scene loading
-#    excluded) and, on one thread, its CPU time (the run's minus a one-step run's).
+#    excluded) and, on one thread, its CPU time (the run's minus a one-step run's: noisy
+#    unless the timed steps take several CPU seconds, as with the defaults).
 # After the table, the ratios with one timer for both (wall: scg 2 threads / OpenFOAM;
 # CPU: scg 1 thread / OpenFOAM); the last lines are `openfoam particle-steps/s: X`
 # (ExecutionTime), `scg 1 thread: Y`, `scg 2 threads: Z` (their own lines) and
@@ -67,7 +68,7 @@ while [ $# -gt 0 ]; do
     --check-steps) CHECK_STEPS=$2; shift ;;
     --check-particles) CHECK_N=$2; shift ;;
     --scg) SCG=$2; shift ;;
-    -h|--help) sed -n '2,47p' "$self"; exit 0 ;;
+    -h|--help) sed -n '2,48p' "$self"; exit 0 ;;
     *) echo "unknown argument: $1" >&2; exit 2 ;;
   esac
   shift
