@@ -39,7 +39,7 @@ fn cyclone_separates_fines_from_coarse() {
         );
         assert_eq!(lost[g], 0, "group {g}: blown back through the inlet");
     }
-    // 2 µm (below the cut size, 3–8 µm) escape; 10 and 20 µm are all held.
+    // 2 µm (below the cut size, 4–8 µm) escape; 10 and 20 µm are all held.
     assert!(tally.drained[0] > 0, "no 2 µm particle escaped");
     assert!(tally.drained[0] >= tally.drained[1]);
     assert_eq!((tally.drained[2], tally.drained[3]), (0, 0));
