@@ -164,10 +164,10 @@ mkdir -p "$out/constant/polyMesh" "$out/$final" "$out/system"
 # OpenFOAM v1912 ignores writeCompression for binary files ("Disabled binary format
 # compression"): gzip them here (scg reads gzipped binary files)
 for f in points faces owner neighbour boundary; do
-    gzip -9 -c "constant/polyMesh/$f" > "$out/constant/polyMesh/$f.gz"
+    gzip -9 -n -c "constant/polyMesh/$f" > "$out/constant/polyMesh/$f.gz"
 done
-gzip -9 -c "$final/U" > "$out/$final/U.gz"
-gzip -9 -c "$final/UMean" > "$out/$final/UMean.gz"
+gzip -9 -n -c "$final/U" > "$out/$final/U.gz"
+gzip -9 -n -c "$final/UMean" > "$out/$final/UMean.gz"
 cp constant/transportProperties constant/turbulenceProperties "$out/constant/"
 mkdir -p "$out/constant/triSurface"
 cp "$stl" "$out/constant/triSurface/"   # for [[walls]] kind = "mesh" (scg reads .stl.gz)
