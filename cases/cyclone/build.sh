@@ -1,0 +1,176 @@
+#!/usr/bin/env bash
+# Build the air flow of the OpenFOAM "MPPICFoam/cyclone" tutorial geometry for scg.
+#
+#   bash cases/cyclone/build.sh [--coarse|--full] [--out DIR] [--iterations N] [--np N] [--keep]
+#
+#   --coarse      (default) the tutorial's mesh: background blocks 33x33x63 (dx = 33 mm),
+#                 snappyHexMesh at level 0, 30.8k cells; simpleFoam 800 iterations, U averaged
+#                 over the last 400; serial
+#   --full        background blocks 66x66x126 (dx = 17 mm), 248k cells; 1000 iterations,
+#                 averaged over the last 500, on --np processes (default 2: decomposePar +
+#                 mpirun -np 2 + reconstructPar); about 1.2 s CPU per iteration and process,
+#                 so about 20 minutes on 2 idle cores; 23 MB, not committed
+#   --out DIR     where the case scg reads goes (default cases/cyclone/coarse or .../full);
+#                 it is replaced
+#   --iterations  SIMPLE iterations (simpleFoam stops earlier when the residualControl
+#                 targets of system/fvSolution are met; in this geometry they are not)
+#   --average-from  first iteration of the average UMean (default: half the iterations)
+#   --np          processes for simpleFoam (1 = serial)
+#   --keep        keep the OpenFOAM working directory (printed) instead of deleting it
+#
+# Steps: install OpenFOAM (Debian's openfoam + openfoam-examples) with apt if missing;
+# copy the tutorial's geometry (resources/geometry/cyclone.stl.gz), blockMeshDict and
+# snappyHexMeshDict into a fresh case; blockMesh; snappyHexMesh -overwrite; checkMesh (the
+# build fails unless it says "Mesh OK."); simpleFoam (steady RANS, k-omega SST, air
+# nu = 1.5e-5 m^2/s, inlet 10 m/s as in the tutorial; template/ holds the dictionaries);
+# then copies constant/polyMesh, the final U and UMean (binary, gzipped), the STL
+# (constant/triSurface), the case's dictionaries and a log summary to --out.
+set -eo pipefail
+
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+variant=coarse
+out=""
+iterations=""
+average_from=""
+np=""
+keep=0
+while [ $# -gt 0 ]; do
+    case "$1" in
+        --coarse) variant=coarse ;;
+        --full) variant=full ;;
+        --out) out="$2"; shift ;;
+        --iterations) iterations="$2"; shift ;;
+        --np) np="$2"; shift ;;
+        --average-from) average_from="$2"; shift ;;
+        --keep) keep=1 ;;
+        -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
+        *) echo "build.sh: unknown argument $1" >&2; exit 2 ;;
+    esac
+    shift
+done
+if [ "$variant" = coarse ]; then
+    blocks="33 33 63"; : "${iterations:=800}"; : "${np:=1}"
+else
+    blocks="66 66 126"; : "${iterations:=1000}"; : "${np:=2}"
+fi
+: "${average_from:=$((iterations / 2))}"
+: "${out:=$here/$variant}"
+mkdir -p "$(dirname "$out")"
+out="$(cd "$(dirname "$out")" && pwd)/$(basename "$out")"
+
+# --- OpenFOAM ---------------------------------------------------------------------
+foam_etc=/usr/share/openfoam/etc/bashrc
+examples=/usr/share/doc/openfoam-examples/examples
+if [ ! -f "$foam_etc" ] || [ ! -d "$examples/lagrangian/MPPICFoam/cyclone" ]; then
+    echo "== installing OpenFOAM (Debian packages openfoam, openfoam-examples)"
+    sudo=""; [ "$(id -u)" -ne 0 ] && sudo=sudo
+    $sudo apt-get update
+    $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends \
+        openfoam openfoam-examples
+fi
+# The Debian bashrc refers to unset variables and to helper scripts it does not ship.
+# shellcheck disable=SC1090
+source "$foam_etc" >/dev/null 2>&1 || true
+command -v simpleFoam >/dev/null || { echo "build.sh: simpleFoam not found after sourcing $foam_etc" >&2; exit 1; }
+tutorial="$examples/lagrangian/MPPICFoam/cyclone"
+stl="$examples/resources/geometry/cyclone.stl.gz"
+
+# --- case ---------------------------------------------------------------------------
+work="$(mktemp -d "${TMPDIR:-/tmp}/scg-cyclone-$variant.XXXXXX")"
+[ "$keep" = 1 ] || trap 'rm -rf "$work"' EXIT
+echo "== $variant: working in $work"
+cp -r "$here/template/." "$work/"
+mkdir -p "$work/constant/triSurface"
+cp "$stl" "$work/constant/triSurface/"
+gunzip "$work/constant/triSurface/cyclone.stl.gz"
+# the tutorial's background mesh, at the variant's resolution
+sed "s/(33 33 63)/($blocks)/" "$tutorial/system/blockMeshDict" > "$work/system/blockMeshDict"
+grep -q "($blocks)" "$work/system/blockMeshDict" || { echo "build.sh: blockMeshDict: no (33 33 63) block" >&2; exit 1; }
+# the tutorial's snappyHexMeshDict; room for the finer variant's cells per process
+zcat "$tutorial/system/snappyHexMeshDict.gz" \
+    | sed -e 's/maxLocalCells [0-9]*;/maxLocalCells 4000000;/' \
+          -e 's/maxGlobalCells [0-9]*;/maxGlobalCells 8000000;/' > "$work/system/snappyHexMeshDict"
+sed -i -e "s/ITERATIONS/$iterations/g" -e "s/AVERAGE_START/$average_from/" "$work/system/controlDict"
+cat > "$work/system/decomposeParDict" <<DICT
+FoamFile { version 2.0; format ascii; class dictionary; object decomposeParDict; }
+numberOfSubdomains $np;
+method          simple;         // Debian's OpenFOAM has no scotch; slabs along z
+simpleCoeffs    { n (1 1 $np); delta 0.001; }
+DICT
+
+cd "$work"
+step() { # step NAME CMD...: run, log to log.NAME, print the wall time
+    local name="$1"; shift
+    local t0; t0=$(date +%s.%N)
+    if ! "$@" > "log.$name" 2>&1; then
+        echo "build.sh: $name failed; the end of $work/log.$name:" >&2
+        tail -30 "log.$name" >&2
+        trap - EXIT
+        exit 1
+    fi
+    local t1; t1=$(date +%s.%N)
+    printf '   %-16s %7.1f s\n' "$name" "$(echo "$t1 - $t0" | bc)" | tee -a timings
+}
+echo "== mesh (uptime: $(uptime | sed 's/.*load/load/'))"
+step blockMesh blockMesh
+step snappyHexMesh snappyHexMesh -overwrite
+step checkMesh checkMesh
+grep -q "Mesh OK." log.checkMesh || { echo "build.sh: checkMesh failed:" >&2; grep -i -B2 -A2 "\*\*\*" log.checkMesh >&2; trap - EXIT; exit 1; }
+cells=$(awk '/^ *cells:/ {print $2; exit}' log.checkMesh)
+grep -E "^ *(points|faces|cells):|non-orthogonality Max|Max skewness|Max aspect ratio" log.checkMesh | sed 's/^ */   /'
+
+echo "== simpleFoam, k-omega SST, $iterations iterations max, $np process(es)"
+if [ "$np" -gt 1 ]; then
+    step decomposePar decomposePar
+    mpi_root=""; [ "$(id -u)" -eq 0 ] && mpi_root=--allow-run-as-root   # containers, CI
+    step simpleFoam mpirun $mpi_root -np "$np" --oversubscribe simpleFoam -parallel
+    step reconstructPar reconstructPar -latestTime
+else
+    step simpleFoam simpleFoam
+fi
+final=$(ls -d [0-9]* | sort -g | tail -1)
+[ -n "$final" ] && [ "$final" != 0 ] && [ -f "$final/U" ] && [ -f "$final/UMean" ] || { echo "build.sh: no final U written" >&2; trap - EXIT; exit 1; }
+# the last iteration's initial residuals and the inlet/outlet volume flows
+summary="$work/summary.txt"
+{
+    echo "variant: $variant; blocks ($blocks); cells: $cells; processes: $np"
+    echo "turbulence: RAS kOmegaSST, steady (simpleFoam, SIMPLEC), nu = 1.5e-5 m^2/s, inlet U = (-10 0 0) m/s"
+    echo "final iteration: $final (of $iterations max)"
+    if grep -q "reached convergence" log.simpleFoam; then grep "reached convergence" log.simpleFoam; fi
+    echo "UMean: U averaged over iterations $average_from..$final"
+    echo "initial residuals (first solve of each iteration): last; min..max over the averaged iterations"
+    for f in Ux Uy Uz p k omega; do
+        awk -v f="$f" -v a="$average_from" '
+            /^Time = / { t = $3; seen = 0 }
+            $0 ~ ("Solving for " f ",") && !seen {
+                seen = 1; r = $0; sub(/.*Initial residual = /, "", r); sub(/,.*/, "", r); r += 0
+                last = r
+                if (t >= a) { if (n == 0 || r < lo) lo = r; if (n == 0 || r > hi) hi = r; n++ }
+            }
+            END { printf "   %-6s %.2e; %.2e..%.2e\n", f, last, lo, hi }' log.simpleFoam
+    done
+    echo "continuity (last): $(grep 'continuity errors' log.simpleFoam | tail -1 | sed 's/^ *//')"
+    echo "volume flow at the last iteration, sum(phi), m^3/s: inlet $(tail -1 postProcessing/inletFlow/0/surfaceFieldValue.dat | awk '{print $2}')," \
+         "outlet $(tail -1 postProcessing/outletFlow/0/surfaceFieldValue.dat | awk '{print $2}')"
+    echo "wall times (s):"
+    cat timings
+    echo "load: $(uptime | sed 's/.*load/load/')"
+} > "$summary"
+cat "$summary"
+
+# --- the case scg reads ---------------------------------------------------------------
+rm -rf "$out"
+mkdir -p "$out/constant/polyMesh" "$out/$final" "$out/system"
+# OpenFOAM v1912 ignores writeCompression for binary files ("Disabled binary format
+# compression"): gzip them here (scg reads gzipped binary files)
+for f in points faces owner neighbour boundary; do
+    gzip -9 -n -c "constant/polyMesh/$f" > "$out/constant/polyMesh/$f.gz"
+done
+gzip -9 -n -c "$final/U" > "$out/$final/U.gz"
+gzip -9 -n -c "$final/UMean" > "$out/$final/UMean.gz"
+cp constant/transportProperties constant/turbulenceProperties "$out/constant/"
+mkdir -p "$out/constant/triSurface"
+cp "$stl" "$out/constant/triSurface/"   # for [[walls]] kind = "mesh" (scg reads .stl.gz)
+cp system/controlDict system/fvSchemes system/fvSolution system/blockMeshDict system/snappyHexMeshDict "$out/system/"
+cp "$summary" "$out/summary.txt"
+echo "== wrote $out ($(du -sh "$out" | cut -f1))"
