@@ -43,6 +43,9 @@ struct CellRec {
     face: u32,
     /// Face records (0: no records, ask the locator).
     n_faces: u32,
+    /// A convex cell of triangular faces: one tetrahedron per face, whose record holds
+    /// the rows of the value's gradient G (u = u_c + G·(x − cc)) instead of M and Δu.
+    simple: u32,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -111,6 +114,11 @@ impl CellTable {
         huge_pages(&t.faces);
         huge_pages(&t.tets);
         for (c, (&cc, &uc)) in geom.cell_centres.iter().zip(cellv).enumerate() {
+            if t.faces.len() % 2 == 1 {
+                // start every cell's face records on a 64-byte line (a tetrahedral cell's
+                // four: two lines)
+                t.faces.push(FaceRec::default());
+            }
             let (f0, t0) = (t.faces.len(), t.tets.len());
             let mut ok = true;
             for &f in geom.faces_of(c) {
@@ -160,14 +168,49 @@ impl CellTable {
                 t.faces.truncate(f0);
                 t.tets.truncate(t0);
             }
+            // convex with triangular faces: every point of the cell on the inner side of
+            // every face plane, one tetrahedron per face
+            let faces = &t.faces[f0..];
+            let simple = ok
+                && faces.iter().all(|f| f.n_tets == 1)
+                && geom.faces_of(c).iter().all(|&f| {
+                    mesh.face(f as usize).len() == 3
+                        && geom.faces_of(c).iter().all(|&g| {
+                            mesh.face(g as usize).iter().all(|&p| {
+                                faces
+                                    .iter()
+                                    .all(|fr| fr.q.dot(mesh.points[p as usize] - cc) <= 1.0 + 1e-9)
+                            })
+                        })
+                });
+            if simple {
+                for tr in &mut t.tets[t0..] {
+                    let g = [0, 1, 2].map(|j| {
+                        tr.m[0] * tr.du[0][j] + tr.m[1] * tr.du[1][j] + tr.m[2] * tr.du[2][j]
+                    });
+                    *tr = TetRec {
+                        m: g,
+                        du: [DVec3::ZERO; 3],
+                    };
+                }
+            }
             t.cells.push(CellRec {
                 cc,
                 uc,
                 face: f0 as u32,
                 n_faces: (t.faces.len() - f0) as u32,
+                simple: u32::from(simple),
             });
         }
         Some(t)
+    }
+
+    /// Cells on the short path (convex, triangular faces), and cells without records.
+    pub fn counts(&self) -> (usize, usize) {
+        (
+            self.cells.iter().filter(|c| c.simple != 0).count(),
+            self.cells.iter().filter(|c| c.n_faces == 0).count(),
+        )
     }
 
     /// Bytes held.
@@ -195,6 +238,15 @@ impl CellTable {
                 best_ratio = r;
                 best = f;
             }
+        }
+        if rec.simple != 0 {
+            // convex, planar faces: inside when the exit ratio is ≤ 1, and then in the
+            // tetrahedron of the exit face
+            if best_ratio > 1.0 + TOL {
+                return None;
+            }
+            let g = &self.tets.get(best.tet as usize)?.m;
+            return Some(rec.uc + DVec3::new(g[0].dot(d), g[1].dot(d), g[2].dot(d)));
         }
         let tets = self
             .tets
@@ -274,7 +326,7 @@ impl CellTable {
         if let Some(f) = best
             && let Some(t) = self.tets.get(f.tet as usize)
         {
-            prefetch_bytes(t, 3);
+            prefetch_bytes(t, if rec.simple != 0 { 2 } else { 3 });
         }
     }
 }
@@ -363,6 +415,13 @@ mod tests {
             ] {
                 let it = crate::Interpolator::new(&loc, &field, scheme).unwrap();
                 let t = CellTable::new(&it).unwrap();
+                let (simple, none) = t.counts();
+                assert_eq!(none, 0);
+                if shape == CellShape::Tet {
+                    assert_eq!(simple, m.n_cells);
+                } else {
+                    assert_eq!(simple, 0);
+                }
                 let (mut found, mut n) = (0, 0);
                 for _ in 0..2000 {
                     let x = DVec3::new(rng.random(), rng.random(), rng.random());
