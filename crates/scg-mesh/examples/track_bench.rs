@@ -88,7 +88,7 @@ fn main() {
                 })
                 .collect(),
         };
-        let it = Interpolator::new(&loc, &field, Interpolation::CellPointLinearExact).unwrap();
+        let it = Interpolator::new(&loc, &field, Interpolation::CellPoint).unwrap();
         let setup = t0.elapsed().as_secs_f64();
         let h = (0.2 * 0.2 * 0.2 / mesh.n_cells as f64).cbrt();
         let umax = vortex(DVec3::new(0.1, 0.1, 0.0)).length();

@@ -2,28 +2,37 @@
 //!
 //! * [`Interpolation::CellValue`]: the value of the cell holding the point (OpenFOAM's
 //!   `cell` scheme) — first order.
-//! * [`Interpolation::CellPoint`]: OpenFOAM's `cellPoint` scheme. Point values come from
-//!   the cell values once, by inverse-distance weighting ([`point_values`], OpenFOAM's
-//!   `volPointInterpolation`); face-centre values from the point values with the weights
-//!   that place the face centre ([`crate::geometry::face_centre_weights`]); then inside a
-//!   cell the value is linear on the tetrahedron (cell centre, face triangle) of the
-//!   [`crate::locate`] decomposition holding the point. Continuous across faces (the
-//!   neighbours share the face triangle and its values), and second order on smooth
-//!   fields where the point values are: at interior points of meshes whose cells surround
-//!   each point symmetrically (unperturbed hex and tet boxes). Elsewhere (perturbed
-//!   meshes, hanging nodes, box edges) IDW point values are off by O(h·|∇u|) and the
-//!   scheme tends to first order (tests/interp.rs measures 1.3–1.4 on h/2 → h/4).
-//! * [`Interpolation::CellPointLinearExact`]: the same with point values by linear-exact
-//!   weights ([`point_values_linear_exact`]): affine fields are reproduced to rounding on
-//!   every mesh and the measured order is 1.9–2.1 on all of them.
+//! * [`Interpolation::CellPoint`] (the default): cell-point interpolation with point values
+//!   by linear-exact weights ([`point_values_linear_exact`], the pseudo-Laplacian of Holmes
+//!   & Connell, clipped where ill-conditioned). Face-centre values come from the point
+//!   values with the weights that place the face centre
+//!   ([`crate::geometry::face_centre_weights`]); then inside a cell the value is linear on
+//!   the tetrahedron (cell centre, face triangle) of the [`crate::locate`] decomposition
+//!   holding the point. Continuous across faces (the neighbours share the face triangle
+//!   and its values); affine fields are reproduced to rounding on every mesh where no point
+//!   needed the clipped fallback, and the measured order is 1.9–2.1 on hex, perturbed tet
+//!   and polyhedral meshes (tests/interp.rs, tests/mesh_flow.rs of the workspace).
+//! * [`Interpolation::CellPointIdw`]: OpenFOAM's `cellPoint` exactly: point values by
+//!   inverse-distance weighting ([`point_values`], OpenFOAM's `volPointInterpolation`).
+//!   Second order where the cells surround each point symmetrically (unperturbed hex and
+//!   tet boxes); elsewhere (perturbed meshes, hanging nodes, box edges) IDW point values are
+//!   off by O(h·|∇u|) and the scheme tends to first order (tests/interp.rs measures 1.3–1.4
+//!   on h/2 → h/4).
+//! * [`Interpolation::CellPointLinearExact`]: the former name of `CellPoint`, kept as an
+//!   alias (the same values).
 //!
 //! The point and face-centre values are computed once in [`Interpolator::new`]; a query
-//! reads the cell value and three node values and allocates nothing.
+//! reads the cell value and three node values and allocates nothing. The hot path of a
+//! particle simulation uses [`crate::table::CellTable`] instead, which stores what a query
+//! reads per cell.
+
+use std::sync::Arc;
 
 use glam::DVec3;
 
 use crate::geometry::{MeshGeometry, face_centre_weights};
 use crate::locate::{Hit, Locator, Probe};
+use crate::shared::Shared;
 use crate::{CellField, MeshError, PolyMesh};
 
 /// The interpolation scheme.
@@ -31,13 +40,22 @@ use crate::{CellField, MeshError, PolyMesh};
 pub enum Interpolation {
     /// The value of the cell (OpenFOAM `cell`).
     CellValue,
-    /// Linear on the cell's tetrahedra from cell, face-centre and point values (OpenFOAM
-    /// `cellPoint`), point values by inverse-distance weighting ([`point_values`]).
+    /// Linear on the cell's tetrahedra from cell, face-centre and point values, point
+    /// values by linear-exact weights ([`point_values_linear_exact`]): exact for affine
+    /// fields on any mesh, so second order also on distorted meshes and at hanging nodes.
     CellPoint,
-    /// As `CellPoint`, but with point values by linear-exact weights
-    /// ([`point_values_linear_exact`]; not in OpenFOAM): exact for affine fields on any
-    /// mesh, so second order also on distorted meshes and at hanging nodes.
+    /// OpenFOAM's `cellPoint`: as `CellPoint`, but point values by inverse-distance
+    /// weighting ([`point_values`]); first order on irregular meshes.
+    CellPointIdw,
+    /// The former name of `CellPoint` (linear-exact point values): the same values.
     CellPointLinearExact,
+}
+
+impl Interpolation {
+    /// Whether values are interpolated from point values (every scheme but `CellValue`).
+    pub fn uses_points(self) -> bool {
+        self != Interpolation::CellValue
+    }
 }
 
 /// Check that `field` fits `mesh`: one finite value per cell, and per patch either no
@@ -137,10 +155,12 @@ pub fn point_values(
 /// pseudo-Laplacian of Holmes & Connell (1989) applied to inverse-distance base weights:
 /// over the neighbours i of a point p (the cells using it, and the boundary faces using
 /// it with the values [`point_values`] gives them), w_i = (1 + λ·R_i)/|R_i| with
-/// R_i = x_i − x_p, λ chosen so that Σ w_i R_i = 0. Where the 3×3 system is singular or
-/// the weights would be wild (Σ|w_i| > 10 Σw_i; a box corner with one cell and three faces
-/// has 5), the point keeps
-/// its [`point_values`] value. An error if `field` fails [`check_field`].
+/// R_i = x_i − x_p, λ chosen so that Σ w_i R_i = 0. Where the 3×3 system is singular the
+/// point keeps its [`point_values`] value; where the weights would be wild (Σ|w_i| >
+/// 10 Σw_i; a box corner with one cell and three faces has 5) they are clipped as Holmes &
+/// Connell's and OpenFOAM's `pointLinear`-style corrections are: w_i = clamp(1 + λ·R_i,
+/// 0, 2)/|R_i|, a positive, bounded average (no longer exact for affine fields there). An
+/// error if `field` fails [`check_field`].
 pub fn point_values_linear_exact(
     mesh: &PolyMesh,
     geom: &MeshGeometry,
@@ -213,6 +233,17 @@ pub fn point_values_linear_exact(
         }
         if ws > 0.0 && wabs <= 10.0 * ws && s.is_finite() {
             *value = s / ws;
+            continue;
+        }
+        // ill-conditioned: clipped weights
+        let (mut s, mut ws) = (DVec3::ZERO, 0.0);
+        for &(d, u) in &nb {
+            let w = (1.0 + lambda.dot(d)).clamp(0.0, 2.0) / d.length().max(1e-300);
+            s += w * u;
+            ws += w;
+        }
+        if ws > 0.0 && s.is_finite() {
+            *value = s / ws;
         }
     }
     Ok(out)
@@ -233,11 +264,14 @@ pub fn face_centre_values(mesh: &PolyMesh, point_values: &[DVec3]) -> Vec<DVec3>
         .collect()
 }
 
-/// A field ready to interpolate: cell values, and for `CellPoint` the values at the nodes
-/// of the decomposition (points, then face centres) computed once.
+/// A field ready to interpolate: cell values, and for the cell-point schemes the values at
+/// the nodes of the decomposition (points, then face centres) computed once.
+///
+/// It borrows its locator ([`Interpolator::new`]) or shares its ownership
+/// ([`Interpolator::owned`]); it owns its values.
 #[derive(Clone, Debug)]
 pub struct Interpolator<'a> {
-    loc: &'a Locator<'a>,
+    loc: Shared<'a, Locator<'a>>,
     scheme: Interpolation,
     cells: Vec<DVec3>,
     nodes: Vec<DVec3>,
@@ -250,12 +284,22 @@ impl<'a> Interpolator<'a> {
         field: &CellField,
         scheme: Interpolation,
     ) -> Result<Self, MeshError> {
+        Self::from_shared(Shared::Borrowed(loc), field, scheme)
+    }
+
+    fn from_shared(
+        loc: Shared<'a, Locator<'a>>,
+        field: &CellField,
+        scheme: Interpolation,
+    ) -> Result<Self, MeshError> {
         let mesh = loc.mesh();
         check_field(mesh, field)?;
         let nodes = match scheme {
             Interpolation::CellValue => Vec::new(),
-            Interpolation::CellPoint | Interpolation::CellPointLinearExact => {
-                let mut nodes = if scheme == Interpolation::CellPoint {
+            Interpolation::CellPointIdw
+            | Interpolation::CellPoint
+            | Interpolation::CellPointLinearExact => {
+                let mut nodes = if scheme == Interpolation::CellPointIdw {
                     point_values(mesh, loc.geometry(), field)?
                 } else {
                     point_values_linear_exact(mesh, loc.geometry(), field)?
@@ -273,12 +317,28 @@ impl<'a> Interpolator<'a> {
         })
     }
 
+    /// The locator.
+    pub fn locator(&self) -> &Locator<'a> {
+        &self.loc
+    }
+
+    /// The cell values.
+    pub fn cell_values(&self) -> &[DVec3] {
+        &self.cells
+    }
+
+    /// Values at the nodes of the decomposition: the mesh points, then the face centres
+    /// (empty for `CellValue`).
+    pub fn node_values(&self) -> &[DVec3] {
+        &self.nodes
+    }
+
     /// The scheme.
     pub fn scheme(&self) -> Interpolation {
         self.scheme
     }
 
-    /// Values at the mesh points (`CellPoint`; empty for `CellValue`).
+    /// Values at the mesh points (cell-point schemes; empty for `CellValue`).
     pub fn point_values(&self) -> &[DVec3] {
         &self.nodes[..self.nodes.len().min(self.loc.mesh().points.len())]
     }
@@ -302,7 +362,7 @@ impl<'a> Interpolator<'a> {
         let c = hit.cell as usize;
         match self.scheme {
             Interpolation::CellValue => self.cells.get(c).copied().unwrap_or(DVec3::NAN),
-            Interpolation::CellPoint | Interpolation::CellPointLinearExact => {
+            _ => {
                 let [w0, w1, w2, w3] = hit.weights;
                 let node = |k: usize| {
                     self.nodes
@@ -332,6 +392,18 @@ impl<'a> Interpolator<'a> {
                 Probe::Fail => self.cells[cell as usize],
             },
         }
+    }
+}
+
+impl Interpolator<'static> {
+    /// Prepare `field` on `loc`'s mesh for `scheme`, sharing the ownership of the locator
+    /// (which may own its mesh: [`Locator::owned`]).
+    pub fn owned(
+        loc: Arc<Locator<'static>>,
+        field: &CellField,
+        scheme: Interpolation,
+    ) -> Result<Self, MeshError> {
+        Self::from_shared(Shared::Owned(loc), field, scheme)
     }
 }
 

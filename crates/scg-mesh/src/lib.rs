@@ -13,6 +13,10 @@
 //!   across faces, boundary crossings reported with their patch.
 //! * [`interp`]: [`Interpolator`]: cell value and cell-point interpolation of a
 //!   [`CellField`].
+//! * [`table`]: [`CellTable`]: per-cell records of what locating a point in a known cell
+//!   and interpolating there reads (the hot path of particle tracking).
+//! * [`shared`]: [`Shared`]: borrowed or `Arc`-owned; [`Locator::owned`] and
+//!   [`Interpolator::owned`] hold their mesh without borrowing it.
 //!
 //! Readers and writers:
 //! * [`foam`]: OpenFOAM cases — [`foam::read_mesh`], [`foam::read_vector_field`] (a time
@@ -28,6 +32,8 @@ pub mod geometry;
 pub mod interp;
 pub mod locate;
 pub mod polymesh;
+pub mod shared;
+pub mod table;
 pub mod vtk;
 
 pub use error::MeshError;
@@ -35,3 +41,5 @@ pub use geometry::MeshGeometry;
 pub use interp::{Interpolation, Interpolator};
 pub use locate::{Hit, Location, Locator};
 pub use polymesh::{CellField, Patch, PolyMesh};
+pub use shared::Shared;
+pub use table::CellTable;

@@ -34,9 +34,12 @@
 //! cell it came from (a two-cell cycle), or when no face triangle takes the ray (a
 //! degenerate cell), the grid decides.
 
+use std::sync::Arc;
+
 use glam::DVec3;
 
 use crate::geometry::MeshGeometry;
+use crate::shared::Shared;
 use crate::{MeshError, PolyMesh};
 
 /// Relative tolerance of the inside tests (barycentric coordinates may be this negative).
@@ -207,10 +210,13 @@ impl BinGrid {
 }
 
 /// Point location on a mesh: [`Locator::find_cell`] and [`Locator::track`].
+///
+/// It borrows its mesh and geometry ([`Locator::new`]) or shares their ownership
+/// ([`Locator::owned`], a `Locator<'static>` that frees them with its last `Arc`).
 #[derive(Clone, Debug)]
 pub struct Locator<'a> {
-    mesh: &'a PolyMesh,
-    geom: &'a MeshGeometry,
+    mesh: Shared<'a, PolyMesh>,
+    geom: Shared<'a, MeshGeometry>,
     grid: BinGrid,
     n_points: u32,
     /// Patch of every boundary face (index `f − n_internal_faces`).
@@ -222,6 +228,13 @@ pub struct Locator<'a> {
 impl<'a> Locator<'a> {
     /// A locator over `mesh` and its geometry (an error if `geom` is not `mesh`'s).
     pub fn new(mesh: &'a PolyMesh, geom: &'a MeshGeometry) -> Result<Self, MeshError> {
+        Self::from_shared(Shared::Borrowed(mesh), Shared::Borrowed(geom))
+    }
+
+    fn from_shared(
+        mesh: Shared<'a, PolyMesh>,
+        geom: Shared<'a, MeshGeometry>,
+    ) -> Result<Self, MeshError> {
         if geom.cell_centres.len() != mesh.n_cells
             || geom.face_centres.len() != mesh.n_faces()
             || geom.point_cell_offsets.len() != mesh.points.len() + 1
@@ -243,23 +256,35 @@ impl<'a> Locator<'a> {
             }
         }
         Ok(Locator {
+            grid: BinGrid::new(&geom),
+            n_points: mesh.points.len() as u32,
             mesh,
             geom,
-            grid: BinGrid::new(geom),
-            n_points: mesh.points.len() as u32,
             face_patch,
             max_steps: 256,
         })
     }
 
     /// The mesh.
-    pub fn mesh(&self) -> &'a PolyMesh {
-        self.mesh
+    #[inline]
+    pub fn mesh(&self) -> &PolyMesh {
+        &self.mesh
     }
 
     /// The geometry.
-    pub fn geometry(&self) -> &'a MeshGeometry {
-        self.geom
+    #[inline]
+    pub fn geometry(&self) -> &MeshGeometry {
+        &self.geom
+    }
+
+    /// The mesh's `Arc` when the locator owns it ([`Locator::owned`]).
+    pub fn mesh_arc(&self) -> Option<&Arc<PolyMesh>> {
+        self.mesh.arc()
+    }
+
+    /// The geometry's `Arc` when the locator owns it ([`Locator::owned`]).
+    pub fn geometry_arc(&self) -> Option<&Arc<MeshGeometry>> {
+        self.geom.arc()
     }
 
     /// Position of node `n` (a point, or a face centre past the points), m; NaN when out
@@ -332,7 +357,7 @@ impl<'a> Locator<'a> {
     /// along `d`.
     #[inline]
     fn probe_face(&self, c: u32, cc: DVec3, d: DVec3, f: u32) -> Option<Probe> {
-        let mesh = self.mesh;
+        let mesh: &PolyMesh = &self.mesh;
         let fi = f as usize;
         let pts = mesh.face(fi);
         let flip = mesh.owner[fi] != c;
@@ -513,6 +538,14 @@ impl<'a> Locator<'a> {
             }
         }
         self.track(prev.cell, x)
+    }
+}
+
+impl Locator<'static> {
+    /// A locator sharing the ownership of `mesh` and `geom` (an error if `geom` is not
+    /// `mesh`'s): nothing is borrowed, and both are freed with their last `Arc`.
+    pub fn owned(mesh: Arc<PolyMesh>, geom: Arc<MeshGeometry>) -> Result<Self, MeshError> {
+        Self::from_shared(Shared::Owned(mesh), Shared::Owned(geom))
     }
 }
 

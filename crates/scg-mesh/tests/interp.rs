@@ -105,8 +105,8 @@ fn paper_vortex_affine() {
             let g = MeshGeometry::new(&m).unwrap();
             let loc = Locator::new(&m, &g).unwrap();
             let f = sample(&m, &g, paper_vortex);
-            let exact = Interpolator::new(&loc, &f, Interpolation::CellPointLinearExact).unwrap();
-            let idw = Interpolator::new(&loc, &f, Interpolation::CellPoint).unwrap();
+            let exact = Interpolator::new(&loc, &f, Interpolation::CellPoint).unwrap();
+            let idw = Interpolator::new(&loc, &f, Interpolation::CellPointIdw).unwrap();
             let (e_exact, _) = errors(&loc, &exact, paper_vortex, lo, hi, 2000);
             let (e_box, _) = errors(&loc, &idw, paper_vortex, lo, hi, 2000);
             let (e_inner, _) = errors(&loc, &idw, paper_vortex, ilo, ihi, 2000);
@@ -125,7 +125,7 @@ fn paper_vortex_affine() {
             let g = MeshGeometry::new(&m).unwrap();
             let loc = Locator::new(&m, &g).unwrap();
             let f = sample(&m, &g, paper_vortex);
-            let it = Interpolator::new(&loc, &f, Interpolation::CellPoint).unwrap();
+            let it = Interpolator::new(&loc, &f, Interpolation::CellPointIdw).unwrap();
             let (max, rms) = errors(&loc, &it, paper_vortex, ilo, ihi, 2000);
             let order = (prev / rms).log2();
             println!(
@@ -158,8 +158,8 @@ fn lamb_oseen_convergence() {
         ("poly", CellShape::Poly { refine: 0.3 }, 0.2, [2, 4, 8]),
     ] {
         for scheme in [
-            Interpolation::CellPointLinearExact,
             Interpolation::CellPoint,
+            Interpolation::CellPointIdw,
             Interpolation::CellValue,
         ] {
             let mut prev = (f64::NAN, f64::NAN);
@@ -177,13 +177,13 @@ fn lamb_oseen_convergence() {
                 );
                 if n != ns[0] {
                     let min = match scheme {
-                        Interpolation::CellPointLinearExact => 1.8,
-                        Interpolation::CellPoint
+                        Interpolation::CellPoint | Interpolation::CellPointLinearExact => 1.8,
+                        Interpolation::CellPointIdw
                             if perturb == 0.0 && !matches!(shape, CellShape::Poly { .. }) =>
                         {
                             1.8
                         }
-                        Interpolation::CellPoint => 1.0,
+                        Interpolation::CellPointIdw => 1.0,
                         Interpolation::CellValue => 0.8,
                     };
                     assert!(
@@ -247,7 +247,7 @@ fn lamb_oseen_trajectories() {
             "hex",
             CellShape::Hex,
             0.0,
-            Interpolation::CellPoint,
+            Interpolation::CellPointIdw,
             Some(1.8),
         ),
         ("hex", CellShape::Hex, 0.0, Interpolation::CellValue, None),
@@ -255,15 +255,21 @@ fn lamb_oseen_trajectories() {
             "tet",
             CellShape::Tet,
             0.2,
-            Interpolation::CellPointLinearExact,
+            Interpolation::CellPoint,
             Some(1.8),
         ),
-        ("tet", CellShape::Tet, 0.2, Interpolation::CellPoint, None),
+        (
+            "tet",
+            CellShape::Tet,
+            0.2,
+            Interpolation::CellPointIdw,
+            None,
+        ),
         (
             "poly",
             CellShape::Poly { refine: 0.3 },
             0.2,
-            Interpolation::CellPointLinearExact,
+            Interpolation::CellPoint,
             Some(1.8),
         ),
         (
@@ -323,8 +329,8 @@ fn cell_point_is_continuous_across_faces() {
     let f = sample(&m, &g, lamb_oseen);
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     for scheme in [
+        Interpolation::CellPointIdw,
         Interpolation::CellPoint,
-        Interpolation::CellPointLinearExact,
         Interpolation::CellValue,
     ] {
         let it = Interpolator::new(&loc, &f, scheme).unwrap();

@@ -148,6 +148,7 @@ pub struct RawPatches {
 #[serde(rename_all = "snake_case")]
 pub enum RawInterpolation {
     CellPoint,
+    CellPointIdw,
     CellValue,
     CellPointLinearExact,
 }

@@ -6,10 +6,12 @@
 //! Velocities are in m/s, lengths in m.
 
 use std::fmt;
+use std::sync::Arc;
 
 use glam::DVec3;
 use scg_mesh::{
-    CellField, Hit, Interpolation, Interpolator, Location, Locator, MeshGeometry, PolyMesh,
+    CellField, CellTable, Hit, Interpolation, Interpolator, Location, Locator, MeshGeometry,
+    PolyMesh,
 };
 
 /// What a particle meeting a boundary patch does.
@@ -47,14 +49,18 @@ pub mod hint {
 
 /// A flow field on a mesh, ready for queries.
 ///
-/// `scg-mesh`'s [`Locator`] and [`Interpolator`] borrow the mesh and its geometry. To keep
-/// them in an ECS resource without self-references, [`MeshFlow::new`] moves the mesh, its
-/// geometry and the locator to the heap and **leaks** them (`&'static`): this happens once
-/// per loaded flow (a scene load, a benchmark), never per step, and the memory lives until
-/// the process ends. Simulations built from the same scene share one `MeshFlow` (`Arc`).
+/// It owns everything: the mesh and its geometry (shared by the [`Locator`] through `Arc`s,
+/// [`Locator::owned`]), the locator (shared by the [`Interpolator`],
+/// [`Interpolator::owned`]), the interpolator's point values and the [`CellTable`] of the
+/// hot path; all is freed when the `MeshFlow` is dropped. Simulations built from the same
+/// scene share one `MeshFlow` (`Arc`).
+///
+/// Queries from a particle's cell first ask the [`CellTable`] (is x still in that cell?
+/// three records read); only when it is not do they walk with the locator.
 pub struct MeshFlow {
-    loc: &'static Locator<'static>,
+    loc: Arc<Locator<'static>>,
     interp: Interpolator<'static>,
+    table: Option<CellTable>,
     roles: Vec<PatchRole>,
     field_speed: (f64, f64),
 }
@@ -74,8 +80,7 @@ impl fmt::Debug for MeshFlow {
 
 impl MeshFlow {
     /// Prepare `field` on `mesh` with `scheme`; `roles` gives one role per patch of
-    /// `mesh.patches` (a length mismatch is an error). Leaks the mesh, its geometry and the
-    /// locator (see the type's documentation).
+    /// `mesh.patches` (a length mismatch is an error).
     pub fn new(
         mesh: PolyMesh,
         field: &CellField,
@@ -90,10 +95,9 @@ impl MeshFlow {
             ));
         }
         let geom = MeshGeometry::new(&mesh)?;
-        let mesh: &'static PolyMesh = Box::leak(Box::new(mesh));
-        let geom: &'static MeshGeometry = Box::leak(Box::new(geom));
-        let loc: &'static Locator<'static> = Box::leak(Box::new(Locator::new(mesh, geom)?));
-        let interp = Interpolator::new(loc, field, scheme)?;
+        let loc = Arc::new(Locator::owned(Arc::new(mesh), Arc::new(geom))?);
+        let interp = Interpolator::owned(Arc::clone(&loc), field, scheme)?;
+        let table = CellTable::new(&interp);
         let (lo, hi) = field
             .cells
             .iter()
@@ -102,6 +106,7 @@ impl MeshFlow {
         Ok(MeshFlow {
             loc,
             interp,
+            table,
             roles,
             field_speed: (lo, hi),
         })
@@ -119,7 +124,13 @@ impl MeshFlow {
 
     /// The locator.
     pub fn locator(&self) -> &Locator<'static> {
-        self.loc
+        &self.loc
+    }
+
+    /// The per-cell records of the hot path (`None` when the mesh was too large for them,
+    /// [`CellTable::MAX_BYTES`]).
+    pub fn table(&self) -> Option<&CellTable> {
+        self.table.as_ref()
     }
 
     /// The interpolation scheme.
@@ -158,6 +169,13 @@ impl MeshFlow {
         self.loc.track(hint, x)
     }
 
+    /// The interpolated velocity at x when x is in cell `c` (checked with the
+    /// [`CellTable`] alone; `None` when it is not, or when that cannot tell), m/s.
+    #[inline]
+    pub fn velocity_in(&self, c: u32, x: DVec3) -> Option<DVec3> {
+        self.table.as_ref()?.velocity_in(c, x)
+    }
+
     /// Interpolated velocity where a point was found, m/s.
     #[inline]
     pub fn at(&self, hit: &Hit) -> DVec3 {
@@ -169,18 +187,40 @@ impl MeshFlow {
     /// mesh the value is extrapolated from the hint's cell ([`Interpolator::velocity`]).
     #[inline]
     pub fn velocity(&self, hint: u32, x: DVec3) -> (DVec3, u32) {
+        if let Some(u) = self.velocity_in(hint, x) {
+            return (u, hint);
+        }
+        match self.loc.track(hint, x) {
+            Location::Inside(h) | Location::Crossed { hit: h, .. } => {
+                let u = self
+                    .velocity_in(h.cell, x)
+                    .unwrap_or_else(|| self.interp.at(&h));
+                (u, h.cell)
+            }
+            Location::Left { .. } | Location::Outside => (self.interp.velocity(hint, x), hint),
+        }
+    }
+
+    /// [`MeshFlow::velocity`] without the [`CellTable`] (the locator and the interpolator
+    /// alone), m/s.
+    pub fn velocity_walk(&self, hint: u32, x: DVec3) -> (DVec3, u32) {
         match self.loc.track(hint, x) {
             Location::Inside(h) | Location::Crossed { hit: h, .. } => (self.interp.at(&h), h.cell),
             Location::Left { .. } | Location::Outside => (self.interp.velocity(hint, x), hint),
         }
     }
 
-    /// Ask the processor to load what locating a particle in cell `c` reads first (the
-    /// cell centre, its face list and its faces' centres and areas), when `deep` also the
-    /// face data (which needs the face list in cache to be addressed). Calling it a few
-    /// particles ahead hides memory latency on large meshes; no effect on results.
+    /// Ask the processor to load what locating a particle in cell `c` reads first: its
+    /// [`CellTable`] record, when `deep` also its face records (which need the cell record
+    /// in cache to be addressed); without a table, the cell centre and face list, when
+    /// `deep` also the faces' centres and areas. Calling it a few particles ahead hides
+    /// memory latency on large meshes; no effect on results.
     #[inline]
     pub fn prefetch(&self, c: u32, deep: bool) {
+        if let Some(t) = &self.table {
+            t.prefetch(c, deep);
+            return;
+        }
         let g = self.loc.geometry();
         let m = self.loc.mesh();
         let ci = c as usize;
@@ -200,6 +240,16 @@ impl MeshFlow {
                 prefetch(&g.face_centres, f as usize);
                 prefetch(&m.face_offsets, f as usize);
             }
+        }
+    }
+
+    /// Ask the processor to load the [`CellTable`] records a query for x in cell `c` reads
+    /// last (the tetrahedron; the cell and face records should be in cache by then: call
+    /// [`MeshFlow::prefetch`] earlier). No effect on results.
+    #[inline]
+    pub fn prefetch_at(&self, c: u32, x: DVec3) {
+        if let Some(t) = &self.table {
+            t.prefetch_at(c, x);
         }
     }
 
@@ -271,6 +321,14 @@ pub fn land(
     mut v1: DVec3,
     e: f64,
 ) -> Landing {
+    if flow.velocity_in(h_from, x1).is_some() {
+        // still in the cell of the mid-step point (most steps)
+        return Landing {
+            x: x1,
+            v: v1,
+            hint: h_from,
+        };
+    }
     let mut from = h_from;
     for _ in 0..MAX_REFLECTIONS {
         let (face, patch) = match flow.track(from, x1) {
@@ -350,6 +408,26 @@ mod tests {
             })
             .collect();
         MeshFlow::new(m, &field, Interpolation::CellPoint, r).unwrap()
+    }
+
+    /// A dropped flow frees its mesh, geometry, locator and table (nothing leaked): the
+    /// mesh's and the geometry's last `Arc`s are the flow's.
+    #[test]
+    fn dropping_a_flow_frees_its_mesh() {
+        let mut weak = Vec::new();
+        for _ in 0..20 {
+            let f = box_flow(DVec3::X, &[]);
+            let loc = f.locator();
+            assert!(f.table().is_some_and(|t| t.bytes() > 0));
+            weak.push((
+                std::sync::Arc::downgrade(loc.mesh_arc().unwrap()),
+                std::sync::Arc::downgrade(loc.geometry_arc().unwrap()),
+            ));
+            drop(f);
+        }
+        for (m, g) in &weak {
+            assert!(m.upgrade().is_none() && g.upgrade().is_none());
+        }
     }
 
     #[test]

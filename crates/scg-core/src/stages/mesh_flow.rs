@@ -145,12 +145,16 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
         let mut gone = 0u64;
         for i in 0..xs.len() {
             // Memory latency dominates on large meshes: start loading a later particle's
-            // cell now (the face list 16 ahead, the faces 8 ahead).
+            // records now (its cell 16 ahead, the cell's faces 8 ahead, the tetrahedron
+            // holding it 4 ahead).
             if let Some(h) = hs.get(i + 16) {
                 flow.prefetch(h.0, false);
             }
             if let Some(h) = hs.get(i + 8) {
                 flow.prefetch(h.0, true);
+            }
+            if let Some(h) = hs.get(i + 4) {
+                flow.prefetch_at(h.0, xs[i + 4].0);
             }
             let x0 = xs[i].0;
             let mut h0 = hs[i].0;

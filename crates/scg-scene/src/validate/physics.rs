@@ -184,8 +184,10 @@ pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, 
     }
     let scheme = match f.interpolation {
         None | Some(RawInterpolation::CellPoint) => Interpolation::CellPoint,
+        Some(RawInterpolation::CellPointIdw) => Interpolation::CellPointIdw,
         Some(RawInterpolation::CellValue) => Interpolation::CellValue,
-        Some(RawInterpolation::CellPointLinearExact) => Interpolation::CellPointLinearExact,
+        // the former name of the default
+        Some(RawInterpolation::CellPointLinearExact) => Interpolation::CellPoint,
     };
     let scale = cx.positive("flow.scale", f.scale.unwrap_or(1.0))?;
     let translate = cx.vec3("flow.translate", f.translate.unwrap_or([0.0; 3]))?;
