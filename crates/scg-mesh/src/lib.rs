@@ -13,6 +13,8 @@
 //!   across faces, boundary crossings reported with their patch.
 //! * [`interp`]: [`Interpolator`]: cell value and cell-point interpolation of a
 //!   [`CellField`].
+//! * [`surface`]: boundary patches as triangles (face-centre or first-point fans) for
+//!   contact walls and drawings.
 //!
 //! Readers and writers:
 //! * [`foam`]: OpenFOAM cases — [`foam::read_mesh`], [`foam::read_vector_field`] (a time
@@ -28,6 +30,7 @@ pub mod geometry;
 pub mod interp;
 pub mod locate;
 pub mod polymesh;
+pub mod surface;
 pub mod vtk;
 
 pub use error::MeshError;
