@@ -260,6 +260,7 @@ fn parse_meta(entries: &BTreeMap<String, String>) -> Result<RunMeta, String> {
         groups: groups.into_iter().map(GroupMeta::from).collect(),
         scene_toml: String::new(),
         outlines: outlines.into_iter().map(Outline::from).collect(),
+        patches: Vec::new(),
         warnings,
     })
 }
