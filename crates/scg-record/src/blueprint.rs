@@ -35,8 +35,8 @@ use scg_core::frame::RunMeta;
 
 use crate::RecordError;
 use crate::layout::{
-    ENTITY_GEOMETRY, ENTITY_PARTICLES, ENTITY_PATCHES, ENTITY_SCENE, ENTITY_STATS,
-    ENTITY_WARNINGS, RRD_APPLICATION_ID, TIMELINE_SIM_TIME,
+    ENTITY_GEOMETRY, ENTITY_PARTICLES, ENTITY_PATCHES, ENTITY_SCENE, ENTITY_STATS, ENTITY_WARNINGS,
+    RRD_APPLICATION_ID, TIMELINE_SIM_TIME,
 };
 
 /// Radius (UI points) of the points of the group with the largest diameter; the smallest

@@ -6,8 +6,8 @@ use std::io::Read;
 use std::path::Path;
 
 use foxglove::Decode;
-use foxglove::messages::{PointCloud, SceneUpdate};
 use foxglove::messages::packed_element_field::NumericType;
+use foxglove::messages::{PointCloud, SceneUpdate};
 use mcap::records::Record;
 use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use scg_core::frame::{Frame, GroupMeta, Outline, PatchSurface, RunMeta};
@@ -214,8 +214,8 @@ impl ReadState {
                         self.pending.entry(header.sequence).or_default().stats = Some(stats);
                     }
                     ChannelKind::Patches => {
-                        self.patches = decode_patches(&data)
-                            .map_err(|e| format!("`{TOPIC_PATCHES}`: {e}"))?;
+                        self.patches =
+                            decode_patches(&data).map_err(|e| format!("`{TOPIC_PATCHES}`: {e}"))?;
                     }
                     ChannelKind::Other => {}
                 }

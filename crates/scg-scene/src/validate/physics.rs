@@ -16,8 +16,8 @@ use super::Ctx;
 use crate::error::SceneError;
 use crate::model::{Group, Outlet, PatchWalls, SceneMeshFlow};
 use crate::raw::{
-    RawContacts, RawFlow, RawFlowKind, RawMaterial, RawNormalModel, RawOutlet, RawWall, RawWallKind,
-    RawWallModel,
+    RawContacts, RawFlow, RawFlowKind, RawMaterial, RawNormalModel, RawOutlet, RawWall,
+    RawWallKind, RawWallModel,
 };
 use crate::raw::{RawInterpolation, RawTime};
 use scg_core::physics::mesh_flow::{MeshFlow, PatchRole};
