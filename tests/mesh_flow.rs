@@ -515,9 +515,9 @@ fn closed_box_scene(dir: &Path, n: usize, steps: u64) -> Scene {
     let (p, v) = random_particles(n, DVec3::splat(0.001), DVec3::splat(0.009), 2.0, 9);
     // 1 mm particles, τ ≈ 3 s, elastic walls (e = 1): they keep most of their speed
     // (≈ 1–3 m/s) and move 5–15 mm per step of 5 ms, i.e. 4–12 cells of 1.25 mm, bouncing
-    // off the walls.
+    // off the walls (the specular rebound: `wall_model = "rebound"`).
     let text = format!(
-        "duration = {dur:e}\ndt = 5.0e-3\n[fluid]\ndensity = 1.2\nviscosity = 1.8e-5\n[flow]\nkind = \"openfoam\"\ncase = \"case\"\n[flow.patches]\n{SIDES}\n[drag]\nlaw = \"stokes\"\n[material]\nyoungs_modulus = 1e7\npoisson_ratio = 0.3\nrestitution = 1.0\nfriction = 0.0\n[[groups]]\nname = \"p\"\ndiameter = 1e-3\ndensity = 1000.0\npositions = {p}\nvelocities = {v}\n",
+        "duration = {dur:e}\ndt = 5.0e-3\n[fluid]\ndensity = 1.2\nviscosity = 1.8e-5\n[flow]\nkind = \"openfoam\"\ncase = \"case\"\n[flow.patches]\n{SIDES}\nwall_model = \"rebound\"\n[drag]\nlaw = \"stokes\"\n[material]\nyoungs_modulus = 1e7\npoisson_ratio = 0.3\nrestitution = 1.0\nfriction = 0.0\n[[groups]]\nname = \"p\"\ndiameter = 1e-3\ndensity = 1000.0\npositions = {p}\nvelocities = {v}\n",
         dur = steps as f64 * 5.0e-3
     );
     load(dir, &text)

@@ -89,3 +89,124 @@ fn vortex_recordings_equal_the_in_memory_frames() {
     }
     assert_eq!(got, expected);
 }
+
+/// A mesh-flow run: every boundary patch is a static `Mesh3D` at `flow/patches/<name>` in
+/// the `.rrd` (also when rebuilt from the MCAP, as `scg replay --rrd` does), and the
+/// MCAP's `/flow/patches` `foxglove.SceneUpdate` carries the same triangles.
+#[test]
+fn mesh_flow_patches_are_recorded() {
+    use foxglove::Decode;
+    use glam::DVec3;
+    use rerun::Mesh3D;
+    use scg_mesh::build::{BoxMesh, CellShape, PatchNaming};
+
+    let dir = tempfile::tempdir().unwrap();
+    // 4 × 3 × 2 hexahedra: inlet and outlet 6 quads each, walls 2·(12 + 8) = 40 quads.
+    let mesh = BoxMesh::new(DVec3::ZERO, DVec3::new(0.04, 0.03, 0.02), [4, 3, 2])
+        .shape(CellShape::Hex)
+        .naming(PatchNaming::InletOutletWalls { axis: 0 })
+        .build()
+        .unwrap();
+    let field = scg_mesh::CellField {
+        cells: vec![DVec3::new(1.0, 0.0, 0.0); mesh.n_cells],
+        patches: vec![None; mesh.patches.len()],
+    };
+    scg_mesh::foam::write_case(
+        dir.path().join("case"),
+        &mesh,
+        Some(("U", &field)),
+        scg_mesh::foam::Format::Ascii,
+    )
+    .unwrap();
+    let text = "duration = 1e-3\ndt = 1e-4\nrecord_every = 5\n[flow]\nkind = \"openfoam\"\ncase = \"case\"\n[flow.patches]\nwalls = [\"walls\"]\noutlets = [\"outlet\"]\n[[groups]]\nname = \"p\"\ndiameter = 1e-4\ndensity = 1000.0\npositions = [[0.02, 0.015, 0.01]]\n";
+    let path = dir.path().join("m.toml");
+    std::fs::write(&path, text).unwrap();
+    let scene = scg::scene::load(&path, &[]).unwrap();
+    let meta = scene.run_meta(Vec::new());
+    // Quads fanned from a corner: two triangles each.
+    let want: BTreeMap<String, (String, usize)> = [
+        ("inlet", "lost", 12),
+        ("outlet", "outlet", 12),
+        ("walls", "wall", 80),
+    ]
+    .into_iter()
+    .map(|(n, r, t)| (n.to_string(), (r.to_string(), t)))
+    .collect();
+    let got: BTreeMap<String, (String, usize)> = meta
+        .patches
+        .iter()
+        .map(|p| (p.name.clone(), (p.role.clone(), p.triangles.len())))
+        .collect();
+    assert_eq!(got, want);
+
+    let (rrd, mcap) = (dir.path().join("m.rrd"), dir.path().join("m.mcap"));
+    let mut sim = scene.build(true);
+    sim.add_recorder(Box::new(RrdSink::create(&rrd, &meta).unwrap()));
+    sim.add_recorder(Box::new(McapSink::create(&mcap, &meta).unwrap()));
+    sim.record_now().unwrap();
+    sim.run(scene.steps(), |_| true).unwrap();
+    sim.finish_recorders().unwrap();
+
+    // MCAP: one SceneUpdate on /flow/patches, one entity per patch, read back exactly.
+    let bytes = std::fs::read(&mcap).unwrap();
+    let mut updates = Vec::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        if m.channel.topic == "/flow/patches" {
+            let schema = m.channel.schema.as_ref().unwrap();
+            assert_eq!(schema.name, "foxglove.SceneUpdate");
+            assert_eq!(m.channel.message_encoding, "protobuf");
+            updates.push(foxglove::messages::SceneUpdate::decode(&m.data[..]).unwrap());
+        }
+    }
+    assert_eq!(updates.len(), 1);
+    let from_mcap: BTreeMap<String, (String, usize)> = updates[0]
+        .entities
+        .iter()
+        .map(|e| {
+            assert_eq!(e.frame_id, "world");
+            assert_eq!(e.triangles.len(), 1);
+            let role = e.metadata.iter().find(|kv| kv.key == "role").unwrap();
+            (
+                e.id.clone(),
+                (role.value.clone(), e.triangles[0].indices.len() / 3),
+            )
+        })
+        .collect();
+    assert_eq!(from_mcap, want);
+    let rec = read_mcap(&mcap).unwrap();
+    assert_eq!(rec.meta.patches, meta.patches);
+
+    // RRD (as written, and rebuilt from the MCAP): one static Mesh3D per patch.
+    let rebuilt = dir.path().join("rebuilt.rrd");
+    scg::record::write_rrd(&rec, &rebuilt).unwrap();
+    for file in [&rrd, &rebuilt] {
+        let mut meshes = BTreeMap::<String, (usize, usize)>::new();
+        let messages = DecoderApp::decode_eager(BufReader::new(File::open(file).unwrap())).unwrap();
+        for msg in messages {
+            if let LogMsg::ArrowMsg(_, arrow) = msg.unwrap() {
+                let chunk = Chunk::from_arrow_msg(&arrow).unwrap();
+                let path = chunk.entity_path().to_string();
+                let Some(name) = path.strip_prefix("/flow/patches/") else {
+                    continue;
+                };
+                assert!(chunk.is_static(), "{path}");
+                let tris: usize = chunk
+                    .iter_slices::<[u32; 3]>(Mesh3D::descriptor_triangle_indices().component)
+                    .map(|s| s.len())
+                    .sum();
+                let verts: usize = chunk
+                    .iter_slices::<[f32; 3]>(Mesh3D::descriptor_vertex_positions().component)
+                    .map(|s| s.len())
+                    .sum();
+                assert!(meshes.insert(name.to_string(), (tris, verts)).is_none());
+            }
+        }
+        let counts: BTreeMap<String, (usize, usize)> = meta
+            .patches
+            .iter()
+            .map(|p| (p.name.clone(), (p.triangles.len(), p.vertices.len())))
+            .collect();
+        assert_eq!(meshes, counts, "{}", file.display());
+    }
+}

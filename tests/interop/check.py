@@ -17,7 +17,11 @@ REC.rrd and REC.mcap must hold the same run (e.g. both written by one `scg run`,
 5. the `.rrd` carries a blueprint (`RrdReader.blueprints()`): a viewport, a 3D view,
    time-series views on `/stats/...`, the time panel on `sim_time`; and every particle
    chunk has the `speed` component;
-6. with `--vtk DIR` (the output of `scg replay REC.mcap --vtk DIR`): meshio reads the
+6. a mesh flow's boundary patches: the MCAP's `/flow/patches` message decodes as
+   `foxglove.SceneUpdate` (one entity per patch, a `role`, one indexed triangle list) and
+   the `.rrd` holds one static `Mesh3D` per patch at `/flow/patches/<name>` with the same
+   triangles and (as float32) vertices; passes trivially when neither has patches;
+7. with `--vtk DIR` (the output of `scg replay REC.mcap --vtk DIR`): meshio reads the
    `.pvd`'s every `.vtu` frame, and its points, velocities, diameters and ids equal the
    MCAP's bit for bit; the geometry file reads as line cells.
 
@@ -93,7 +97,10 @@ def read_mcap(path: Path, validate_crcs: bool) -> dict:
     from foxglove_schemas_protobuf.PointCloud_pb2 import PointCloud
     from mcap.reader import make_reader
 
+    from foxglove_schemas_protobuf.SceneUpdate_pb2 import SceneUpdate
+
     clouds: dict[int, np.ndarray] = {}
+    patches: list = []
     stats: dict[int, dict] = {}
     log_times: dict[int, int] = {}
     with open(path, "rb") as f:
@@ -122,10 +129,17 @@ def read_mcap(path: Path, validate_crcs: bool) -> dict:
                 log_times[message.sequence] = message.log_time
             elif channel.topic == "/stats":
                 stats[message.sequence] = json.loads(message.data)
+            elif channel.topic == "/flow/patches":
+                if schema.name != "foxglove.SceneUpdate" or channel.message_encoding != "protobuf":
+                    raise ValueError(f"/flow/patches: schema {schema.name}, "
+                                     f"encoding {channel.message_encoding}")
+                update = SceneUpdate()
+                update.ParseFromString(message.data)
+                patches.append(update)
     if clouds.keys() != stats.keys():
         raise ValueError("/particles and /stats messages do not pair up")
     return {"clouds": clouds, "stats": stats, "log_times": log_times, "summary": summary,
-            "metadata": metadata, "attachments": attachments}
+            "metadata": metadata, "attachments": attachments, "patches": patches}
 
 
 def mcap_positions(mcap: dict) -> dict[tuple[int, int], np.ndarray]:
@@ -260,6 +274,46 @@ def check_blueprint(rrd: Path, mcap: Path) -> str:
             f"time panel on {timeline}; speed in {speed_chunks} particle chunks")
 
 
+def check_patches(rrd: Path, mcap: Path) -> str:
+    from rerun.experimental import RrdReader
+
+    updates = read_mcap(mcap, validate_crcs=False)["patches"]
+    if len(updates) > 1:
+        raise ValueError(f"{len(updates)} /flow/patches messages, expected at most one")
+    want = {}
+    for entity in (updates[0].entities if updates else []):
+        roles = [kv.value for kv in entity.metadata if kv.key == "role"]
+        if entity.frame_id != "world" or len(entity.triangles) != 1 or len(roles) != 1:
+            raise ValueError(f"patch {entity.id!r}: frame {entity.frame_id!r}, "
+                             f"{len(entity.triangles)} triangle lists, roles {roles}")
+        tri = entity.triangles[0]
+        points = np.array([[p.x, p.y, p.z] for p in tri.points], dtype=np.float64)
+        indices = np.array(tri.indices, dtype=np.uint32)
+        if len(indices) % 3 or (len(indices) and indices.max() >= len(points)):
+            raise ValueError(f"patch {entity.id!r}: bad indices")
+        want[entity.id] = (roles[0], points.astype(np.float32), indices.reshape(-1, 3))
+    got = {}
+    for chunk in RrdReader(rrd).stream():
+        if not chunk.entity_path.startswith("/flow/patches/"):
+            continue
+        if not chunk.is_static:
+            raise ValueError(f"{chunk.entity_path} is not static")
+        batch = chunk.to_record_batch()
+        pos = batch.column("Mesh3D:vertex_positions")[0].values.flatten()
+        idx = batch.column("Mesh3D:triangle_indices")[0].values.flatten()
+        got[chunk.entity_path.removeprefix("/flow/patches/")] = (
+            np.asarray(pos, dtype=np.float32).reshape(-1, 3),
+            np.asarray(idx, dtype=np.uint32).reshape(-1, 3))
+    if got.keys() != want.keys():
+        raise ValueError(f"patches differ: rrd {sorted(got)}, mcap {sorted(want)}")
+    for name, (role, points, tris) in want.items():
+        if not (np.array_equal(got[name][0], points) and np.array_equal(got[name][1], tris)):
+            raise ValueError(f"patch {name!r}: rrd mesh differs from the MCAP's")
+    if not want:
+        return "no mesh flow: no patches in either file"
+    return ", ".join(f"{n} ({want[n][0]}, {len(want[n][2])} triangles)" for n in sorted(want))
+
+
 def check_vtk(vtk: Path, mcap_path: Path) -> str:
     import xml.etree.ElementTree as ET
 
@@ -308,6 +362,7 @@ CHECKS = [
     ("mcap reader + foxglove PointCloud", check_mcap),
     ("rerun mcap convert + verify", check_convert),
     ("blueprint in the rrd", check_blueprint),
+    ("flow patches rrd Mesh3D == mcap SceneUpdate", check_patches),
 ]
 
 

@@ -83,6 +83,19 @@ pub struct Outline {
     pub triangles: Vec<[u32; 3]>,
 }
 
+/// A boundary patch of a flow mesh, to draw: its faces as triangles (m).
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct PatchSurface {
+    /// Patch name from the mesh.
+    pub name: String,
+    /// Its role in the scene: `wall`, `outlet`, `inlet` or `lost`.
+    pub role: String,
+    /// Vertices, m.
+    pub vertices: Vec<[f64; 3]>,
+    /// Triangles, as indices into `vertices`.
+    pub triangles: Vec<[u32; 3]>,
+}
+
 /// Description of a run, written once at the start of each recording.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct RunMeta {
@@ -102,6 +115,8 @@ pub struct RunMeta {
     pub scene_toml: String,
     /// Geometry to draw once, as static line strips.
     pub outlines: Vec<Outline>,
+    /// The boundary patches of a flow mesh (empty without one), drawn once.
+    pub patches: Vec<PatchSurface>,
     /// Warnings from the scene check (`scg check`), logged as text.
     pub warnings: Vec<String>,
 }

@@ -17,6 +17,8 @@
 //!   and interpolating there reads (the hot path of particle tracking).
 //! * [`shared`]: [`Shared`]: borrowed or `Arc`-owned; [`Locator::owned`] and
 //!   [`Interpolator::owned`] hold their mesh without borrowing it.
+//! * [`surface`]: boundary patches as triangles (face-centre or first-point fans) for
+//!   contact walls and drawings.
 //!
 //! Readers and writers:
 //! * [`foam`]: OpenFOAM cases — [`foam::read_mesh`], [`foam::read_vector_field`] (a time
@@ -33,6 +35,7 @@ pub mod interp;
 pub mod locate;
 pub mod polymesh;
 pub mod shared;
+pub mod surface;
 pub mod table;
 pub mod vtk;
 

@@ -35,7 +35,7 @@ use scg_core::frame::RunMeta;
 
 use crate::RecordError;
 use crate::layout::{
-    ENTITY_GEOMETRY, ENTITY_PARTICLES, ENTITY_SCENE, ENTITY_STATS, ENTITY_WARNINGS,
+    ENTITY_GEOMETRY, ENTITY_PARTICLES, ENTITY_PATCHES, ENTITY_SCENE, ENTITY_STATS, ENTITY_WARNINGS,
     RRD_APPLICATION_ID, TIMELINE_SIM_TIME,
 };
 
@@ -198,8 +198,9 @@ fn child(parent: &str, name: &str) -> EntityPath {
     EntityPath::new(vec![EntityPathPart::new(parent), EntityPathPart::new(name)])
 }
 
-/// Where the camera looks from and at: the bounding box of the outlines seen from above the
-/// front right, far enough for the whole box to fit the view. `None` without outlines.
+/// Where the camera looks from and at: the bounding box of the outlines and the flow
+/// mesh's patches seen from above the front right, far enough for the whole box to fit
+/// the view. `None` without either.
 ///
 /// `None` also for a vessel smaller than [`MIN_FRAMED_RADIUS`]: an eye set in the blueprint
 /// gets a fixed near clipping plane of about 1 cm in Rerun 0.36, which would cut such a
@@ -207,7 +208,9 @@ fn child(parent: &str, name: &str) -> EntityPath {
 fn eye(meta: &RunMeta) -> Option<([f32; 3], [f32; 3])> {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    for p in meta.outlines.iter().flat_map(|o| o.strips.iter().flatten()) {
+    let strips = meta.outlines.iter().flat_map(|o| o.strips.iter().flatten());
+    let patches = meta.patches.iter().flat_map(|p| p.vertices.iter());
+    for p in strips.chain(patches) {
         for k in 0..3 {
             lo[k] = lo[k].min(p[k]);
             hi[k] = hi[k].max(p[k]);
@@ -290,6 +293,7 @@ fn build(meta: &RunMeta, stat_names: &[String]) -> Result<Vec<LogMsg>, RecordErr
         &[
             format!("+ /{ENTITY_PARTICLES}/**"),
             format!("+ /{ENTITY_GEOMETRY}/**"),
+            format!("+ /{}/**", ENTITY_PATCHES.join("/")),
         ],
     )?;
     if let Some((position, target)) = eye(meta) {

@@ -24,6 +24,9 @@ pub const ENTITY_PARTICLES: &str = "particles";
 pub const ENTITY_GEOMETRY: &str = "geometry";
 /// Parent entity of the scalars: `stats/<name>` holds `Scalars` (a `/` in a name nests).
 pub const ENTITY_STATS: &str = "stats";
+/// Parent entity of a mesh flow's boundary patches: `flow/patches/<patch name>` holds a
+/// static `Mesh3D` (its faces as triangles, coloured by role, see [`patch_color`]).
+pub const ENTITY_PATCHES: [&str; 2] = ["flow", "patches"];
 /// Entity of the static `TextLog` holding the scene check's warnings (one line each).
 pub const ENTITY_WARNINGS: &str = "warnings";
 /// Entity of the static `TextDocument` holding the scene file.
@@ -44,6 +47,11 @@ pub const COMPONENT_SPEED: &str = "speed";
 pub const TOPIC_PARTICLES: &str = "/particles";
 /// Topic of the scalars: one JSON message per frame, see [`STATS_JSON_SCHEMA`].
 pub const TOPIC_STATS: &str = "/stats";
+/// Topic of a mesh flow's boundary patches: one `foxglove.SceneUpdate` (protobuf) at time
+/// 0, one `SceneEntity` per patch (id = patch name, metadata `role`) holding one
+/// `TriangleListPrimitive` (points in m, indexed, coloured by role). Absent without a
+/// mesh flow.
+pub const TOPIC_PATCHES: &str = "/flow/patches";
 /// `frame_id` of the point clouds.
 pub const FRAME_ID: &str = "world";
 /// Name of the MCAP metadata record holding the run description (see `META_*` keys).
@@ -123,6 +131,17 @@ pub const META_GROUPS: &str = "groups";
 pub const META_WARNINGS: &str = "warnings";
 /// Metadata key: JSON array of `{name, strips}` (strips: arrays of `[x, y, z]`, m).
 pub const META_OUTLINES: &str = "outlines";
+
+/// Colour (sRGB and alpha, 0–255) a boundary patch is drawn in, by role: walls grey and
+/// most translucent, outlets green, inlets blue, lost patches red.
+pub fn patch_color(role: &str) -> [u8; 4] {
+    match role {
+        "wall" => [160, 160, 160, 60],
+        "outlet" => [60, 190, 90, 120],
+        "inlet" => [70, 130, 235, 120],
+        _ => [225, 95, 80, 100],
+    }
+}
 
 /// A group as stored in the [`META_GROUPS`] metadata entry.
 #[derive(Serialize, Deserialize)]

@@ -6,16 +6,17 @@ use std::io::Read;
 use std::path::Path;
 
 use foxglove::Decode;
-use foxglove::messages::PointCloud;
 use foxglove::messages::packed_element_field::NumericType;
+use foxglove::messages::{PointCloud, SceneUpdate};
 use mcap::records::Record;
 use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
-use scg_core::frame::{Frame, GroupMeta, Outline, RunMeta};
+use scg_core::frame::{Frame, GroupMeta, Outline, PatchSurface, RunMeta};
 
 use crate::layout::{
     FORMAT_VERSION, FieldType, GroupJson, META_CASE, META_DT, META_FORMAT, META_GROUPS,
     META_OUTLINES, META_RECORD_EVERY, META_SCG_VERSION, META_SEED, META_WARNINGS, METADATA_NAME,
-    OutlineJson, POINT_FIELDS, SCENE_ATTACHMENT, StatsIn, TOPIC_PARTICLES, TOPIC_STATS,
+    OutlineJson, POINT_FIELDS, SCENE_ATTACHMENT, StatsIn, TOPIC_PARTICLES, TOPIC_PATCHES,
+    TOPIC_STATS,
 };
 use crate::{RecordError, Recording};
 
@@ -93,6 +94,7 @@ pub fn read_mcap(path: &Path) -> Result<Recording, RecordError> {
         )));
     };
     meta.scene_toml = state.scene_toml.take().unwrap_or_default();
+    meta.patches = std::mem::take(&mut state.patches);
     let complete = outcome.is_ok() && state.saw_footer;
 
     let mut frames = Vec::with_capacity(state.pending.len());
@@ -129,6 +131,7 @@ pub fn read_mcap(path: &Path) -> Result<Recording, RecordError> {
 enum ChannelKind {
     Particles,
     Stats,
+    Patches,
     Other,
 }
 
@@ -148,6 +151,7 @@ struct ReadState {
     channels: HashMap<u16, ChannelKind>,
     meta: Option<RunMeta>,
     scene_toml: Option<String>,
+    patches: Vec<PatchSurface>,
     pending: BTreeMap<u32, Pending>,
 }
 
@@ -164,12 +168,14 @@ impl ReadState {
                 let kind = match channel.topic.as_str() {
                     TOPIC_PARTICLES => ChannelKind::Particles,
                     TOPIC_STATS => ChannelKind::Stats,
+                    TOPIC_PATCHES => ChannelKind::Patches,
                     _ => ChannelKind::Other,
                 };
                 let schema = self.schemas.get(&channel.schema_id);
                 let expected = match kind {
                     ChannelKind::Particles => Some(("protobuf", "foxglove.PointCloud")),
                     ChannelKind::Stats => Some(("json", "")),
+                    ChannelKind::Patches => Some(("protobuf", "foxglove.SceneUpdate")),
                     ChannelKind::Other => None,
                 };
                 if let Some((encoding, schema_name)) = expected {
@@ -206,6 +212,10 @@ impl ReadState {
                             )
                         })?;
                         self.pending.entry(header.sequence).or_default().stats = Some(stats);
+                    }
+                    ChannelKind::Patches => {
+                        self.patches =
+                            decode_patches(&data).map_err(|e| format!("`{TOPIC_PATCHES}`: {e}"))?;
                     }
                     ChannelKind::Other => {}
                 }
@@ -260,8 +270,45 @@ fn parse_meta(entries: &BTreeMap<String, String>) -> Result<RunMeta, String> {
         groups: groups.into_iter().map(GroupMeta::from).collect(),
         scene_toml: String::new(),
         outlines: outlines.into_iter().map(Outline::from).collect(),
+        patches: Vec::new(),
         warnings,
     })
+}
+
+/// Decodes the `/flow/patches` scene update into the patches (name = entity id, role =
+/// metadata `role`, vertices and triangles of its first triangle list).
+fn decode_patches(data: &[u8]) -> Result<Vec<PatchSurface>, String> {
+    let update = SceneUpdate::decode(data).map_err(|e| format!("bad scene update: {e}"))?;
+    update
+        .entities
+        .into_iter()
+        .map(|e| {
+            let role = e
+                .metadata
+                .iter()
+                .find(|kv| kv.key == "role")
+                .map_or_else(|| "lost".to_owned(), |kv| kv.value.clone());
+            let list = e.triangles.into_iter().next().unwrap_or_default();
+            let n = list.points.len();
+            if list.indices.len() % 3 != 0 || list.indices.iter().any(|&i| i as usize >= n) {
+                return Err(format!(
+                    "patch `{}`: {} indices for {n} points",
+                    e.id,
+                    list.indices.len()
+                ));
+            }
+            Ok(PatchSurface {
+                name: e.id,
+                role,
+                vertices: list.points.iter().map(|p| [p.x, p.y, p.z]).collect(),
+                triangles: list
+                    .indices
+                    .chunks_exact(3)
+                    .map(|t| [t[0], t[1], t[2]])
+                    .collect(),
+            })
+        })
+        .collect()
 }
 
 /// Decodes a `/particles` point cloud into a frame (step, time and stats left empty).

@@ -11,7 +11,10 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use foxglove::Encode;
 use foxglove::bytes::Bytes;
 use foxglove::messages::packed_element_field::NumericType;
-use foxglove::messages::{PackedElementField, PointCloud, Pose, Quaternion, Timestamp, Vector3};
+use foxglove::messages::{
+    Color, KeyValuePair, PackedElementField, Point3, PointCloud, Pose, Quaternion, SceneEntity,
+    SceneUpdate, Timestamp, TriangleListPrimitive, Vector3,
+};
 use mcap::records::{MessageHeader, Metadata};
 use mcap::{Attachment, Compression, WriteOptions, Writer};
 use scg_core::frame::{Frame, FrameSink, RunMeta};
@@ -20,7 +23,8 @@ use crate::layout::{
     FORMAT_VERSION, FRAME_ID, FieldType, GroupJson, META_CASE, META_DT, META_FORMAT, META_GROUPS,
     META_OUTLINES, META_RECORD_EVERY, META_SCG_VERSION, META_SEED, META_WARNINGS, METADATA_NAME,
     OrderedValues, OutlineJson, POINT_FIELDS, POINT_STRIDE, SCENE_ATTACHMENT, SCENE_MEDIA_TYPE,
-    STATS_JSON_SCHEMA, STATS_SCHEMA_NAME, StatsOut, TOPIC_PARTICLES, TOPIC_STATS,
+    STATS_JSON_SCHEMA, STATS_SCHEMA_NAME, StatsOut, TOPIC_PARTICLES, TOPIC_PATCHES, TOPIC_STATS,
+    patch_color,
 };
 use crate::{RecordError, check_frame, commit_partial, partial_path};
 
@@ -64,6 +68,8 @@ impl Default for McapOptions {
 ///   ns (rounded);
 /// * metadata record `scg` with the run description, attachment `scene.toml` with the scene
 ///   file, both written first so that a truncated file keeps them;
+/// * with a mesh flow, `/flow/patches`: one `foxglove.SceneUpdate` at time 0 with every
+///   boundary patch as a triangle list ([`TOPIC_PATCHES`]), in the first chunk;
 /// * zstd-compressed chunks (see [`McapOptions`]), message and chunk indexes, statistics,
 ///   summary and CRCs.
 ///
@@ -127,6 +133,66 @@ fn point_fields() -> Vec<PackedElementField> {
             } as i32,
         })
         .collect()
+}
+
+/// The identity pose.
+fn identity() -> Pose {
+    Pose {
+        position: Some(Vector3 {
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+        }),
+        orientation: Some(Quaternion {
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+            w: 1.0,
+        }),
+    }
+}
+
+/// The [`TOPIC_PATCHES`] message: one entity per boundary patch (id = its name, metadata
+/// `role`), one indexed triangle list each, coloured by role, in frame `world`, forever.
+fn patches_update(meta: &RunMeta) -> SceneUpdate {
+    let entities = meta
+        .patches
+        .iter()
+        .map(|p| {
+            let [r, g, b, a] = patch_color(&p.role).map(|c| f64::from(c) / 255.0);
+            SceneEntity {
+                timestamp: Some(Timestamp::new(0, 0)),
+                frame_id: FRAME_ID.to_owned(),
+                id: p.name.clone(),
+                lifetime: None,
+                frame_locked: false,
+                metadata: vec![KeyValuePair {
+                    key: "role".to_owned(),
+                    value: p.role.clone(),
+                }],
+                triangles: vec![TriangleListPrimitive {
+                    pose: Some(identity()),
+                    points: p
+                        .vertices
+                        .iter()
+                        .map(|v| Point3 {
+                            x: v[0],
+                            y: v[1],
+                            z: v[2],
+                        })
+                        .collect(),
+                    color: Some(Color { r, g, b, a }),
+                    colors: Vec::new(),
+                    indices: p.triangles.iter().flatten().copied().collect(),
+                }],
+                ..Default::default()
+            }
+        })
+        .collect();
+    SceneUpdate {
+        deletions: Vec::new(),
+        entities,
+    }
 }
 
 /// Simulation time in ns, as MCAP log/publish time.
@@ -229,6 +295,37 @@ impl McapSink {
         let stats_channel = writer
             .add_channel(stats_schema, TOPIC_STATS, "json", &BTreeMap::new())
             .map_err(mcap_err)?;
+        if !meta.patches.is_empty() {
+            let schema = SceneUpdate::get_schema().ok_or_else(|| {
+                RecordError::Encode("foxglove.SceneUpdate has no schema".to_owned())
+            })?;
+            let scene_schema = writer
+                .add_schema(&schema.name, &schema.encoding, &schema.data)
+                .map_err(mcap_err)?;
+            let channel = writer
+                .add_channel(
+                    scene_schema,
+                    TOPIC_PATCHES,
+                    &SceneUpdate::get_message_encoding(),
+                    &BTreeMap::new(),
+                )
+                .map_err(mcap_err)?;
+            let mut data = Vec::new();
+            patches_update(meta)
+                .encode(&mut data)
+                .map_err(|e| RecordError::Encode(e.to_string()))?;
+            writer
+                .write_to_known_channel(
+                    &MessageHeader {
+                        channel_id: channel,
+                        sequence: 0,
+                        log_time: 0,
+                        publish_time: 0,
+                    },
+                    &data,
+                )
+                .map_err(mcap_err)?;
+        }
         // Close the chunk holding the schemas and channels, and write everything so far.
         writer.flush().map_err(mcap_err)?;
 

@@ -28,9 +28,9 @@ use rerun::{
 use scg_core::frame::{Frame, FrameSink, RunMeta};
 
 use crate::layout::{
-    COMPONENT_PARTICLE_ID, COMPONENT_SPEED, ENTITY_GEOMETRY, ENTITY_PARTICLES, ENTITY_SCENE,
-    ENTITY_STATS, ENTITY_WARNINGS, RRD_APPLICATION_ID, RRD_PROPERTY, TIMELINE_SIM_TIME,
-    TIMELINE_STEP,
+    COMPONENT_PARTICLE_ID, COMPONENT_SPEED, ENTITY_GEOMETRY, ENTITY_PARTICLES, ENTITY_PATCHES,
+    ENTITY_SCENE, ENTITY_STATS, ENTITY_WARNINGS, RRD_APPLICATION_ID, RRD_PROPERTY,
+    TIMELINE_SIM_TIME, TIMELINE_STEP, patch_color,
 };
 use crate::{RecordError, Recording, check_frame, commit_partial, partial_path};
 
@@ -98,7 +98,8 @@ struct GroupEntity {
 ///   (|v|, m/s, Float32), one per point;
 ///   a group without particles in a frame is logged as an empty point set;
 /// * `stats/<name>`: `Scalars`, one per entry of [`Frame::stats`] (a `/` in a name nests);
-/// * static: `geometry/<outline>` (`LineStrips3D`), `warnings` (`TextLog`, one warning per
+/// * static: `geometry/<outline>` (`LineStrips3D`), `flow/patches/<patch>` (`Mesh3D`, a mesh
+///   flow's boundary patches coloured by role), `warnings` (`TextLog`, one warning per
 ///   line), `scene` (`TextDocument` with the scene file), and the recording property `scg`
 ///   (case, scg_version, seed, dt, record_every, groups), and Z-up `ViewCoordinates` at `/`;
 /// * a blueprint (viewer layout, see the `blueprint` module), sent with the first frame.
@@ -296,6 +297,31 @@ impl RrdSink {
                 )
                 .map_err(rerun_err)?;
             }
+        }
+
+        for patch in &meta.patches {
+            // A mesh flow's boundary patch: its triangles, translucent, coloured by role.
+            let path = EntityPath::new(
+                ENTITY_PATCHES
+                    .iter()
+                    .chain([&patch.name.as_str()])
+                    .map(|p| EntityPathPart::new(*p))
+                    .collect(),
+            );
+            let positions = patch
+                .vertices
+                .iter()
+                .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]);
+            let [r, g, b, a] = patch_color(&patch.role);
+            rec.log_static(
+                path,
+                &Mesh3D::new(positions)
+                    .with_triangle_indices(patch.triangles.clone())
+                    .with_albedo_factor(rerun::datatypes::Rgba32::from_unmultiplied_rgba(
+                        r, g, b, a,
+                    )),
+            )
+            .map_err(rerun_err)?;
         }
 
         if !meta.warnings.is_empty() {

@@ -13,7 +13,7 @@ use mcap::{MessageStream, Summary};
 use scg_core::frame::{Frame, FrameSink};
 use scg_record::layout::{
     METADATA_NAME, POINT_FIELDS, POINT_STRIDE, SCENE_ATTACHMENT, STATS_SCHEMA_NAME,
-    TOPIC_PARTICLES, TOPIC_STATS,
+    TOPIC_PARTICLES, TOPIC_PATCHES, TOPIC_STATS,
 };
 use scg_record::{McapOptions, McapSink, RecordError, partial_path, read_mcap};
 
@@ -67,8 +67,32 @@ fn file_layout_is_as_documented() {
     // Messages, read with the mcap crate's own reader.
     let mut particles = 0;
     let mut stats = 0;
+    let mut patches = 0;
     for message in MessageStream::new(&bytes).expect("stream") {
         let message = message.expect("message");
+        if message.channel.topic == TOPIC_PATCHES {
+            // The boundary patches: one SceneUpdate at time 0, one entity per patch.
+            patches += 1;
+            assert_eq!((message.sequence, message.log_time), (0, 0));
+            assert_eq!(message.channel.message_encoding, "protobuf");
+            let schema = message.channel.schema.as_ref().expect("schema");
+            assert_eq!(schema.name, "foxglove.SceneUpdate");
+            let update =
+                foxglove::messages::SceneUpdate::decode(&message.data[..]).expect("update");
+            let want = meta().patches;
+            assert_eq!(update.entities.len(), want.len());
+            for (e, p) in update.entities.iter().zip(&want) {
+                assert_eq!(e.id, p.name);
+                assert_eq!(e.frame_id, "world");
+                assert_eq!(e.metadata[0].key, "role");
+                assert_eq!(e.metadata[0].value, p.role);
+                let t = &e.triangles[0];
+                assert_eq!(t.indices.len(), 3 * p.triangles.len());
+                assert_eq!(t.points.len(), p.vertices.len());
+                assert_eq!(t.points[0].x.to_bits(), p.vertices[0][0].to_bits());
+            }
+            continue;
+        }
         let frame = &frames[message.sequence as usize];
         let ns = (frame.time * 1e9).round() as u64;
         assert_eq!(message.log_time, ns);
@@ -108,15 +132,15 @@ fn file_layout_is_as_documented() {
             other => panic!("unexpected topic {other}"),
         }
     }
-    assert_eq!((particles, stats), (N_FRAMES, N_FRAMES));
+    assert_eq!((particles, stats, patches), (N_FRAMES, N_FRAMES, 1));
 
     // Summary: statistics, chunk indexes, attachment and metadata indexes.
     let summary = Summary::read(&bytes)
         .expect("summary")
         .expect("has a summary");
     let stats = summary.stats.as_ref().expect("statistics");
-    assert_eq!(stats.message_count, 2 * N_FRAMES as u64);
-    assert_eq!(stats.channel_count, 2);
+    assert_eq!(stats.message_count, 2 * N_FRAMES as u64 + 1);
+    assert_eq!(stats.channel_count, 3);
     assert_eq!(stats.attachment_count, 1);
     assert_eq!(stats.metadata_count, 1);
     // One chunk for the schemas and channels, then one per frame.

@@ -10,7 +10,7 @@ use glam::DVec3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use scg_core::frame::{GroupMeta, Outline, RunMeta};
+use scg_core::frame::{GroupMeta, Outline, PatchSurface, RunMeta};
 use scg_core::physics::contact::{Material, NormalLaw};
 use scg_core::physics::wall_shape::WallShape;
 use scg_core::sim::InletOutlet;
@@ -87,8 +87,8 @@ impl Scene {
             }),
             gravity: self.gravity,
             buoyancy: self.buoyancy,
-            walls: (!self.walls.is_empty()).then(|| WallSet {
-                walls: self.walls.clone(),
+            walls: (self.contact_walls().next().is_some()).then(|| WallSet {
+                walls: self.contact_walls().cloned().collect(),
                 law: self.normal_law.unwrap_or(NormalLaw::hertz(1.0)),
                 material: self.material.unwrap_or(Material {
                     youngs_modulus: 1e7,
@@ -189,8 +189,30 @@ impl Scene {
                     }
                 })
                 .collect(),
+            patches: self.patch_surfaces(),
             warnings,
         }
+    }
+
+    /// Every boundary patch of the mesh flow with its role, as triangles to draw (polygons
+    /// fanned from their first point); empty without a mesh flow.
+    pub fn patch_surfaces(&self) -> Vec<PatchSurface> {
+        use scg_mesh::surface::{Fan, patch_surface};
+        let Some(m) = &self.mesh_flow else {
+            return Vec::new();
+        };
+        let mesh = m.flow.mesh();
+        (0..mesh.patches.len())
+            .map(|i| {
+                let s = patch_surface(mesh, &[i], Fan::FirstPoint);
+                PatchSurface {
+                    name: mesh.patches[i].name.clone(),
+                    role: m.flow.role(i as u32).name().to_string(),
+                    vertices: s.vertices.iter().map(|v| v.to_array()).collect(),
+                    triangles: s.triangles,
+                }
+            })
+            .collect()
     }
 
     /// A length that spans the scene (for drawing infinite walls), m.

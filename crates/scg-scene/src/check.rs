@@ -271,7 +271,10 @@ fn group_report(scene: &Scene, g: &crate::Group) -> GroupReport {
         (Some(f), None) => (f64::INFINITY, 0.0, 0.0, s.density / f.density),
         _ => (f64::INFINITY, 0.0, 0.0, f64::INFINITY),
     };
-    let contact_time = (!scene.walls.is_empty())
+    let contact_time = scene
+        .contact_walls()
+        .next()
+        .is_some()
         .then(|| known_speed(scene, tau, g))
         .flatten()
         .and_then(|v| contact_time(scene, s.diameter, s.density, v));
@@ -571,7 +574,7 @@ pub fn check(scene: &Scene) -> Report {
         if let Placement::Explicit { positions, .. } = &g.placement {
             let radius = 0.5 * coarse_grain(g.law, g.alpha, g.diameter, g.density).diameter;
             for (pi, p) in positions.iter().enumerate() {
-                for w in &scene.walls {
+                for w in scene.contact_walls() {
                     if let Some(t) = w.shape.touch(*p, radius)
                         && w.shape.contains(*p)
                     {

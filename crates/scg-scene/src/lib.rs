@@ -21,6 +21,8 @@ pub mod stl;
 mod validate;
 
 pub use error::SceneError;
-pub use model::{DtChoice, Feeder, Group, Outlet, Placement, Region, Scene, SceneMeshFlow};
+pub use model::{
+    DtChoice, Feeder, Group, Outlet, PatchWalls, Placement, Region, Scene, SceneMeshFlow,
+};
 pub use overrides::apply_overrides;
 pub use validate::{DEFAULT_SCENE, load, parse};

@@ -113,8 +113,11 @@ pub struct Scene {
     pub material: Option<Material>,
     /// Normal contact law derived from the material.
     pub normal_law: Option<NormalLaw>,
-    /// Walls.
+    /// Walls (`[[walls]]`).
     pub walls: Vec<Wall>,
+    /// The wall patches of a mesh flow as a contact wall (`flow.patches.wall_model =
+    /// "contact"`, the default with `[material]`); `None` when they only rebound.
+    pub patch_walls: Option<PatchWalls>,
     /// Particle–particle contacts (`[contacts]`), if declared.
     pub contacts: Option<ContactConfig>,
     /// Groups.
@@ -187,4 +190,30 @@ pub struct SceneMeshFlow {
     pub source: String,
     /// The field's name.
     pub field: String,
+}
+
+/// The wall patches of a mesh flow as one mesh wall: every face of every wall patch,
+/// polygons split into triangles about their centres, points shared, so that a particle
+/// crossing from one face or patch to the next of a flat surface feels one contact.
+#[derive(Clone, Debug)]
+pub struct PatchWalls {
+    /// The wall (`WallShape::Mesh`), named [`PatchWalls::NAME`].
+    pub wall: Wall,
+    /// (patch index in the mesh, its triangles) for every wall patch.
+    pub per_patch: Vec<(usize, usize)>,
+}
+
+impl PatchWalls {
+    /// The wall's name (messages, contact histories).
+    pub const NAME: &'static str = "flow.patches.walls";
+}
+
+impl Scene {
+    /// Every wall particles touch with the contact law: the `[[walls]]`, then the wall
+    /// patches when they are a contact wall.
+    pub fn contact_walls(&self) -> impl Iterator<Item = &Wall> {
+        self.walls
+            .iter()
+            .chain(self.patch_walls.as_ref().map(|p| &p.wall))
+    }
 }

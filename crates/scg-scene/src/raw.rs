@@ -140,6 +140,19 @@ pub struct RawPatches {
     pub walls: Vec<String>,
     #[serde(default)]
     pub outlets: Vec<String>,
+    /// What the wall patches do: `contact` (default with `[material]`) or `rebound`.
+    #[serde(default, deserialize_with = "some_name")]
+    pub wall_model: Option<RawWallModel>,
+}
+
+/// `flow.patches.wall_model`.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum RawWallModel {
+    /// The contact law of `[material]` against the patches' faces (a mesh wall).
+    Contact,
+    /// The specular rebound of the centre only.
+    Rebound,
 }
 
 /// `flow.interpolation`.

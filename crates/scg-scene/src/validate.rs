@@ -19,7 +19,7 @@ use crate::model::{DtChoice, Group, Scene};
 use crate::overrides::apply_overrides;
 use crate::raw::{RawDt, RawScene};
 use particles::{feeder, group};
-use physics::{contacts, flow_field, material, mesh_flow, outlet, wall};
+use physics::{contacts, flow_field, material, mesh_flow, outlet, patch_walls, wall};
 
 /// The embedded default scene (the paper's vortex case), run by `scg run` with no file.
 pub const DEFAULT_SCENE: &str = include_str!("../../../cases/vortex.toml");
@@ -121,6 +121,10 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
             (Some(mat), Some(law))
         }
     };
+    let patch_walls = match (&raw.flow, &mesh_flow) {
+        (Some(f), Some(m)) => patch_walls(f, m, material, cx)?,
+        _ => None,
+    };
     let mut walls = Vec::new();
     for (i, w) in raw.walls.iter().enumerate() {
         walls.push(wall(w, i, cx)?);
@@ -195,6 +199,7 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
         material,
         normal_law,
         walls,
+        patch_walls,
         contacts: None,
         groups,
         feeders,

@@ -232,7 +232,8 @@ pub fn design(a: &CostArgs, base: &mut Scene) -> Result<Design, String> {
     if represented == 0 {
         return Err("--represented must be ≥ 1".into());
     }
-    let contacts = base.material.is_some() && (!base.walls.is_empty() || base.contacts.is_some());
+    let contacts = base.material.is_some()
+        && (base.contact_walls().next().is_some() || base.contacts.is_some());
     if !contacts {
         stiffness = vec![1.0];
     }

@@ -17,7 +17,9 @@ use scg_mesh::{
 /// What a particle meeting a boundary patch does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PatchRole {
-    /// Rebounds (specular reflection, normal velocity × −e).
+    /// Rebounds (specular reflection, normal velocity × −e). With the contact wall model
+    /// the particles meet a mesh wall of the patch's faces first (the walls stage) and the
+    /// reflection is only the guard that keeps every centre inside.
     Wall,
     /// Drains: removed and counted per group.
     Outlet,
@@ -310,7 +312,9 @@ pub const MAX_REFLECTIONS: usize = 8;
 /// [`MAX_REFLECTIONS`] times, after which the particle goes back to `x0` (its start, in
 /// cell `h0`) with the reflected velocity, so a wall is never passed; crossing an outlet
 /// drains, anything else is lost. A boundary face the walk passes on its way to a point
-/// inside the mesh (`Location::Crossed`: a concave boundary) counts as crossed.
+/// inside the mesh (`Location::Crossed`: a concave boundary) counts as crossed. When the
+/// wall patches are also a contact wall, this reflection is the last-resort guard (a
+/// centre reaches a wall patch only through an overlap beyond the radius).
 #[inline]
 pub fn land(
     flow: &MeshFlow,

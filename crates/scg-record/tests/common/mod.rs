@@ -2,7 +2,7 @@
 
 #![allow(dead_code)]
 
-use scg_core::frame::{Frame, GroupMeta, Outline, RunMeta};
+use scg_core::frame::{Frame, GroupMeta, Outline, PatchSurface, RunMeta};
 
 /// Number of particles in a full frame.
 pub const N_PARTICLES: u32 = 50;
@@ -59,6 +59,25 @@ pub fn meta() -> RunMeta {
                 name: "nozzle".into(),
                 strips: vec![vec![[0.05, 0.1, 0.3], [0.05, 0.1, 0.25]]],
                 ..Default::default()
+            },
+        ],
+        patches: vec![
+            PatchSurface {
+                name: "walls".into(),
+                role: "wall".into(),
+                vertices: vec![
+                    [0.0, 0.0, 0.0],
+                    [0.1, 0.0, 0.0],
+                    [0.1, 0.2, 0.0],
+                    [0.0, 0.2, 1.0 / 3.0],
+                ],
+                triangles: vec![[0, 1, 2], [0, 2, 3]],
+            },
+            PatchSurface {
+                name: "out let/α".into(),
+                role: "outlet".into(),
+                vertices: vec![[0.0, 0.0, 0.3], [0.1, 0.0, 0.3], [0.1, 0.2, 0.3]],
+                triangles: vec![[0, 1, 2]],
             },
         ],
         warnings: vec![

@@ -43,7 +43,7 @@ pub fn render(scene: &Scene, r: &Report) -> String {
         }
     }
     if let Some(m) = &scene.mesh_flow {
-        s.push_str(&mesh_flow_lines(m));
+        s.push_str(&mesh_flow_lines(m, scene.patch_walls.as_ref()));
     }
     s.push_str(&format!(
         "Stokes number (paper eq. 1): {:.4e}\n",
@@ -83,7 +83,7 @@ fn mesh_line(name: &str, m: &scg_core::physics::trimesh::TriMesh) -> String {
 
 /// The lines describing a flow on a mesh: sizes, bounds, patches with their roles, field
 /// speeds.
-fn mesh_flow_lines(m: &crate::model::SceneMeshFlow) -> String {
+fn mesh_flow_lines(m: &crate::model::SceneMeshFlow, walls: Option<&crate::PatchWalls>) -> String {
     let f = &m.flow;
     let mesh = f.mesh();
     let [lo, hi] = f.geometry().bounds();
@@ -103,14 +103,30 @@ fn mesh_flow_lines(m: &crate::model::SceneMeshFlow) -> String {
         umin,
         umax
     );
-    for (p, role) in mesh.patches.iter().zip(f.roles()) {
+    for (i, (p, role)) in mesh.patches.iter().zip(f.roles()).enumerate() {
+        let what = match (role, walls) {
+            (scg_core::physics::mesh_flow::PatchRole::Wall, Some(w)) => format!(
+                "wall: contact wall with {} triangles (the [material] contact law; the specular rebound only as a guard)",
+                w.per_patch
+                    .iter()
+                    .find(|(k, _)| *k == i)
+                    .map_or(0, |(_, n)| *n)
+            ),
+            (scg_core::physics::mesh_flow::PatchRole::Wall, None) => {
+                "wall: specular rebound of the centre (no contact law)".to_string()
+            }
+            _ => role.name().to_string(),
+        };
         s.push_str(&format!(
-            "  patch `{}` ({}): {} faces, {}\n",
-            p.name,
-            p.kind,
-            p.size,
-            role.name()
+            "  patch `{}` ({}): {} faces, {what}\n",
+            p.name, p.kind, p.size,
         ));
+    }
+    if let Some(w) = walls
+        && let scg_core::physics::wall_shape::WallShape::Mesh(t) = &w.wall.shape
+    {
+        s.push_str("  ");
+        s.push_str(&mesh_line(&w.wall.name, t));
     }
     s
 }
