@@ -19,6 +19,9 @@ pub enum PatchRole {
     Wall,
     /// Drains: removed and counted per group.
     Outlet,
+    /// Particles are fed through it (`[[feeders]] patch`); one going back out through
+    /// it is removed and counted as lost.
+    Inlet,
     /// Removed and counted as lost.
     Lost,
 }
@@ -29,6 +32,7 @@ impl PatchRole {
         match self {
             PatchRole::Wall => "wall",
             PatchRole::Outlet => "outlet",
+            PatchRole::Inlet => "inlet",
             PatchRole::Lost => "lost",
         }
     }
@@ -308,7 +312,7 @@ pub fn land(
                     hint: hint::DRAINED,
                 };
             }
-            PatchRole::Lost => {
+            PatchRole::Lost | PatchRole::Inlet => {
                 return Landing {
                     x: x1,
                     v: v1,
