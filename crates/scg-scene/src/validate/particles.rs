@@ -213,7 +213,12 @@ pub(super) fn feeder(
             return Err(cx.err(&k("patch"), "give `region` or `patch`, not both"));
         }
         (None, None) => {
-            return Err(cx.err(&k("region"), "a feeder needs `region` or `patch`"));
+            // the key is missing: point at the feeder
+            let mut e = cx.err(&k("region"), "a feeder needs `region` or `patch`");
+            e.line = e
+                .line
+                .or_else(|| crate::error::locate(cx.text, &format!("feeders[{i}]")));
+            return Err(e);
         }
         (Some(r), None) => FeedSource::Region(region(r, &k("region"), cx)?),
         (None, Some(name)) => FeedSource::Patch(Arc::new(patch(name, &k("patch"), mesh, cx)?)),
