@@ -180,3 +180,43 @@ fn overrides_keep_line_numbers_and_comments() {
         "comment after the value kept"
     );
 }
+
+#[test]
+fn patch_feeders_need_a_mesh_flow_and_no_region() {
+    // GOOD's lines 1–14 (the group fed, starting empty), then the feeder (15–19).
+    let fed = GOOD.replace("positions = [[0.0, 0.0, 0.0]]\n", "")
+        + "[[feeders]]\ngroup = \"a\"\nrate = 100.0\npatch = \"inlet\"\nvelocity = \"field\"\n";
+    // `patch` without a mesh flow
+    expect(&fed, "feeders[0].patch", 18);
+    // `patch` and `region` together
+    expect(
+        &fed.replace(
+            "velocity = \"field\"",
+            "region = { kind = \"box\", min = [0.0, 0.0, 0.0], max = [1.0, 1.0, 1.0] }",
+        ),
+        "feeders[0].patch",
+        18,
+    );
+    // neither: the feeder's line
+    let (code, err) = check(&fed.replace("patch = \"inlet\"\n", ""));
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("`feeders[0].region`") && err.contains("needs `region` or `patch`"),
+        "{err}"
+    );
+    assert!(
+        err.contains("bad.toml:15:") || err.contains("bad.toml:16:"),
+        "{err}"
+    );
+    // `velocity = "field"` on a region feeder, and an unknown word
+    let region = fed.replace(
+        "patch = \"inlet\"",
+        "region = { kind = \"box\", min = [0.0, 0.0, 0.0], max = [1.0, 1.0, 1.0] }",
+    );
+    expect(&region, "feeders[0].velocity", 19);
+    expect(
+        &region.replace("\"field\"", "\"fast\""),
+        "feeders[0].velocity",
+        19,
+    );
+}

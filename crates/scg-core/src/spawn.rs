@@ -89,16 +89,11 @@ impl SpawnRules {
     }
 }
 
-/// `spawner.spawn(bundle)`, with an unlocated [`CellHint`] added when `mesh` (one bundle).
+/// `spawner.spawn(bundle)`, with the [`CellHint`] `$hint` added when `mesh` (one bundle).
 macro_rules! spawn_opt {
-    ($spawner:expr, $mesh:expr, $bundle:expr) => {
+    ($spawner:expr, $mesh:expr, $hint:expr, $bundle:expr) => {
         if $mesh {
-            $spawner
-                .spawn((
-                    $bundle,
-                    CellHint(crate::physics::mesh_flow::hint::UNLOCATED),
-                ))
-                .id()
+            $spawner.spawn(($bundle, CellHint($hint))).id()
         } else {
             $spawner.spawn($bundle).id()
         }
@@ -108,7 +103,18 @@ macro_rules! spawn_opt {
 /// Spawn one particle with every component of the layout in a single bundle (no
 /// archetype moves), through a `World` or `Commands` (both have `spawn`).
 macro_rules! spawn_bundle {
-    ($spawner:expr, $rules:expr, $spec:expr, $id:expr, $dt:expr) => {{
+    ($spawner:expr, $rules:expr, $spec:expr, $id:expr, $dt:expr) => {
+        spawn_bundle!(
+            $spawner,
+            $rules,
+            $spec,
+            $id,
+            $dt,
+            crate::physics::mesh_flow::hint::UNLOCATED
+        )
+    };
+    ($spawner:expr, $rules:expr, $spec:expr, $id:expr, $dt:expr, $hint:expr) => {{
+        let hint: u32 = $hint;
         let rules: &SpawnRules = $rules;
         let spec: &ParticleSpec = $spec;
         let cg = CoarseGrain {
@@ -135,12 +141,12 @@ macro_rules! spawn_bundle {
         );
         let spin = AngularVelocity::default();
         match (rules.forces, rules.spin, rules.gravity.is_some()) {
-            (true, _, false) => spawn_opt!($spawner, rules.mesh, (base, walls)),
-            (true, _, true) => spawn_opt!($spawner, rules.mesh, (base, walls, gravity)),
-            (false, true, false) => spawn_opt!($spawner, rules.mesh, (base, spin)),
-            (false, true, true) => spawn_opt!($spawner, rules.mesh, (base, spin, gravity)),
-            (false, false, false) => spawn_opt!($spawner, rules.mesh, base),
-            (false, false, true) => spawn_opt!($spawner, rules.mesh, (base, gravity)),
+            (true, _, false) => spawn_opt!($spawner, rules.mesh, hint, (base, walls)),
+            (true, _, true) => spawn_opt!($spawner, rules.mesh, hint, (base, walls, gravity)),
+            (false, true, false) => spawn_opt!($spawner, rules.mesh, hint, (base, spin)),
+            (false, true, true) => spawn_opt!($spawner, rules.mesh, hint, (base, spin, gravity)),
+            (false, false, false) => spawn_opt!($spawner, rules.mesh, hint, base),
+            (false, false, true) => spawn_opt!($spawner, rules.mesh, hint, (base, gravity)),
         }
     }};
 }
@@ -173,4 +179,17 @@ pub fn spawn_particle_deferred(
     dt: f64,
 ) -> Entity {
     spawn_bundle!(commands, rules, spec, id, dt)
+}
+
+/// [`spawn_particle_deferred`] with the mesh cell hint `hint` (a cell holding the centre,
+/// or [`crate::physics::mesh_flow::hint::UNLOCATED`]); ignored without a mesh flow.
+pub fn spawn_particle_deferred_in(
+    commands: &mut Commands,
+    rules: &SpawnRules,
+    spec: &ParticleSpec,
+    id: u32,
+    dt: f64,
+    hint: u32,
+) -> Entity {
+    spawn_bundle!(commands, rules, spec, id, dt, hint)
 }

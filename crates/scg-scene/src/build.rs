@@ -44,8 +44,9 @@ impl Scene {
             alpha: g.alpha,
             law: g.law,
             rate: f.rate,
-            region: f.region.clone(),
+            source: f.source.clone(),
             velocity: f.velocity,
+            field_velocity: f.field_velocity,
             spin: self.flow.vortex().filter(|_| f.swirl != 0.0).map(|v| Spin {
                 center: v.center,
                 omega: v.axis * (v.omega * f.swirl),

@@ -11,7 +11,7 @@ use scg_core::physics::integrate::Integrator;
 use scg_core::physics::scaling::coarse_grain;
 use scg_core::physics::wall_shape::WallShape;
 
-use crate::model::Allow;
+use crate::model::{Allow, FeedSource};
 use crate::{Placement, Scene};
 
 mod render;
@@ -117,7 +117,7 @@ fn max_radius(scene: &Scene) -> f64 {
         }
     }
     for f in &scene.feeders {
-        if let crate::Region::Cylinder { radius_max, .. } = f.region {
+        if let FeedSource::Region(crate::Region::Cylinder { radius_max, .. }) = f.source {
             r = r.max(radius_max);
         }
     }
@@ -144,24 +144,33 @@ fn group_velocities(scene: &Scene, g: &crate::Group) -> Vec<(DVec3, DVec3)> {
     let mut out = placement_velocities(g);
     for f in &scene.feeders {
         if scene.groups[f.group].name == g.name {
-            let c = match &f.region {
-                crate::Region::Box { min, max } => 0.5 * (*min + *max),
-                crate::Region::Cylinder {
+            let c = match &f.source {
+                FeedSource::Region(crate::Region::Box { min, max }) => 0.5 * (*min + *max),
+                FeedSource::Region(crate::Region::Cylinder {
                     center,
                     axis,
                     radius_max,
                     height,
                     ..
-                } => {
+                }) => {
                     *center
                         + *axis * (0.5 * (height.0 + height.1))
                         + *radius_max * axis.any_orthonormal_vector()
                 }
+                FeedSource::Patch(p) => {
+                    p.faces().iter().map(|f| f.centre * f.area).sum::<DVec3>() / p.area()
+                }
+            };
+            let given = match (&f.source, &scene.mesh_flow) {
+                (FeedSource::Patch(p), Some(m)) if f.field_velocity => {
+                    p.flux(&m.flow).mean_velocity
+                }
+                _ => f.velocity,
             };
             let swirl = scene.flow.vortex().map_or(DVec3::ZERO, |v| {
                 (v.axis * (v.omega * f.swirl)).cross(c - v.center)
             });
-            out.push((c, f.velocity + swirl));
+            out.push((c, given + swirl));
         }
     }
     out
@@ -653,8 +662,29 @@ fn mesh_flow_findings(scene: &Scene) -> Vec<Finding> {
     }
     for (i, f) in scene.feeders.iter().enumerate() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(i as u64);
+        let region = match &f.source {
+            FeedSource::Region(r) => r,
+            FeedSource::Patch(p) => {
+                // the centres, one simulated radius inward, must be inside the mesh
+                let g = &scene.groups[f.group];
+                let r = 0.5 * coarse_grain(g.law, g.alpha, g.diameter, g.density).diameter;
+                let n = (0..FEEDER_SAMPLES)
+                    .filter(|_| m.flow.find_cell(p.sample(&mut rng, r).centre).is_none())
+                    .count();
+                if n > 0 {
+                    out.push(Finding {
+                        level: Level::Warning,
+                        message: format!(
+                            "feeders[{i}]: {n} of {FEEDER_SAMPLES} sampled starts on patch `{}` (one radius, {r:.4e} m, inward) lie outside the flow mesh; particles fed there are removed as lost",
+                            p.name
+                        ),
+                    });
+                }
+                continue;
+            }
+        };
         let n = (0..FEEDER_SAMPLES)
-            .filter(|_| m.flow.find_cell(f.region.sample(&mut rng)).is_none())
+            .filter(|_| m.flow.find_cell(region.sample(&mut rng)).is_none())
             .count();
         if n > 0 {
             out.push(Finding {

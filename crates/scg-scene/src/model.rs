@@ -12,6 +12,7 @@ use scg_core::physics::integrate::Integrator;
 use scg_core::physics::scaling::CoarseGrainLaw;
 pub use scg_core::region::Region;
 use scg_core::stages::contacts::ContactConfig;
+pub use scg_core::stages::feeder::FeedSource;
 use scg_core::stages::outlet::OutletGeometry;
 use scg_core::stages::walls::Wall;
 
@@ -159,10 +160,13 @@ pub struct Feeder {
     pub group: usize,
     /// Simulated particles per second (from `rate`, or `volume_rate` / simulated volume).
     pub rate: f64,
-    /// Where particles appear.
-    pub region: Region,
-    /// Their velocity, m/s.
+    /// Where particles appear: a region, or a patch of the mesh flow.
+    pub source: FeedSource,
+    /// Their velocity, m/s (unless `field_velocity`).
     pub velocity: DVec3,
+    /// `velocity = "field"`: each particle starts with the mesh flow's velocity at its
+    /// centre.
+    pub field_velocity: bool,
     /// Added co-rotation with the flow's vortex, as a fraction of its local speed ω·r
     /// (dimensionless; 0 = none, 1 = entering co-rotating with the vortex).
     pub swirl: f64,

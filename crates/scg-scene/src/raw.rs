@@ -64,8 +64,10 @@ pub struct RawFeeder {
     pub group: String,
     pub rate: Option<f64>,
     pub volume_rate: Option<f64>,
-    pub region: RawRegion,
-    pub velocity: Option<[f64; 3]>,
+    pub region: Option<RawRegion>,
+    /// A boundary patch of a mesh flow to feed from (instead of `region`).
+    pub patch: Option<String>,
+    pub velocity: Option<RawFeedVelocity>,
     pub swirl: Option<f64>,
     pub start: Option<f64>,
     pub stop: Option<f64>,
@@ -82,6 +84,14 @@ pub struct RawOutlet {
     pub domain_radius: f64,
     pub domain_height: [f64; 2],
     pub interval: Option<f64>,
+}
+
+/// `feeders[i].velocity`: `[x, y, z]` m/s or `"field"`.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(untagged)]
+pub enum RawFeedVelocity {
+    Given([f64; 3]),
+    Word(String),
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -140,6 +150,8 @@ pub struct RawPatches {
     pub walls: Vec<String>,
     #[serde(default)]
     pub outlets: Vec<String>,
+    #[serde(default)]
+    pub inlets: Vec<String>,
     /// What the wall patches do: `contact` (default with `[material]`) or `rebound`.
     #[serde(default, deserialize_with = "some_name")]
     pub wall_model: Option<RawWallModel>,

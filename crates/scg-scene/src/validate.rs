@@ -165,7 +165,7 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
     let feed_scale = cx.non_negative("feed_scale", raw.feed_scale.unwrap_or(1.0))?;
     let mut feeders = Vec::new();
     for (i, f) in raw.feeders.iter().enumerate() {
-        let mut fd = feeder(f, i, &groups, duration, cx)?;
+        let mut fd = feeder(f, i, &groups, duration, mesh_flow.as_ref(), cx)?;
         if fd.swirl != 0.0 && flow.vortex().is_none() {
             return Err(cx.err(
                 &format!("feeders[{i}].swirl"),

@@ -23,6 +23,9 @@ pub enum PatchRole {
     Wall,
     /// Drains: removed and counted per group.
     Outlet,
+    /// Particles are fed through it (`[[feeders]] patch`); one going back out through
+    /// it is removed and counted as lost.
+    Inlet,
     /// Removed and counted as lost.
     Lost,
 }
@@ -33,6 +36,7 @@ impl PatchRole {
         match self {
             PatchRole::Wall => "wall",
             PatchRole::Outlet => "outlet",
+            PatchRole::Inlet => "inlet",
             PatchRole::Lost => "lost",
         }
     }
@@ -370,7 +374,7 @@ pub fn land(
                     hint: hint::DRAINED,
                 };
             }
-            PatchRole::Lost => {
+            PatchRole::Lost | PatchRole::Inlet => {
                 return Landing {
                     x: x1,
                     v: v1,

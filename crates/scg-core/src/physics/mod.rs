@@ -5,6 +5,7 @@
 //! * [`drag`] — drag laws (Stokes, Schiller–Naumann) and response times;
 //! * [`flow`] — the prescribed fluid flow fields;
 //! * [`mesh_flow`] — flow fields on CFD meshes (location, interpolation, patch roles);
+//! * [`inlet`] — feeding on a mesh patch: uniform-by-area sampling, the flow through it;
 //! * [`integrate`] — the exponential and explicit schemes, kicks;
 //! * [`contact`] — normal, tangential and rolling laws, and the pair kernel;
 //! * [`wall_shape`] — wall geometry (planes, cylinders, meshes) and touch tests;
@@ -14,6 +15,7 @@
 pub mod contact;
 pub mod drag;
 pub mod flow;
+pub mod inlet;
 pub mod integrate;
 pub mod mesh_flow;
 pub mod neighbour;

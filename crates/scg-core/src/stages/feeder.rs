@@ -1,19 +1,28 @@
 //! Feeders: particles of one group enter at a constant rate, at random positions in a
-//! region, with a given velocity.
+//! region or on a boundary patch of a mesh flow, with a given velocity or the flow's.
+//!
+//! A patch feeder ([`FeedSource::Patch`]) samples points uniformly by area on the patch
+//! ([`PatchSampler`]) and starts each particle its simulated radius inward of the face,
+//! with the cell hint of the cell holding it ([`settle`]).
 //!
 //! The count is exact: after the step ending at time t a feeder has fed
 //! ⌊rate·(min(t, stop) − start)⌋ particles ([`fed_by`]), so fractional particles carry
 //! over between steps. Positions come from a ChaCha8 stream seeded by the scene seed and
 //! the feeder index, so a run is reproducible and feeders are independent.
 
+use std::sync::Arc;
+
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::physics::scaling::CoarseGrainLaw;
+use crate::physics::inlet::{PatchSampler, settle};
+use crate::physics::mesh_flow::hint;
+use crate::physics::scaling::{CoarseGrainLaw, coarse_grain};
 use crate::region::Region;
-use crate::spawn::{ParticleSpec, SpawnRules, spawn_particle_deferred};
+use crate::spawn::{ParticleSpec, SpawnRules, spawn_particle_deferred_in};
+use crate::stages::mesh_flow::MeshFlowState;
 use crate::state::{NextParticleId, SimClock, Tally};
 use crate::step::{StepBuilder, StepSet, StepSystem};
 
@@ -33,9 +42,12 @@ pub struct FeederSpec {
     /// Simulated particles per second.
     pub rate: f64,
     /// Where particles appear.
-    pub region: Region,
-    /// Their velocity, m/s.
+    pub source: FeedSource,
+    /// Their velocity, m/s (unless `field_velocity`).
     pub velocity: DVec3,
+    /// Take each particle's velocity from the mesh flow at its start instead (patch
+    /// feeders on a mesh flow).
+    pub field_velocity: bool,
     /// A rigid rotation added to `velocity` at each particle's position (e.g. entering
     /// co-rotating with a vortex), or none.
     pub spin: Option<Spin>,
@@ -46,6 +58,16 @@ pub struct FeederSpec {
     /// Steps between releases (≥ 1): particles due are released together every `every`
     /// steps, so the particle set (and the neighbour list) changes less often.
     pub every: u64,
+}
+
+/// Where a feeder's particles appear.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FeedSource {
+    /// Uniformly in a region.
+    Region(Region),
+    /// Uniformly by area on a boundary patch of the mesh flow, the simulated radius
+    /// inward.
+    Patch(Arc<PatchSampler>),
 }
 
 /// A rigid-body rotation about an axis through `center`: velocity ω × (x − center).
@@ -90,6 +112,8 @@ struct FeederState {
     spec: FeederSpec,
     rng: ChaCha8Rng,
     fed: u64,
+    /// Simulated (coarse-grained) radius of the particles fed, m.
+    radius: f64,
 }
 
 /// The scene's feeders and their state (resource).
@@ -109,6 +133,7 @@ impl Feeders {
                     spec: s.clone(),
                     rng: ChaCha8Rng::seed_from_u64(feeder_seed(seed, i)),
                     fed: 0,
+                    radius: 0.5 * coarse_grain(s.law, s.alpha, s.diameter, s.density).diameter,
                 })
                 .collect(),
         }
@@ -172,17 +197,33 @@ pub fn feed_particles(
     mut feeders: ResMut<Feeders>,
     mut next: ResMut<NextParticleId>,
     mut tally: ResMut<Tally>,
+    mesh: Option<Res<MeshFlowState>>,
 ) {
     let t = clock.time();
+    let flow = mesh.as_deref().map(|m| &*m.spec.flow);
     for f in feeders.list.iter_mut() {
         if !clock.step.is_multiple_of(f.spec.every.max(1)) {
             continue;
         }
         let due = fed_by(f.spec.rate, f.spec.start, f.spec.stop, t);
         while f.fed < due {
-            let position = f.spec.region.sample(&mut f.rng);
-            let velocity =
-                f.spec.velocity + f.spec.spin.map_or(DVec3::ZERO, |s| s.velocity_at(position));
+            let (position, cell, u) = match (&f.spec.source, flow) {
+                (FeedSource::Region(r), _) => (r.sample(&mut f.rng), hint::UNLOCATED, None),
+                (FeedSource::Patch(p), Some(flow)) => {
+                    let s = p.sample(&mut f.rng, f.radius);
+                    let (cell, u) = settle(flow, p.faces()[s.face].owner, s.centre);
+                    (s.centre, cell, Some(u))
+                }
+                // (the scene rejects a patch without a mesh flow)
+                (FeedSource::Patch(p), None) => {
+                    (p.sample(&mut f.rng, f.radius).centre, hint::UNLOCATED, None)
+                }
+            };
+            let given = match u {
+                Some(u) if f.spec.field_velocity => u,
+                _ => f.spec.velocity,
+            };
+            let velocity = given + f.spec.spin.map_or(DVec3::ZERO, |s| s.velocity_at(position));
             let spec = ParticleSpec {
                 group: f.spec.group,
                 diameter: f.spec.diameter,
@@ -193,7 +234,7 @@ pub fn feed_particles(
                 velocity,
             };
             let id = next.take();
-            spawn_particle_deferred(&mut commands, &rules, &spec, id, clock.dt);
+            spawn_particle_deferred_in(&mut commands, &rules, &spec, id, clock.dt, cell);
             f.fed += 1;
             if let Some(c) = tally.fed.get_mut(f.spec.group as usize) {
                 *c += 1;

@@ -44,6 +44,7 @@ pub fn render(scene: &Scene, r: &Report) -> String {
     }
     if let Some(m) = &scene.mesh_flow {
         s.push_str(&mesh_flow_lines(m, scene.patch_walls.as_ref()));
+        s.push_str(&inlet_lines(scene, m));
     }
     s.push_str(&format!(
         "Stokes number (paper eq. 1): {:.4e}\n",
@@ -127,6 +128,35 @@ fn mesh_flow_lines(m: &crate::model::SceneMeshFlow, walls: Option<&crate::PatchW
     {
         s.push_str("  ");
         s.push_str(&mesh_line(&w.wall.name, t));
+    }
+    s
+}
+
+/// One line per patch feeder: the patch, its area, the mean field velocity over it and
+/// the flow rate through it.
+fn inlet_lines(scene: &Scene, m: &crate::model::SceneMeshFlow) -> String {
+    let mut s = String::new();
+    for (i, f) in scene.feeders.iter().enumerate() {
+        let crate::model::FeedSource::Patch(p) = &f.source else {
+            continue;
+        };
+        let q = p.flux(&m.flow);
+        let u = q.mean_velocity;
+        s.push_str(&format!(
+            "  feeders[{i}] on patch `{}`: area {:.6e} m², mean field velocity [{:.6e}, {:.6e}, {:.6e}] m/s, inflow Q = ∫u·n_in dA = {:.6e} m³/s (mean normal speed {:.6e} m/s), velocity {}\n",
+            p.name,
+            q.area,
+            u.x,
+            u.y,
+            u.z,
+            q.inflow,
+            q.inflow / q.area,
+            if f.field_velocity {
+                "from the field".to_string()
+            } else {
+                format!("{:?} m/s", f.velocity.to_array())
+            }
+        ));
     }
     s
 }

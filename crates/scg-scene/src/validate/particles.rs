@@ -4,8 +4,12 @@ use scg_core::physics::scaling::CoarseGrainLaw;
 
 use super::Ctx;
 use crate::error::SceneError;
-use crate::model::{Feeder, Group, Placement, Region};
-use crate::raw::{RawFeeder, RawGroup, RawRegion, RawRegionKind};
+use std::sync::Arc;
+
+use scg_core::physics::inlet::PatchSampler;
+
+use crate::model::{FeedSource, Feeder, Group, Placement, Region, SceneMeshFlow};
+use crate::raw::{RawFeedVelocity, RawFeeder, RawGroup, RawRegion, RawRegionKind};
 
 /// Default group colours, by group index.
 const PALETTE: [[u8; 3]; 10] = [
@@ -161,12 +165,14 @@ fn region(r: &RawRegion, key: &str, cx: &Ctx) -> Result<Region, SceneError> {
     }
 }
 
-/// `feeders[i]`, feeding one of `groups` over a run of `duration` s.
+/// `feeders[i]`, feeding one of `groups` over a run of `duration` s (from a patch of
+/// `mesh`, the scene's mesh flow, when it names one).
 pub(super) fn feeder(
     f: &RawFeeder,
     i: usize,
     groups: &[Group],
     duration: f64,
+    mesh: Option<&SceneMeshFlow>,
     cx: &Ctx,
 ) -> Result<Feeder, SceneError> {
     let k = |s: &str| format!("feeders[{i}].{s}");
@@ -202,13 +208,76 @@ pub(super) fn feeder(
     if stop < start {
         return Err(cx.err(&k("stop"), "must be ≥ start"));
     }
+    let source = match (&f.region, &f.patch) {
+        (Some(_), Some(_)) => {
+            return Err(cx.err(&k("patch"), "give `region` or `patch`, not both"));
+        }
+        (None, None) => {
+            // the key is missing: point at the feeder
+            let mut e = cx.err(&k("region"), "a feeder needs `region` or `patch`");
+            e.line = e
+                .line
+                .or_else(|| crate::error::locate(cx.text, &format!("feeders[{i}]")));
+            return Err(e);
+        }
+        (Some(r), None) => FeedSource::Region(region(r, &k("region"), cx)?),
+        (None, Some(name)) => FeedSource::Patch(Arc::new(patch(name, &k("patch"), mesh, cx)?)),
+    };
+    let (velocity, field_velocity) = match &f.velocity {
+        None => (glam::DVec3::ZERO, false),
+        Some(RawFeedVelocity::Given(v)) => (cx.vec3(&k("velocity"), *v)?, false),
+        Some(RawFeedVelocity::Word(w)) if w == "field" => {
+            if f.patch.is_none() {
+                return Err(cx.err(
+                    &k("velocity"),
+                    "`velocity = \"field\"` goes with `patch` (a feeder on a mesh-flow patch)",
+                ));
+            }
+            (glam::DVec3::ZERO, true)
+        }
+        Some(RawFeedVelocity::Word(w)) => {
+            return Err(cx.err(
+                &k("velocity"),
+                format!("expected [x, y, z] in m/s or \"field\", got \"{w}\""),
+            ));
+        }
+    };
     Ok(Feeder {
         group,
         rate,
-        region: region(&f.region, &k("region"), cx)?,
-        velocity: cx.vec3(&k("velocity"), f.velocity.unwrap_or([0.0; 3]))?,
+        source,
+        velocity,
+        field_velocity,
         swirl: cx.finite(&k("swirl"), f.swirl.unwrap_or(0.0))?,
         window: (start, stop),
         interval: cx.non_negative(&k("interval"), f.interval.unwrap_or(0.0))?,
     })
+}
+
+/// The sampler of the mesh-flow patch `name` (at `key`).
+fn patch(
+    name: &str,
+    key: &str,
+    mesh: Option<&SceneMeshFlow>,
+    cx: &Ctx,
+) -> Result<PatchSampler, SceneError> {
+    let Some(m) = mesh else {
+        return Err(cx.err(
+            key,
+            "feeding from a patch needs a flow on a mesh (flow.kind = \"openfoam\" or \"vtk\")",
+        ));
+    };
+    let mesh = m.flow.mesh();
+    let Some(p) = mesh.patches.iter().position(|p| p.name == name) else {
+        let known: Vec<&str> = mesh.patches.iter().map(|p| p.name.as_str()).collect();
+        return Err(cx.err(
+            key,
+            format!(
+                "unknown patch `{name}` in {}; the mesh has: {}",
+                m.source,
+                known.join(", ")
+            ),
+        ));
+    };
+    PatchSampler::new(mesh, m.flow.geometry(), p).map_err(|e| cx.err(key, e))
 }

@@ -247,6 +247,7 @@ pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, 
     for (key, names, role) in [
         ("flow.patches.walls", &patches.walls, PatchRole::Wall),
         ("flow.patches.outlets", &patches.outlets, PatchRole::Outlet),
+        ("flow.patches.inlets", &patches.inlets, PatchRole::Inlet),
     ] {
         for name in names {
             let Some(i) = mesh.patches.iter().position(|p| &p.name == name) else {
