@@ -4,6 +4,8 @@
 //!
 //! Run: `cargo test --release --test inlets -- --nocapture` (prints the measured numbers).
 
+mod common;
+
 use std::collections::HashSet;
 use std::path::Path;
 use std::process::Command;
@@ -329,25 +331,14 @@ fn child_inlet_digest() {
 
 #[test]
 fn inlet_same_bits_on_one_and_two_threads() {
-    let exe = std::env::current_exe().unwrap();
     let digest = |threads: &str, parallel_min: &str| {
-        let out = Command::new(&exe)
-            .args([
-                "child_inlet_digest",
-                "--exact",
-                "--ignored",
-                "--nocapture",
-                "--test-threads=1",
-            ])
-            .env("SCG_THREADS", threads)
-            .env("SCG_PARALLEL_MIN", parallel_min)
-            .env("SCG_INLET_CHILD", "1")
-            .output()
-            .unwrap();
-        let s = String::from_utf8_lossy(&out.stdout).into_owned();
-        s.lines()
-            .find_map(|l| l.find("INLET_DIGEST=").map(|k| l[k..].to_string()))
-            .unwrap_or_else(|| panic!("no digest from child: {s}"))
+        common::child_digest(
+            "child_inlet_digest",
+            "SCG_INLET_CHILD",
+            "INLET_DIGEST=",
+            threads,
+            parallel_min,
+        )
     };
     let a = digest("1", "100000000");
     let b = digest("2", "1");

@@ -3,6 +3,8 @@
 //!
 //! Run: `cargo test --release --test mesh_flow -- --nocapture` (prints the errors).
 
+mod common;
+
 use std::path::Path;
 use std::process::Command;
 
@@ -552,36 +554,20 @@ fn child_mesh_digest() {
     }
     scg::core::exec::configure(scg::core::exec::ExecSettings::from_env());
     let (ps, ..) = run_closed_box(3000, 60);
-    let mut h: u64 = 0xcbf29ce484222325;
-    for p in ps {
-        for b in [p.position, p.velocity].iter().flat_map(|v| v.to_array()) {
-            h = (h ^ b.to_bits()).wrapping_mul(0x100000001b3);
-        }
-    }
+    let h = common::state_digest(&ps);
     println!("MESH_DIGEST={h:016x}");
 }
 
 #[test]
 fn same_bits_on_one_and_two_threads() {
-    let exe = std::env::current_exe().unwrap();
     let digest = |threads: &str, parallel_min: &str| {
-        let out = Command::new(&exe)
-            .args([
-                "child_mesh_digest",
-                "--exact",
-                "--ignored",
-                "--nocapture",
-                "--test-threads=1",
-            ])
-            .env("SCG_THREADS", threads)
-            .env("SCG_PARALLEL_MIN", parallel_min)
-            .env("SCG_MESH_CHILD", "1")
-            .output()
-            .unwrap();
-        let s = String::from_utf8_lossy(&out.stdout).into_owned();
-        s.lines()
-            .find_map(|l| l.find("MESH_DIGEST=").map(|k| l[k..].to_string()))
-            .unwrap_or_else(|| panic!("no digest from child: {s}"))
+        common::child_digest(
+            "child_mesh_digest",
+            "SCG_MESH_CHILD",
+            "MESH_DIGEST=",
+            threads,
+            parallel_min,
+        )
     };
     let a = digest("1", "100000000");
     let b = digest("2", "1");

@@ -39,3 +39,45 @@ pub fn rel(a: f64, b: f64) -> f64 {
         ((a - b) / b).abs()
     }
 }
+
+/// FNV-1a over the bits of every particle's position and velocity: a state digest for
+/// bit-identity tests.
+pub fn state_digest(ps: &[scg::core::sim::ParticleState]) -> u64 {
+    let mut h: u64 = 0xcbf29ce484222325;
+    for p in ps {
+        for b in [p.position, p.velocity].iter().flat_map(|v| v.to_array()) {
+            h = (h ^ b.to_bits()).wrapping_mul(0x100000001b3);
+        }
+    }
+    h
+}
+
+/// Run the ignored test `child` of this test binary in a child process with
+/// `SCG_THREADS = threads`, `SCG_PARALLEL_MIN = parallel_min` and `flag = 1`, and return
+/// what it printed after `marker` (e.g. `"MESH_DIGEST="`) on its line.
+pub fn child_digest(
+    child: &str,
+    flag: &str,
+    marker: &str,
+    threads: &str,
+    parallel_min: &str,
+) -> String {
+    let exe = std::env::current_exe().unwrap();
+    let out = std::process::Command::new(&exe)
+        .args([
+            child,
+            "--exact",
+            "--ignored",
+            "--nocapture",
+            "--test-threads=1",
+        ])
+        .env("SCG_THREADS", threads)
+        .env("SCG_PARALLEL_MIN", parallel_min)
+        .env(flag, "1")
+        .output()
+        .unwrap();
+    let s = String::from_utf8_lossy(&out.stdout).into_owned();
+    s.lines()
+        .find_map(|l| l.find(marker).map(|k| l[k..].to_string()))
+        .unwrap_or_else(|| panic!("no digest from child: {s}"))
+}
