@@ -98,6 +98,21 @@ fn mcap_err(err: mcap::McapError) -> RecordError {
     RecordError::Mcap(err)
 }
 
+/// A channel on `topic` for the foxglove message type `M`, with its schema.
+fn foxglove_channel<M: Encode, W: std::io::Write + std::io::Seek>(
+    writer: &mut Writer<W>,
+    topic: &str,
+) -> Result<u16, RecordError> {
+    let schema = M::get_schema()
+        .ok_or_else(|| RecordError::Encode(format!("{topic}: the message type has no schema")))?;
+    let id = writer
+        .add_schema(&schema.name, &schema.encoding, &schema.data)
+        .map_err(mcap_err)?;
+    writer
+        .add_channel(id, topic, &M::get_message_encoding(), &BTreeMap::new())
+        .map_err(mcap_err)
+}
+
 /// `value` as JSON.
 fn to_json<T: serde::Serialize + ?Sized>(value: &T) -> Result<String, RecordError> {
     serde_json::to_string(value).map_err(|e| RecordError::Encode(e.to_string()))
@@ -272,19 +287,7 @@ impl McapSink {
             })
             .map_err(mcap_err)?;
 
-        let schema = PointCloud::get_schema()
-            .ok_or_else(|| RecordError::Encode("foxglove.PointCloud has no schema".to_owned()))?;
-        let cloud_schema = writer
-            .add_schema(&schema.name, &schema.encoding, &schema.data)
-            .map_err(mcap_err)?;
-        let particles_channel = writer
-            .add_channel(
-                cloud_schema,
-                TOPIC_PARTICLES,
-                &PointCloud::get_message_encoding(),
-                &BTreeMap::new(),
-            )
-            .map_err(mcap_err)?;
+        let particles_channel = foxglove_channel::<PointCloud, _>(&mut writer, TOPIC_PARTICLES)?;
         let stats_schema = writer
             .add_schema(
                 STATS_SCHEMA_NAME,
@@ -296,20 +299,7 @@ impl McapSink {
             .add_channel(stats_schema, TOPIC_STATS, "json", &BTreeMap::new())
             .map_err(mcap_err)?;
         if !meta.patches.is_empty() {
-            let schema = SceneUpdate::get_schema().ok_or_else(|| {
-                RecordError::Encode("foxglove.SceneUpdate has no schema".to_owned())
-            })?;
-            let scene_schema = writer
-                .add_schema(&schema.name, &schema.encoding, &schema.data)
-                .map_err(mcap_err)?;
-            let channel = writer
-                .add_channel(
-                    scene_schema,
-                    TOPIC_PATCHES,
-                    &SceneUpdate::get_message_encoding(),
-                    &BTreeMap::new(),
-                )
-                .map_err(mcap_err)?;
+            let channel = foxglove_channel::<SceneUpdate, _>(&mut writer, TOPIC_PATCHES)?;
             let mut data = Vec::new();
             patches_update(meta)
                 .encode(&mut data)
