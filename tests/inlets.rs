@@ -25,13 +25,19 @@ const L: f64 = 0.01;
 const Y_SPLIT: f64 = 0.3 * L;
 
 /// [0, L]³ of 6 × 2 × 1 hexahedra, the middle y layer moved to y = 0.3 L; patches
-/// `inlet` (x = 0), `outlet` (x = L), `walls`.
+/// `inlet` (x = 0), `outlet` (x = L), `walls`. The walls move with the affine field the
+/// tests sample on them, so the mesh gives them type `patch` (the scene still makes them
+/// walls): at a no-slip `wall` meeting the inlet, cell-point bounds the point values
+/// (crates/scg-mesh/src/interp.rs), and the affine field would not be reproduced there.
 fn split_box() -> PolyMesh {
     let mut m = BoxMesh::new(DVec3::ZERO, DVec3::splat(L), [6, 2, 1])
         .shape(CellShape::Hex)
         .naming(PatchNaming::InletOutletWalls { axis: 0 })
         .build()
         .unwrap();
+    for p in &mut m.patches {
+        p.kind = "patch".into();
+    }
     for p in &mut m.points {
         if (p.y - 0.5 * L).abs() < 1e-12 * L {
             p.y = Y_SPLIT;

@@ -365,3 +365,60 @@ fn cell_point_is_continuous_across_faces() {
         }
     }
 }
+
+/// Where a no-slip wall patch meets an inlet, the boundary values jump. Here the air
+/// enters at u_z = 1 through the inlet (z = 0, type `patch`), the walls (type `wall`) hold
+/// 0, and the cells carry u_z = 1.2 (the stream accelerates past the inlet). A linear fit
+/// over an inlet-edge point's neighbours (one or two cells, inlet and wall faces) gives
+/// u_in + u_wall − u_cell = −0.2 there: back-flow out of the inlet along its edges, which
+/// blew inlet-fed particles straight back out. The default cell-point must keep every
+/// junction point within its neighbours' range, so u_z ≥ 0 everywhere just inside the
+/// inlet; points away from the junctions stay linear-exact (`paper_vortex_affine`).
+#[test]
+fn no_back_flow_where_walls_meet_the_inlet() {
+    use scg_mesh::build::PatchNaming;
+    let (lo, hi) = (DVec3::new(0.0, 0.0, 0.0), DVec3::new(0.1, 0.1, 0.2));
+    for (name, shape, perturb) in [
+        ("hex", CellShape::Hex, 0.0),
+        ("tet", CellShape::Tet, 0.2),
+        ("poly", CellShape::Poly { refine: 0.3 }, 0.2),
+    ] {
+        let m = BoxMesh::new(lo, hi, [5, 5, 10])
+            .shape(shape)
+            .naming(PatchNaming::InletOutletWalls { axis: 2 })
+            .perturbed(perturb, 4)
+            .build()
+            .unwrap();
+        let g = MeshGeometry::new(&m).unwrap();
+        let loc = Locator::new(&m, &g).unwrap();
+        let f = CellField {
+            cells: vec![DVec3::new(0.0, 0.0, 1.2); m.n_cells],
+            patches: m
+                .patches
+                .iter()
+                .map(|p| {
+                    let u = match p.name.as_str() {
+                        "inlet" => DVec3::Z,
+                        "walls" => DVec3::ZERO,
+                        _ => DVec3::new(0.0, 0.0, 1.2),
+                    };
+                    Some(vec![u; p.size])
+                })
+                .collect(),
+        };
+        let it = Interpolator::new(&loc, &f, Interpolation::CellPoint).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let mut min = f64::INFINITY;
+        for _ in 0..20_000 {
+            let x = DVec3::new(
+                0.1 * rng.random::<f64>(),
+                0.1 * rng.random::<f64>(),
+                1e-3 * rng.random::<f64>(),
+            );
+            let c = loc.find_cell(x).expect("inside");
+            min = min.min(it.velocity(c, x).z);
+        }
+        println!("{name}: least u_z just inside the inlet {min:.3e}");
+        assert!(min >= -1e-12, "{name}: back-flow {min} at the inlet");
+    }
+}
