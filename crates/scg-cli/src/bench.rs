@@ -111,6 +111,7 @@ region = {{ kind = "cylinder", radius_max = {r:e}, height = [{h0:e}, {h1:e}] }}
             (nx / 2).max(1)
         ),
         field: "U".into(),
+        sort_every: scg_core::stages::mesh_flow::SORT_EVERY,
     });
     Ok(scene)
 }

@@ -225,6 +225,9 @@ impl Simulation {
             outlet::plugin(&mut world, &mut b, o, ng);
         }
         feeder::plugin(&mut world, &mut b, &io.feeders, io.seed);
+        if cfg.mesh_flow.as_ref().is_some_and(|m| m.sort_every > 0) && cfg.contacts.is_none() {
+            mesh_flow::add_sort(&mut b);
+        }
         guard::plugin(&mut b);
         if cfg.record_every.is_some() {
             recording::plugin(&mut b);

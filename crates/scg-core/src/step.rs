@@ -105,6 +105,8 @@ pub enum StepSystem {
     MeshBoundary,
     /// Spawn fed particles.
     FeedParticles,
+    /// Reorder the particle table by mesh cell (mesh flows without contacts).
+    SortByCell,
     /// Stop on a non-finite state.
     CheckFiniteState,
     /// Hand a frame to the recorders.
@@ -130,6 +132,7 @@ impl StepSystem {
             StepSystem::DrainParticles => "drain_particles",
             StepSystem::MeshBoundary => "mesh_boundary",
             StepSystem::FeedParticles => "feed_particles",
+            StepSystem::SortByCell => "sort_by_cell",
             StepSystem::CheckFiniteState => "check_finite_state",
             StepSystem::RecordFrame => "record_frame",
         }

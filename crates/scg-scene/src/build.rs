@@ -85,6 +85,7 @@ impl Scene {
             mesh_flow: self.mesh_flow.as_ref().map(|m| MeshFlowSpec {
                 flow: m.flow.clone(),
                 restitution: self.material.map_or(1.0, |m| m.restitution),
+                sort_every: m.sort_every,
             }),
             gravity: self.gravity,
             buoyancy: self.buoyancy,

@@ -194,6 +194,9 @@ pub struct SceneMeshFlow {
     pub source: String,
     /// The field's name.
     pub field: String,
+    /// Steps between reorderings of the particle table by mesh cell (0: never; with
+    /// particle contacts never).
+    pub sort_every: u64,
 }
 
 /// The wall patches of a mesh flow as one mesh wall: every face of every wall patch,

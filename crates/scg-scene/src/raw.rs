@@ -132,6 +132,8 @@ pub struct RawFlow {
     pub scale: Option<f64>,
     pub translate: Option<[f64; 3]>,
     pub patches: Option<RawPatches>,
+    /// Steps between reorderings of the particles by mesh cell (0: never).
+    pub sort_every: Option<i64>,
 }
 
 /// `flow.time`: a name (`"latest"`) or a number.

@@ -42,6 +42,9 @@ pub struct MeshFlowSpec {
     pub flow: Arc<MeshFlow>,
     /// Restitution of wall patches, v_n' = −e·v_n, in (0, 1].
     pub restitution: f64,
+    /// Steps between reorderings of the particle table by mesh cell ([`sort_by_cell`]);
+    /// 0: never.
+    pub sort_every: u64,
 }
 
 /// The mesh flow of a simulation (resource).
@@ -247,6 +250,128 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
     });
     if let Some(dd) = disp {
         dd.mark_reported();
+    }
+}
+
+/// Default steps between two reorderings of the particle table by mesh cell
+/// ([`sort_by_cell`]; scene key `flow.sort_every`).
+pub const SORT_EVERY: u64 = 100;
+
+/// Add the reordering of the particle table by mesh cell (inlet/outlet stage, after the
+/// feeders). Only for scenes without particle contacts: there every particle's step
+/// reads only its own state, so the table order changes no result.
+pub(crate) fn add_sort(b: &mut StepBuilder) {
+    b.add(
+        StepSet::InletOutlet,
+        "mesh_flow",
+        StepSystem::SortByCell,
+        sort_by_cell,
+    );
+}
+
+/// Reorder the particle table by mesh cell, then id, after the first step (when every
+/// particle has been located) and every `sort_every` steps ([`MeshFlowSpec`], default
+/// [`SORT_EVERY`]), as LAMMPS's `atom_modify
+/// sort` does by bins. The cell records of consecutive particles are then neighbours in
+/// memory, and a step reads the mesh almost in order instead of at random: on a
+/// 10^6-cell mesh this more than doubles the speed of the integration, which is bound
+/// by memory latency. Every component column of the particle table is permuted alike
+/// (the rows keep their entities; nothing holds a particle's entity across steps), so
+/// each particle's state is unchanged but for its row; and since no stage of a scene
+/// without contacts depends on the row order, the results are bit-identical to an
+/// unsorted run's (tested).
+///
+/// # Panics
+/// When the particles carry a component this system does not know (one added to the
+/// particle layout without adding it here): it stops before moving anything.
+pub fn sort_by_cell(world: &mut World) {
+    let step = world.resource::<SimClock>().step;
+    let every = world.resource::<MeshFlowState>().spec.sort_every;
+    if every == 0 || (step != 1 && !step.is_multiple_of(every)) {
+        return;
+    }
+    // Every component of the particle layout, checked against the table's.
+    let known = [
+        world.register_component::<ParticleId>(),
+        world.register_component::<GroupId>(),
+        world.register_component::<Position>(),
+        world.register_component::<Velocity>(),
+        world.register_component::<CoarseGrain>(),
+        world.register_component::<Diameter>(),
+        world.register_component::<Density>(),
+        world.register_component::<Mass>(),
+        world.register_component::<FluidCoupling>(),
+        world.register_component::<StokesFactors>(),
+        world.register_component::<Force>(),
+        world.register_component::<Torque>(),
+        world.register_component::<AngularVelocity>(),
+        world.register_component::<WallHistory>(),
+        world.register_component::<BodyAcceleration>(),
+        world.register_component::<CellHint>(),
+    ];
+    let layouts = world
+        .archetypes()
+        .iter()
+        .filter(|a| !a.is_empty() && a.contains(known[0]))
+        .count();
+    assert!(
+        layouts <= 1,
+        "sort_by_cell: the particles have {layouts} component layouts (scg keeps one)"
+    );
+    let unknown: Vec<String> = world
+        .archetypes()
+        .iter()
+        .filter(|a| !a.is_empty() && a.contains(known[0]))
+        .flat_map(|a| a.components().iter().copied())
+        .filter(|c| !known.contains(c))
+        .filter_map(|c| world.components().get_name(c).map(|n| n.to_string()))
+        .collect();
+    assert!(
+        unknown.is_empty(),
+        "sort_by_cell does not know the particle components {unknown:?}"
+    );
+    let mut q = world.query::<(&ParticleId, Option<&CellHint>)>();
+    let keys: Vec<(u32, u32)> = q
+        .iter(world)
+        .map(|(id, h)| (h.map_or(u32::MAX, |h| h.0), id.0))
+        .collect();
+    if keys.is_sorted() {
+        return;
+    }
+    let mut perm: Vec<u32> = (0..keys.len() as u32).collect();
+    perm.sort_unstable_by_key(|&i| keys[i as usize]);
+    permute::<ParticleId>(world, &perm);
+    permute::<GroupId>(world, &perm);
+    permute::<Position>(world, &perm);
+    permute::<Velocity>(world, &perm);
+    permute::<CoarseGrain>(world, &perm);
+    permute::<Diameter>(world, &perm);
+    permute::<Density>(world, &perm);
+    permute::<Mass>(world, &perm);
+    permute::<FluidCoupling>(world, &perm);
+    permute::<StokesFactors>(world, &perm);
+    permute::<Force>(world, &perm);
+    permute::<Torque>(world, &perm);
+    permute::<AngularVelocity>(world, &perm);
+    permute::<WallHistory>(world, &perm);
+    permute::<BodyAcceleration>(world, &perm);
+    permute::<CellHint>(world, &perm);
+}
+
+/// Row i of the particles' `T` column takes the value of row `perm[i]` (no effect when
+/// the particles have no `T`). Queries visit the one particle table in row order.
+fn permute<T: Component<Mutability = bevy_ecs::component::Mutable> + Clone>(
+    world: &mut World,
+    perm: &[u32],
+) {
+    let mut q = world.query_filtered::<&mut T, With<ParticleId>>();
+    let old: Vec<T> = q.iter(world).cloned().collect();
+    if old.len() != perm.len() {
+        return;
+    }
+    for (i, mut x) in q.iter_mut(world).enumerate() {
+        x.bypass_change_detection()
+            .clone_from(&old[perm[i] as usize]);
     }
 }
 

@@ -141,6 +141,7 @@ pub(super) fn flow_field(f: &RawFlow, cx: &Ctx) -> Result<FlowField, SceneError>
         ("flow.scale", f.scale.is_some()),
         ("flow.translate", f.translate.is_some()),
         ("flow.patches", f.patches.is_some()),
+        ("flow.sort_every", f.sort_every.is_some()),
     ];
     let (wrong, kinds) = if mesh_kind {
         (&analytic_keys[..], "still, uniform, vortex or classifier")
@@ -191,6 +192,11 @@ pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, 
         Some(RawInterpolation::CellPointLinearExact) => Interpolation::CellPoint,
     };
     let scale = cx.positive("flow.scale", f.scale.unwrap_or(1.0))?;
+    let sort_every = match f.sort_every {
+        None => scg_core::stages::mesh_flow::SORT_EVERY,
+        Some(n) if n >= 0 => n as u64,
+        Some(n) => return Err(cx.err("flow.sort_every", format!("must be ≥ 0, got {n}"))),
+    };
     let translate = cx.vec3("flow.translate", f.translate.unwrap_or([0.0; 3]))?;
     let (mut mesh, cells, source) = match f.kind {
         RawFlowKind::Openfoam => {
@@ -277,6 +283,7 @@ pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, 
         flow: std::sync::Arc::new(flow),
         source,
         field,
+        sort_every,
     }))
 }
 
