@@ -13,48 +13,12 @@ use scg::core::state::Tally;
 use scg::core::step::StepSystem;
 use scg::scene::Scene;
 
-/// The 27-cell blockMesh fixture with an inlet feeder, contact wall patches (force,
-/// torque, spin and wall history on every particle) and gravity.
+/// The fixture box of [`common::cfd_box_scene`] for 50 ms.
 fn fixture_box(sets: &[String]) -> Scene {
-    let case = common::repo("crates/scg-mesh/tests/fixtures/foam/ascii");
-    let text = format!(
-        r#"
-duration = 0.05
-dt = 1e-4
-seed = 3
-[fluid]
-density = 1.2
-viscosity = 1.8e-5
-[flow]
-kind = "openfoam"
-case = "{}"
-time = 0
-[flow.patches]
-walls = ["walls"]
-outlets = ["outlet"]
-inlets = ["inlet"]
-[material]
-youngs_modulus = 1e6
-poisson_ratio = 0.3
-restitution = 0.5
-friction = 0.3
-[gravity]
-acceleration = [0.0, 0.0, -9.81]
-[drag]
-law = "schiller_naumann"
-[[groups]]
-name = "a"
-diameter = 2e-3
-density = 1000.0
-[[feeders]]
-group = "a"
-rate = 20000.0
-patch = "inlet"
-velocity = "field"
-"#,
-        case.display()
-    );
-    scg::scene::parse(&text, "fixture-box.toml", "box", sets).unwrap_or_else(|e| panic!("{e}"))
+    let mut all = vec!["duration=0.05".to_string()];
+    all.extend(sets.iter().cloned());
+    scg::scene::parse(&common::cfd_box_scene(), "fixture-box.toml", "box", &all)
+        .unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn cyclone(sets: &[String]) -> Scene {

@@ -110,61 +110,8 @@ velocities = [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
 "#
         .to_string(),
     );
-    // A CFD flow (the 27-cell blockMesh fixture: patches walls, inlet, outlet) with an
-    // inlet-patch feeder, contact walls from the wall patch and an STL wall.
-    let case = common::repo("crates/scg-mesh/tests/fixtures/foam/ascii");
-    let stl = common::repo("tests/fixtures/mesh-box.stl");
-    out.push(format!(
-        r#"
-duration = 2e-3
-dt = 1e-4
-seed = 3
-[fluid]
-density = 1.2
-viscosity = 1.8e-5
-[flow]
-kind = "openfoam"
-case = "{}"
-time = 0
-field = "U"
-interpolation = "cell_point"
-scale = 1.0
-translate = [0.0, 0.0, 0.0]
-[flow.patches]
-walls = ["walls"]
-outlets = ["outlet"]
-inlets = ["inlet"]
-wall_model = "contact"
-[material]
-youngs_modulus = 1e7
-poisson_ratio = 0.3
-restitution = 0.5
-friction = 0.3
-[drag]
-law = "schiller_naumann"
-[[walls]]
-kind = "mesh"
-file = "{}"
-scale = 0.1
-[[groups]]
-name = "a"
-diameter = 1e-3
-density = 1000.0
-[[feeders]]
-group = "a"
-rate = 2000.0
-patch = "inlet"
-velocity = "field"
-stop = 1e-3
-[[feeders]]
-group = "a"
-rate = 500.0
-patch = "inlet"
-velocity = [0.0, 0.0, 1.0]
-"#,
-        case.display(),
-        stl.display()
-    ));
+    // A CFD flow with an inlet-patch feeder, contact wall patches and an STL wall.
+    out.push(common::cfd_box_scene());
     out
 }
 

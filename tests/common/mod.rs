@@ -81,3 +81,65 @@ pub fn child_digest(
         .find_map(|l| l.find(marker).map(|k| l[k..].to_string()))
         .unwrap_or_else(|| panic!("no digest from child: {s}"))
 }
+
+/// A scene on the 27-cell blockMesh fixture (patches walls, inlet, outlet): inlet-patch
+/// feeders (one with the field's velocity, one given), contact wall patches (force,
+/// torque, spin and wall history on every particle), an STL wall, gravity,
+/// Schiller–Naumann drag; 2 ms.
+pub fn cfd_box_scene() -> String {
+    let case = repo("crates/scg-mesh/tests/fixtures/foam/ascii");
+    let stl = repo("tests/fixtures/mesh-box.stl");
+    format!(
+        r#"
+duration = 2e-3
+dt = 1e-4
+seed = 3
+[fluid]
+density = 1.2
+viscosity = 1.8e-5
+[flow]
+kind = "openfoam"
+case = "{}"
+time = 0
+field = "U"
+interpolation = "cell_point"
+scale = 1.0
+translate = [0.0, 0.0, 0.0]
+[flow.patches]
+walls = ["walls"]
+outlets = ["outlet"]
+inlets = ["inlet"]
+wall_model = "contact"
+[material]
+youngs_modulus = 1e7
+poisson_ratio = 0.3
+restitution = 0.5
+friction = 0.3
+[gravity]
+acceleration = [0.0, 0.0, -9.81]
+[drag]
+law = "schiller_naumann"
+[[walls]]
+kind = "mesh"
+file = "{}"
+scale = 0.1
+[[groups]]
+name = "a"
+diameter = 1e-3
+density = 1000.0
+[[feeders]]
+group = "a"
+rate = 20000.0
+patch = "inlet"
+velocity = "field"
+stop = 1e-3
+[[feeders]]
+group = "a"
+rate = 2000.0
+patch = "inlet"
+velocity = [0.0, 0.0, 1.0]
+"#,
+        case.display(),
+        stl.display()
+    )
+}
