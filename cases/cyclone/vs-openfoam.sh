@@ -11,12 +11,14 @@
 #                 a fixed dt, one [[feeders]] with `patch` per [[groups]] size class,
 #                 [flow.patches] walls (wall_model "rebound", [material] restitution),
 #                 outlets, inlets; [drag], [gravity], [fluid]
-#   --quick       a check of the script (a few minutes): duration 0.4 s and a quarter of
-#                 the feed rates (--set duration=0.4 --set feed_scale=0.25 for scg)
+#   --quick       a check of the script (seconds): duration 0.4 s and a quarter of the
+#                 feed rates (--set duration=0.4 --set feed_scale=0.25 for scg)
 #   --out DIR     results (default /tmp/scg-cyclone-vs-openfoam): grade.json (OpenFOAM,
 #                 the shape `scg study cyclone --openfoam FILE` reads), scg-1.json and
 #                 scg-2.json (`scg run --summary-json`), table.txt, openfoam/ (the cases
 #                 and their logs)
+#   --feed-scale F  multiply every feeder's rate by F in both codes (scg's feed_scale;
+#                 more particles, a smaller sampling error: the table prints it)
 #   --scg PATH    scg binary (default target/release/scg, built if missing)
 #   NICE="nice -n 5" prefixes every run of both codes alike (for a shared machine)
 #
@@ -36,6 +38,7 @@ root=$(cd "$(dirname "$self")/../.." && pwd)
 scene=$root/cases/cyclone.toml
 out=/tmp/scg-cyclone-vs-openfoam
 quick=0
+feed_scale=""
 SCG=""
 NICE=${NICE:-}
 while [ $# -gt 0 ]; do
@@ -44,7 +47,8 @@ while [ $# -gt 0 ]; do
         --out) out=$2; shift ;;
         --quick) quick=1 ;;
         --scg) SCG=$2; shift ;;
-        -h|--help) sed -n '2,33p' "$self" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        --feed-scale) feed_scale=$2; shift ;;
+        -h|--help) sed -n '2,35p' "$self" | sed 's/^# \{0,1\}//'; exit 0 ;;
         *) echo "vs-openfoam.sh: unknown argument $1" >&2; exit 2 ;;
     esac
     shift
@@ -78,10 +82,15 @@ py=(python3 "$root/cases/cyclone/vs_openfoam.py")
 case_args=()
 set_args=()
 if [ "$quick" = 1 ]; then
-    case_args=(--duration 0.4 --feed-scale 0.25)
-    set_args=(--set duration=0.4 --set feed_scale=0.25)
+    case_args=(--duration 0.4)
+    set_args=(--set duration=0.4)
+    : "${feed_scale:=0.25}"
 fi
-echo "scene: $scene$([ "$quick" = 1 ] && echo " (--quick: duration 0.4 s, feed x 0.25)")"
+if [ -n "$feed_scale" ]; then
+    case_args+=(--feed-scale "$feed_scale")
+    set_args+=(--set "feed_scale=$feed_scale")
+fi
+echo "scene: $scene$([ "$quick" = 1 ] && echo " (--quick: duration 0.4 s)")${feed_scale:+ (feed_scale $feed_scale)}"
 echo "scg: $SCG"
 echo "OpenFOAM: $(command -v uncoupledKinematicParcelFoam) ($(dpkg-query -W -f='${Version}' openfoam 2>/dev/null || echo '?'))"
 echo "cores: $(nproc)  load: $(cut -d' ' -f1-3 /proc/loadavg)  NICE='${NICE}'"

@@ -37,6 +37,16 @@ class SceneError(Exception):
     pass
 
 
+def read_text(path):
+    with open(path) as f:
+        return f.read()
+
+
+def read_json(path):
+    with open(path) as f:
+        return json.load(f)
+
+
 def bad(path, key, msg):
     raise SceneError(f"{path}: {key}: {msg}")
 
@@ -138,7 +148,11 @@ def read_scene(path, duration=None, feed_scale=None):
 def boundary_types(case):
     """{patch: type} from constant/polyMesh/boundary(.gz)."""
     p = os.path.join(case, "constant", "polyMesh", "boundary")
-    text = gzip.open(p + ".gz", "rt").read() if os.path.isfile(p + ".gz") else open(p).read()
+    if os.path.isfile(p + ".gz"):
+        with gzip.open(p + ".gz", "rt") as f:
+            text = f.read()
+    else:
+        text = read_text(p)
     body = text[text.index("(", text.index("FoamFile") + 10):]
     return dict(re.findall(r"(\w+)\s*\{[^}]*?type\s+(\w+);", body))
 
@@ -341,7 +355,9 @@ def make_cases(sc, out):
         for sub, name in (("system", "fvSchemes"), ("system", "fvSolution"),
                           ("constant", "turbulenceProperties")):
             shutil.copy(os.path.join(HERE, "..", "..", "bench", "openfoam", sub, name), os.path.join(d, sub, name))
-        w = lambda rel, text: open(os.path.join(d, rel), "w").write(text)
+        def w(rel, text):
+            with open(os.path.join(d, rel), "w") as f:
+                f.write(text)
         w("system/controlDict", control_dict(sc))
         w("constant/g", foam.header("uniformDimensionedVectorField", "constant", "g")
           + "dimensions      [0 1 -2 0 0 0 0];\nvalue           (%s);\n" % " ".join(g6(x) for x in sc["gravity"]))
@@ -382,7 +398,7 @@ def parse_log(log):
                 added[inj] = int(m.group(1))
     wall = []
     if os.path.isfile(log + ".wall"):
-        wall = [float(x) for x in open(log + ".wall").read().split()]
+        wall = [float(x) for x in read_text(log + ".wall").split()]
     return {"parcels": parcels, "cpu": cpu, "added": added, "wall": wall}
 
 
@@ -435,7 +451,7 @@ def d50(classes):
 
 
 def grade(out, dest):
-    plan = json.load(open(os.path.join(out, "plan.json")))
+    plan = read_json(os.path.join(out, "plan.json"))
     classes = {c["group"]: dict(c, fed=0, escaped=0, held=0, lost=0, residence_times=[])
                for c in plan["classes"]}
     ps = cpu = wall = 0.0
@@ -510,36 +526,60 @@ def grade(out, dest):
     return g
 
 
-def table(grade_path, scg1_path, scg2_path):
-    fo = json.load(open(grade_path))
-    s1 = json.load(open(scg1_path))
-    s2 = json.load(open(scg2_path))
+def efficiency(fed, escaped):
+    return 1.0 - escaped / fed if fed else None
+
+
+def sampling_pp(fed1, e1, fed2, e2):
+    """One standard deviation of the difference of two independent binomial escape
+    fractions, percentage points (each class's particles escape or not independently)."""
+    if not fed1 or not fed2 or e1 is None or e2 is None:
+        return None
+    return 100.0 * math.sqrt(e1 * (1 - e1) / fed1 + e2 * (1 - e2) / fed2)
+
+
+def rows(fo, s1):
+    """Per class: (group, d, OpenFOAM class, scg group, efficiency OpenFOAM, scg,
+    difference scg - OpenFOAM in pp, its sampling sigma in pp)."""
     by = {g["group"]: g for g in s1["groups"]}
-    print(f"{'class':>6} {'d [µm]':>7} | {'OpenFOAM':>9} {'fed':>5} {'esc':>5} {'held':>5} {'lost':>5} "
-          f"| {'scg':>9} {'fed':>5} {'esc':>5} {'held':>5} {'lost':>5} | {'diff [pp]':>9}")
-    worst = 0.0
+    out = []
     for c in fo["classes"]:
         s = by[c["group"]]
-        es = 1.0 - s["drained"] / s["fed"] if s["fed"] else None
-        ef = c["efficiency"]
+        ef, es = c["efficiency"], efficiency(s["fed"], s["drained"])
         diff = (es - ef) * 100.0 if es is not None and ef is not None else None
-        if diff is not None:
-            worst = max(worst, abs(diff))
-        fmt = lambda e: f"{e:9.4f}" if e is not None else f"{'-':>9}"
-        print(f"{c['group']:>6} {c['diameter'] * 1e6:7.3g} | {fmt(ef)} {c['fed']:5d} {c['escaped']:5d} "
-              f"{c['held']:5d} {c['lost']:5d} | {fmt(es)} {s['fed']:5d} {s['drained']:5d} {s['held']:5d} "
-              f"{s['lost']:5d} | {diff:+9.2f}" if diff is not None else "")
-    scg_d50 = d50([{"diameter": g["diameter"], "efficiency": (1 - g["drained"] / g["fed"]) if g["fed"] else None}
+        out.append((c["group"], c["diameter"], c, s, ef, es, diff, sampling_pp(c["fed"], ef, s["fed"], es)))
+    return out
+
+
+def table(grade_path, scg1_path, scg2_path):
+    fo, s1, s2 = read_json(grade_path), read_json(scg1_path), read_json(scg2_path)
+    print(f"{'class':>6} {'d [µm]':>7} | {'OpenFOAM':>8} {'fed':>5} {'esc':>5} {'held':>5} {'lost':>4} "
+          f"| {'scg':>8} {'fed':>5} {'esc':>5} {'held':>5} {'lost':>4} | {'diff [pp]':>9} {'sigma':>6}")
+    fmt = lambda e: f"{e:8.4f}" if e is not None else f"{'-':>8}"
+    fpp = lambda x, w: f"{x:+{w}.2f}" if x is not None else f"{'-':>{w}}"
+    worst = None
+    for g, d, c, s, ef, es, diff, sig in rows(fo, s1):
+        if diff is not None and (worst is None or abs(diff) > worst):
+            worst = abs(diff)
+        print(f"{g:>6} {d * 1e6:7.3g} | {fmt(ef)} {c['fed']:5d} {c['escaped']:5d} {c['held']:5d} {c['lost']:4d} "
+              f"| {fmt(es)} {s['fed']:5d} {s['drained']:5d} {s['held']:5d} {s['lost']:4d} "
+              f"| {fpp(diff, 9)} {(f'{sig:6.2f}' if sig is not None else '-'):>6}")
+    print("  (efficiency = 1 - escaped/fed; diff = scg - OpenFOAM; sigma: one standard deviation "
+          "of the difference from sampling alone, binomial)")
+    scg_d50 = d50([{"diameter": g["diameter"], "efficiency": efficiency(g["fed"], g["drained"])}
                    for g in s1["groups"]])
-    um = lambda x: f"{x * 1e6:.2f} µm" if x is not None else "none (efficiency does not cross 0.5)"
+    um = lambda x: f"{x * 1e6:.2f} µm" if x is not None else "none (the efficiency does not cross 0.5)"
     print(f"d50: OpenFOAM {um(fo['d50'])}, scg {um(scg_d50)}")
-    print("speed, particle-steps/s (particle-steps = sum over steps of particles in the domain):")
-    print(f"  OpenFOAM, 1 process:  {fo['particle_steps_per_s']:.4e}  ({fo['particle_steps']} in {fo['cpu_s']:.2f} s CPU, "
-          f"ExecutionTime of steps 2..N; wall {fo['wall_s']:.2f} s)")
+    for name, res in (("OpenFOAM", [c["residence_times"] for c in fo["classes"]]),):
+        med = [f"{c['group']} {sorted(r)[len(r) // 2]:.3g} s" for c, r in zip(fo["classes"], res) if r]
+        print(f"median residence time of the escaped ({name}): " + (", ".join(med) or "-"))
+    print("speed, particle-steps/s (particle-steps = sum over steps of the particles in the domain):")
+    print(f"  OpenFOAM, 1 process: {fo['particle_steps_per_s']:.4e}  ({fo['particle_steps']} in {fo['cpu_s']:.2f} s "
+          f"CPU: ExecutionTime of steps 2..N; wall {fo['wall_s']:.2f} s)")
     for s in (s1, s2):
-        print(f"  scg, {s['threads']} thread(s):      {s['particle_steps_per_s']:.4e}  ({s['particle_steps']} in "
-              f"{s['wall_s']:.2f} s wall, the run's steps)")
-    print(f"max efficiency difference: {worst:.2f} pp")
+        print(f"  scg, {s['threads']} thread{'s' if s['threads'] > 1 else ' '}:       {s['particle_steps_per_s']:.4e}  "
+              f"({s['particle_steps']} in {s['wall_s']:.2f} s wall: the run's steps)")
+    print(f"max efficiency difference: {worst:.2f} pp" if worst is not None else "max efficiency difference: -")
     ratio = s2["particle_steps_per_s"] / fo["particle_steps_per_s"]
     print(f"speed ratio (scg 2 threads / openfoam 1 process): {ratio:.2f}")
 
