@@ -19,6 +19,10 @@
 #                 and their logs)
 #   --feed-scale F  multiply every feeder's rate by F in both codes (scg's feed_scale;
 #                 more particles, a smaller sampling error: the table prints it)
+#   --dt DT       the time step of both codes instead of the scene's (scg: --set dt=DT)
+#   --scg-set KEY=VALUE  passed to both scg runs as --set (repeatable), e.g.
+#                 flow.interpolation=cell_point_idw (OpenFOAM's cellPoint point values);
+#                 for scg only: keys that change the physics break the like-for-like
 #   --scg PATH    scg binary (default target/release/scg, built if missing)
 #   NICE="nice -n 5" prefixes every run of both codes alike (for a shared machine)
 #
@@ -38,7 +42,11 @@ root=$(cd "$(dirname "$self")/../.." && pwd)
 scene=$root/cases/cyclone.toml
 out=/tmp/scg-cyclone-vs-openfoam
 quick=0
+dt=""
+case_args=()
+set_args=()
 feed_scale=""
+scg_set=()
 SCG=""
 NICE=${NICE:-}
 while [ $# -gt 0 ]; do
@@ -48,7 +56,9 @@ while [ $# -gt 0 ]; do
         --quick) quick=1 ;;
         --scg) SCG=$2; shift ;;
         --feed-scale) feed_scale=$2; shift ;;
-        -h|--help) sed -n '2,35p' "$self" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        --dt) case_args+=(--dt "$2"); set_args+=(--set "dt=$2"); dt=$2; shift ;;
+        --scg-set) scg_set+=(--set "$2"); shift ;;
+        -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$self"; exit 0 ;;
         *) echo "vs-openfoam.sh: unknown argument $1" >&2; exit 2 ;;
     esac
     shift
@@ -79,25 +89,26 @@ fi
 SCG=$(realpath "$SCG")
 
 py=(python3 "$root/cases/cyclone/vs_openfoam.py")
-case_args=()
-set_args=()
 if [ "$quick" = 1 ]; then
-    case_args=(--duration 0.4)
-    set_args=(--set duration=0.4)
+    case_args+=(--duration 0.4)
+    set_args+=(--set duration=0.4)
     : "${feed_scale:=0.25}"
 fi
 if [ -n "$feed_scale" ]; then
     case_args+=(--feed-scale "$feed_scale")
     set_args+=(--set "feed_scale=$feed_scale")
 fi
-echo "scene: $scene$([ "$quick" = 1 ] && echo " (--quick: duration 0.4 s)")${feed_scale:+ (feed_scale $feed_scale)}"
-echo "scg: $SCG"
+echo "scene: $scene$([ "$quick" = 1 ] && echo " (--quick: duration 0.4 s)")${feed_scale:+ (feed_scale $feed_scale)}${dt:+ (dt $dt)}"
+echo "scg: $SCG ${scg_set[*]}"
 echo "OpenFOAM: $(command -v uncoupledKinematicParcelFoam) ($(dpkg-query -W -f='${Version}' openfoam 2>/dev/null || echo '?'))"
 echo "cores: $(nproc)  load: $(cut -d' ' -f1-3 /proc/loadavg)  NICE='${NICE}'"
 
 # --- OpenFOAM -------------------------------------------------------------------------------
 rm -rf "$out/openfoam"
-mapfile -t runs < <("${py[@]}" case "$scene" "$out/openfoam" "${case_args[@]}")
+rc=0
+"${py[@]}" case "$scene" "$out/openfoam" "${case_args[@]}" > "$out/runs.txt" || rc=$?
+[ "$rc" = 0 ] || exit "$rc"
+mapfile -t runs < "$out/runs.txt"
 for d in "${runs[@]}"; do
     echo "== OpenFOAM: $d"
     if ! (cd "$d" && python3 "$root/bench/foam.py" run log.foam $NICE uncoupledKinematicParcelFoam > /dev/null); then
@@ -114,7 +125,7 @@ echo "wrote $out/grade.json"
 for t in 1 2; do
     echo "== scg, $t thread(s)"
     if ! $NICE "$SCG" --threads "$t" run "$scene" --no-record --set coarse_grain.alpha=1 \
-        "${set_args[@]}" --summary-json "$out/scg-$t.json" > "$out/scg-$t.log" 2>&1; then
+        "${set_args[@]}" "${scg_set[@]}" --summary-json "$out/scg-$t.json" > "$out/scg-$t.log" 2>&1; then
         tail -20 "$out/scg-$t.log" >&2
         echo "vs-openfoam.sh: scg run failed" >&2
         exit 1

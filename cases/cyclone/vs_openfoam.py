@@ -2,7 +2,7 @@
 particle tracker (uncoupledKinematicParcelFoam, v1912). Python 3.11+ standard library;
 bench/foam.py's helpers (dictionary header, timed run, list reader) are imported.
 
-  python3 vs_openfoam.py case SCENE DIR [--duration T] [--feed-scale F]
+  python3 vs_openfoam.py case SCENE DIR [--duration T] [--feed-scale F] [--dt DT]
       OpenFOAM case(s) under DIR from the scg scene SCENE: one case per particle density
       (one kinematic cloud has one rho0), DIR/rho<ρ>/, and DIR/plan.json (the classes and
       the runs). The scene's flow field (flow.case, flow.time, flow.field) is the frozen U.
@@ -51,7 +51,7 @@ def bad(path, key, msg):
     raise SceneError(f"{path}: {key}: {msg}")
 
 
-def read_scene(path, duration=None, feed_scale=None):
+def read_scene(path, duration=None, feed_scale=None, dt=None):
     """The comparison's settings from an scg scene (dict). Classes: one per [[groups]],
     each fed by exactly one [[feeders]] with `patch`."""
     try:
@@ -99,7 +99,7 @@ def read_scene(path, duration=None, feed_scale=None):
     g = [float(x) for x in s.get("gravity", {}).get("acceleration", [0.0, 0.0, 0.0])]
     if len(g) != 3:
         bad(path, "gravity.acceleration", "needs 3 components")
-    dt = s.get("dt")
+    dt = s.get("dt") if dt is None else dt
     if not isinstance(dt, (int, float)) or dt <= 0:
         bad(path, "dt", "a fixed time step (s) is needed")
     dur = float(duration if duration is not None else s.get("duration", 0.0))
@@ -593,6 +593,7 @@ def main(argv):
     c.add_argument("dir")
     c.add_argument("--duration", type=float)
     c.add_argument("--feed-scale", type=float)
+    c.add_argument("--dt", type=float)
     g = sub.add_parser("grade")
     g.add_argument("dir")
     g.add_argument("out")
@@ -603,7 +604,7 @@ def main(argv):
     a = ap.parse_args(argv[1:])
     try:
         if a.cmd == "case":
-            plan = make_cases(read_scene(a.scene, a.duration, a.feed_scale), a.dir)
+            plan = make_cases(read_scene(a.scene, a.duration, a.feed_scale, a.dt), a.dir)
             for r in plan["runs"]:
                 print(r["dir"])
         elif a.cmd == "grade":
