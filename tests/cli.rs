@@ -73,3 +73,61 @@ fn coarse_grained_variants_get_their_own_recordings() {
         }
     }
 }
+
+#[test]
+fn summary_json_accounts_for_every_particle_fed() {
+    // The cyclone with inlet-patch feeders (cases/cyclone/vs-openfoam.sh reads this file):
+    // 0.3 s, 120 particles per group, some go back out (lost) near the inlet.
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("summary.json");
+    let case = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/cases/cyclone/fixture-patch-feeders.toml"
+    );
+    let out = scg()
+        .args(["--threads", "1", "run", case, "--no-record"])
+        .args(["--set", "duration=0.3", "--summary-json"])
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(s["code"], "scg");
+    assert_eq!(s["steps"], 1500);
+    assert_eq!(s["threads"], 1);
+    let groups = s["groups"].as_array().unwrap();
+    let names: Vec<&str> = groups
+        .iter()
+        .map(|g| g["group"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["d2", "d5", "d10", "d20"]);
+    let mut held = 0;
+    for g in groups {
+        let n = |k: &str| g[k].as_u64().unwrap();
+        // ⌊400/s · 0.3 s⌋ fed, each drained, lost or still in the cyclone
+        assert_eq!(n("fed"), 120, "{g}");
+        assert_eq!(n("drained") + n("lost") + n("held"), n("fed"), "{g}");
+        assert_eq!(g["lost_times"].as_array().unwrap().len() as u64, n("lost"));
+        assert_eq!(
+            g["drained_times"].as_array().unwrap().len() as u64,
+            n("drained")
+        );
+        for t in g["lost_times"].as_array().unwrap() {
+            assert!((0.0..=0.3).contains(&t.as_f64().unwrap()), "{g}");
+        }
+        held += n("held");
+    }
+    assert_eq!(groups[2]["diameter"], 1e-5);
+    assert_eq!(groups[2]["density"], 2000.0);
+    // the particle-steps: at least the particles held at the end, once each
+    let ps = s["particle_steps"].as_u64().unwrap();
+    assert!(ps > held && ps < 480 * 1500, "{ps}");
+    let rate = s["particle_steps_per_s"].as_f64().unwrap();
+    let wall = s["wall_s"].as_f64().unwrap();
+    assert!((rate * wall - ps as f64).abs() < 1e-6 * ps as f64);
+}

@@ -1,0 +1,188 @@
+"""Tests of cases/cyclone/vs_openfoam.py that need no OpenFOAM (standard library only):
+
+    python3 -m unittest discover -s cases/cyclone -p 'test_vs_openfoam.py'
+
+The scene is the test fixture cases/cyclone/fixture-patch-feeders.toml (cases/cyclone.toml
+with inlet-patch feeders); the mesh is the committed cases/cyclone/coarse.
+"""
+import json
+import os
+import re
+import shutil
+import sys
+import tempfile
+import unittest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import vs_openfoam as vs  # noqa: E402
+
+FIXTURE = os.path.join(HERE, "fixture-patch-feeders.toml")
+
+
+def entry(text, key):
+    m = re.search(r"^\s*" + re.escape(key) + r"\s+([^;]+);", text, re.M)
+    return m.group(1).strip() if m else None
+
+
+def block(text, name):
+    """The body of `name { ... }` (nested braces counted)."""
+    i = re.search(r"^\s*" + re.escape(name) + r"\s*\n?\s*\{", text, re.M).end()
+    depth = 1
+    for j in range(i, len(text)):
+        depth += {"{": 1, "}": -1}.get(text[j], 0)
+        if depth == 0:
+            return text[i:j]
+    raise AssertionError(f"unclosed {name}")
+
+
+class Scene(unittest.TestCase):
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp()
+
+    def tearDown(self):
+        shutil.rmtree(self.tmp)
+
+    def write(self, text, name="s.toml"):
+        p = os.path.join(self.tmp, name)
+        with open(p, "w") as f:
+            f.write(text)
+        return p
+
+    def test_fixture_maps_to_one_case_with_an_injector_per_class(self):
+        sc = vs.read_scene(FIXTURE)
+        self.assertEqual([c["group"] for c in sc["classes"]], ["d2", "d5", "d10", "d20"])
+        self.assertEqual(sc["field"], "UMean")
+        self.assertEqual(sc["time"], "800")
+        plan = vs.make_cases(sc, self.tmp)
+        self.assertEqual(len(plan["runs"]), 1)
+        d = plan["runs"][0]["dir"]
+        cloud = vs.read_text(os.path.join(d, "constant", "kinematicCloudProperties"))
+        self.assertEqual(entry(block(cloud, "constantProperties"), "rho0"), "2000.0")
+        inj = block(cloud, "injectionModels")
+        for name, dia in (("d2", "2e-06"), ("d5", "5e-06"), ("d10", "1e-05"), ("d20", "2e-05")):
+            b = block(inj, name)
+            self.assertEqual(entry(b, "type"), "patchInjection")
+            self.assertEqual(entry(b, "patch"), "inlet")
+            self.assertEqual(entry(b, "parcelsPerSecond"), "400.0")
+            self.assertEqual(entry(b, "duration"), "1.0")
+            self.assertEqual(entry(b, "SOI"), "0.0")
+            self.assertEqual(entry(b, "nParticle"), "1")
+            self.assertEqual(entry(b, "U0"), "(-10.0 0.0 0.0)")
+            self.assertEqual(entry(block(b, "fixedValueDistribution"), "value"), dia)
+        wall = block(cloud, "standardWallInteractionCoeffs")
+        self.assertEqual(entry(wall, "type"), "rebound")
+        self.assertEqual(entry(wall, "e"), "0.5")
+        self.assertEqual(entry(wall, "mu"), "0")
+        self.assertIn("sphereDrag", block(cloud, "particleForces"))
+        self.assertIn("gravity", block(cloud, "particleForces"))
+        self.assertEqual(entry(block(cloud, "interpolationSchemes"), "U"), "cellPoint")
+        self.assertEqual(entry(block(cloud, vs.PPP), "patches"), "(inlet outlet)")
+        ctl = vs.read_text(os.path.join(d, "system", "controlDict"))
+        self.assertEqual(entry(ctl, "application"), "uncoupledKinematicParcelFoam")
+        self.assertEqual(entry(ctl, "deltaT"), "0.0002")
+        self.assertEqual(float(entry(ctl, "endTime")), 3.0)
+        self.assertEqual(entry(ctl, "writeInterval"), "15000")
+        g = vs.read_text(os.path.join(d, "constant", "g"))
+        self.assertEqual(entry(g, "value"), "(0.0 0.0 -9.81)")
+        th = vs.read_text(os.path.join(d, "constant", "thermophysicalProperties"))
+        self.assertIn("mu 1.8e-05;", th)
+        # p/(R T) is the scene's air density
+        t = float(entry(vs.read_text(os.path.join(d, "0", "T")), "internalField").split()[1])
+        self.assertAlmostEqual(vs.P_REF / (vs.R_UNIVERSAL / vs.MOL_WEIGHT * t), 1.2, places=12)
+        self.assertTrue(os.path.isfile(os.path.join(d, "0", "U.gz")))
+        self.assertTrue(os.path.isfile(os.path.join(d, "constant", "polyMesh", "owner.gz")))
+
+    def test_overrides_and_densities(self):
+        text = vs.read_text(FIXTURE).replace('case = "coarse"', f'case = "{os.path.join(HERE, "coarse")}"')
+        # d20 heavier: a second OpenFOAM case (one cloud has one rho0)
+        text = text.replace('name = "d20"\ndiameter = 2e-05\ndensity = 2000.0', 'name = "d20"\ndiameter = 2e-05\ndensity = 3000.0')
+        p = self.write(text)
+        sc = vs.read_scene(p, duration=0.4, feed_scale=0.25)
+        self.assertEqual(sc["duration"], 0.4)
+        self.assertEqual(sc["classes"][0]["rate"], 100.0)
+        self.assertEqual(sc["classes"][0]["stop"], 0.4)  # the feed ends with the run
+        plan = vs.make_cases(sc, os.path.join(self.tmp, "out"))
+        self.assertEqual([r["groups"] for r in plan["runs"]], [["d2", "d5", "d10"], ["d20"]])
+        self.assertEqual([r["density"] for r in plan["runs"]], [2000.0, 3000.0])
+        with open(os.path.join(self.tmp, "out", "plan.json")) as f:
+            self.assertEqual(len(json.load(f)["runs"]), 2)
+
+    def test_bad_scenes_name_the_key(self):
+        base = vs.read_text(FIXTURE).replace('case = "coarse"', f'case = "{os.path.join(HERE, "coarse")}"')
+        cases = [
+            (base.replace('patch = "inlet"\nrate = 400.0\nvelocity = [-10.0, 0.0, 0.0]\nstop = 1.0\n\n[[feeders]]\ngroup = "d5"',
+                          'region = { kind = "box", min = [0.5, 0.3, 0.7], max = [0.52, 0.4, 0.9] }\nrate = 400.0\n'
+                          'velocity = [-10.0, 0.0, 0.0]\nstop = 1.0\n\n[[feeders]]\ngroup = "d5"', 1), "feeders.0.patch"),
+            (base.replace('dt = 2.0e-4', 'dt = "auto"'), "dt"),
+            (base.replace('wall_model = "rebound"', 'wall_model = "contact"'), "flow.patches.wall_model"),
+            (base.replace('walls = ["walls"]', 'walls = []'), "flow.patches.walls"),
+            (base.replace('outlets = ["outlet"]', 'outlets = ["top"]'), "flow.patches.outlets"),
+            (base.replace('group = "d20"\n', 'group = "d10"\n'), "groups.2"),
+        ]
+        for text, key in cases:
+            with self.subTest(key=key):
+                p = self.write(text)
+                with self.assertRaises(vs.SceneError) as e:
+                    vs.make_cases(vs.read_scene(p), os.path.join(self.tmp, "o"))
+                self.assertIn(f": {key}:", str(e.exception))
+
+
+class Results(unittest.TestCase):
+    POST = (
+        "# Time currentProc  (coordinates0 coordinates1 coordinates2 coordinates3) (position0 position1 "
+        "position2) celli tetFacei tetPti facei stepFraction origProc origId active typeId nParticle d dTarget "
+        "(U0 U1 U2) rho age tTurb (UTurb0 UTurb1 UTurb2)\n"
+        "0.97479999999992528 0 (0 0.41 0.58 0.0007) (0.071 -0.13 1.1) 30754 88337 1 88337 0.5079 0 310 1 -1 1 "
+        "1.9999999999999999e-06 0 (5.15 1.78 9.15) 2000 0.7775 0 (0 0 0)\n"
+        "1.0369999999999184 0 (0 0.0006 0.65 0.34) (0.15 -0.0047 1.1) 30788 88355 1 88355 0.2429 0 789 1 -1 1 "
+        "5e-06 0 (1.48 4.70 7.77) 2000 0.538 0 (0 0 0)\n"
+    )
+
+    def test_post_rows_by_column_name(self):
+        rows = vs.parse_post(self.POST)
+        self.assertEqual(rows, [(0.97479999999992528, 1.9999999999999999e-06, 0.7775), (1.0369999999999184, 5e-06, 0.538)])
+
+    def test_log_counts_and_times(self):
+        log = """Time = 0.0002
+
+Evolving kinematicCloud
+    Current number of parcels       = 0
+    Injector d2:
+      - parcels added               = 0
+ExecutionTime = 0.28 s  ClockTime = 0 s
+
+Time = 0.0004
+    Current number of parcels       = 3
+    Injector d2:
+      - parcels added               = 2
+    Injector d5:
+      - parcels added               = 1
+ExecutionTime = 0.30 s  ClockTime = 0 s
+"""
+        d = tempfile.mkdtemp()
+        try:
+            p = os.path.join(d, "log.foam")
+            with open(p, "w") as f:
+                f.write(log)
+            lg = vs.parse_log(p)
+        finally:
+            shutil.rmtree(d)
+        self.assertEqual(lg["parcels"], [0, 3])
+        self.assertEqual(lg["cpu"], [0.28, 0.30])
+        self.assertEqual(lg["added"], {"d2": 2, "d5": 1})
+
+    def test_d50_interpolates_in_log_d(self):
+        cls = [{"diameter": 2e-6, "efficiency": 0.2}, {"diameter": 8e-6, "efficiency": 0.8},
+               {"diameter": 20e-6, "efficiency": 1.0}]
+        self.assertAlmostEqual(vs.d50(cls), 4e-6, delta=1e-18)
+        self.assertIsNone(vs.d50([{"diameter": 2e-6, "efficiency": 0.7}, {"diameter": 5e-6, "efficiency": 0.9}]))
+
+    def test_sampling_sigma(self):
+        # two classes of 400 at 0.75: sqrt(2 * 0.1875 / 400) = 3.06 pp
+        self.assertAlmostEqual(vs.sampling_pp(400, 0.75, 400, 0.75), 100 * (2 * 0.1875 / 400) ** 0.5)
+        self.assertEqual(vs.sampling_pp(400, 1.0, 400, 1.0), 0.0)
+
+
+if __name__ == "__main__":
+    unittest.main()

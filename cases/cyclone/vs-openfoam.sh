@@ -1,0 +1,138 @@
+#!/usr/bin/env bash
+# The cyclone side by side with OpenFOAM's particle tracker: the scene's frozen field,
+# inlet-patch feed, sizes, densities, drag and wall rebound in uncoupledKinematicParcelFoam
+# (Debian's OpenFOAM v1912, one process) and in scg (original particles, 1 and 2 threads);
+# one table of grade efficiency, counts and speed.
+#
+#   bash cases/cyclone/vs-openfoam.sh [--scene cases/cyclone.toml] [--quick] [--out DIR]
+#                                     [--scg PATH]
+#
+#   --scene FILE  the scg scene (default cases/cyclone.toml): [flow] kind = "openfoam" with
+#                 a fixed dt, one [[feeders]] with `patch` per [[groups]] size class,
+#                 [flow.patches] walls (wall_model "rebound", [material] restitution),
+#                 outlets, inlets; [drag], [gravity], [fluid]
+#   --quick       a check of the script (seconds): duration 0.4 s and a quarter of the
+#                 feed rates (--set duration=0.4 --set feed_scale=0.25 for scg)
+#   --out DIR     results (default /tmp/scg-cyclone-vs-openfoam): grade.json (OpenFOAM,
+#                 the shape `scg study cyclone --openfoam FILE` reads), scg-1.json and
+#                 scg-2.json (`scg run --summary-json`), table.txt, openfoam/ (the cases
+#                 and their logs)
+#   --feed-scale F  multiply every feeder's rate by F in both codes (scg's feed_scale;
+#                 more particles, a smaller sampling error: the table prints it)
+#   --dt DT       the time step of both codes instead of the scene's (scg: --set dt=DT)
+#   --scg-set KEY=VALUE  passed to both scg runs as --set (repeatable), e.g.
+#                 flow.interpolation=cell_point_idw (OpenFOAM's cellPoint point values);
+#                 for scg only: keys that change the physics break the like-for-like
+#   --scg PATH    scg binary (default target/release/scg, built if missing)
+#   NICE="nice -n 5" prefixes every run of both codes alike (for a shared machine)
+#
+# Steps: installs OpenFOAM with apt when missing (as cases/cyclone/build.sh); writes one
+# OpenFOAM case per particle density (cases/cyclone/vs_openfoam.py case: one kinematic
+# cloud has a single rho0); runs uncoupledKinematicParcelFoam (bench/foam.py run: its log,
+# and the wall time of every ExecutionTime line); reads the fed, escaped (outlet patches),
+# lost (other non-wall patches) and held parcels per class (the injectors' `parcels added`,
+# patchPostProcessing, the parcels written at the end) into grade.json; runs scg on the
+# same scene twice (--threads 1 and 2, --no-record, --summary-json); prints the table
+# (cases/cyclone/vs_openfoam.py table). Timers: OpenFOAM's ExecutionTime (CPU time of the
+# process) over steps 2..N; scg's wall time of its steps (scene and mesh loading
+# excluded). particle-steps: the sum over steps of the particles in the domain, both codes.
+set -eo pipefail
+self=$(realpath "$0")
+root=$(cd "$(dirname "$self")/../.." && pwd)
+scene=$root/cases/cyclone.toml
+out=/tmp/scg-cyclone-vs-openfoam
+quick=0
+dt=""
+case_args=()
+set_args=()
+feed_scale=""
+scg_set=()
+SCG=""
+NICE=${NICE:-}
+while [ $# -gt 0 ]; do
+    case "$1" in
+        --scene) scene=$2; shift ;;
+        --out) out=$2; shift ;;
+        --quick) quick=1 ;;
+        --scg) SCG=$2; shift ;;
+        --feed-scale) feed_scale=$2; shift ;;
+        --dt) case_args+=(--dt "$2"); set_args+=(--set "dt=$2"); dt=$2; shift ;;
+        --scg-set) scg_set+=(--set "$2"); shift ;;
+        -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$self"; exit 0 ;;
+        *) echo "vs-openfoam.sh: unknown argument $1" >&2; exit 2 ;;
+    esac
+    shift
+done
+[ -f "$scene" ] || { echo "vs-openfoam.sh: no scene $scene" >&2; exit 2; }
+scene=$(realpath "$scene")
+mkdir -p "$out"
+out=$(realpath "$out")
+
+# --- OpenFOAM (as cases/cyclone/build.sh) ---------------------------------------------------
+foam_etc=/usr/share/openfoam/etc/bashrc
+if [ ! -f "$foam_etc" ] || ! command -v uncoupledKinematicParcelFoam >/dev/null; then
+    echo "== installing OpenFOAM (Debian package openfoam)"
+    sudo=""; [ "$(id -u)" -ne 0 ] && sudo=sudo
+    $sudo apt-get update
+    $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends openfoam
+fi
+# The Debian bashrc refers to unset variables and to helper scripts it does not ship.
+# shellcheck disable=SC1090
+source "$foam_etc" >/dev/null 2>&1 || true
+command -v uncoupledKinematicParcelFoam >/dev/null || { echo "vs-openfoam.sh: uncoupledKinematicParcelFoam not found after sourcing $foam_etc" >&2; exit 1; }
+set -u
+
+if [ -z "$SCG" ]; then
+    SCG=$root/target/release/scg
+    [ -x "$SCG" ] || (cd "$root" && cargo build --release --quiet)
+fi
+SCG=$(realpath "$SCG")
+
+py=(python3 "$root/cases/cyclone/vs_openfoam.py")
+if [ "$quick" = 1 ]; then
+    case_args+=(--duration 0.4)
+    set_args+=(--set duration=0.4)
+    : "${feed_scale:=0.25}"
+fi
+if [ -n "$feed_scale" ]; then
+    case_args+=(--feed-scale "$feed_scale")
+    set_args+=(--set "feed_scale=$feed_scale")
+fi
+echo "scene: $scene$([ "$quick" = 1 ] && echo " (--quick: duration 0.4 s)")${feed_scale:+ (feed_scale $feed_scale)}${dt:+ (dt $dt)}"
+echo "scg: $SCG ${scg_set[*]}"
+echo "OpenFOAM: $(command -v uncoupledKinematicParcelFoam) ($(dpkg-query -W -f='${Version}' openfoam 2>/dev/null || echo '?'))"
+echo "cores: $(nproc)  load: $(cut -d' ' -f1-3 /proc/loadavg)  NICE='${NICE}'"
+
+# --- OpenFOAM -------------------------------------------------------------------------------
+rm -rf "$out/openfoam"
+rc=0
+"${py[@]}" case "$scene" "$out/openfoam" "${case_args[@]}" > "$out/runs.txt" || rc=$?
+[ "$rc" = 0 ] || exit "$rc"
+mapfile -t runs < "$out/runs.txt"
+for d in "${runs[@]}"; do
+    echo "== OpenFOAM: $d"
+    if ! (cd "$d" && python3 "$root/bench/foam.py" run log.foam $NICE uncoupledKinematicParcelFoam > /dev/null); then
+        tail -30 "$d/log.foam" >&2
+        echo "vs-openfoam.sh: uncoupledKinematicParcelFoam failed in $d" >&2
+        exit 1
+    fi
+    if grep -q "FOAM FATAL" "$d/log.foam"; then grep -A8 "FOAM FATAL" "$d/log.foam" >&2; exit 1; fi
+done
+"${py[@]}" grade "$out/openfoam" "$out/grade.json"
+echo "wrote $out/grade.json"
+
+# --- scg ------------------------------------------------------------------------------------
+for t in 1 2; do
+    echo "== scg, $t thread(s)"
+    if ! $NICE "$SCG" --threads "$t" run "$scene" --no-record --set coarse_grain.alpha=1 \
+        "${set_args[@]}" "${scg_set[@]}" --summary-json "$out/scg-$t.json" > "$out/scg-$t.log" 2>&1; then
+        tail -20 "$out/scg-$t.log" >&2
+        echo "vs-openfoam.sh: scg run failed" >&2
+        exit 1
+    fi
+    grep '^done:' "$out/scg-$t.log"
+done
+
+echo
+echo "== grade efficiency (1 - escaped/fed) and speed; load now $(cut -d' ' -f1-3 /proc/loadavg)"
+"${py[@]}" table "$out/grade.json" "$out/scg-1.json" "$out/scg-2.json" | tee "$out/table.txt"

@@ -1,0 +1,620 @@
+"""Helpers of cases/cyclone/vs-openfoam.sh: the cyclone scene side by side with OpenFOAM's
+particle tracker (uncoupledKinematicParcelFoam, v1912). Python 3.11+ standard library;
+bench/foam.py's helpers (dictionary header, timed run, list reader) are imported.
+
+  python3 vs_openfoam.py case SCENE DIR [--duration T] [--feed-scale F] [--dt DT]
+      OpenFOAM case(s) under DIR from the scg scene SCENE: one case per particle density
+      (one kinematic cloud has one rho0), DIR/rho<ρ>/, and DIR/plan.json (the classes and
+      the runs). The scene's flow field (flow.case, flow.time, flow.field) is the frozen U.
+  python3 vs_openfoam.py grade DIR OUT.json
+      reads each run's log and patchPostProcessing output and writes grade.json
+  python3 vs_openfoam.py table GRADE.json SCG1.json SCG2.json
+      the side-by-side table (scg's `run --summary-json` on 1 and 2 threads)
+
+Exit status 2 (message naming the file and key) when the scene cannot be mapped.
+"""
+import gzip
+import json
+import math
+import os
+import re
+import shutil
+import sys
+import tomllib
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "..", "bench"))
+import foam  # noqa: E402  (bench/foam.py: header, foam_list, run)
+
+CLOUD = "kinematicCloud"
+PPP = "patchPostProcessing1"
+R_UNIVERSAL = 8314.47    # J/(kmol K), OpenFOAM's thermodynamic constant RR (v1912)
+MOL_WEIGHT = 28.96       # kg/kmol, air
+P_REF = 1.0e5            # Pa; T is chosen so that p/(R T) is the scene's fluid density
+
+
+class SceneError(Exception):
+    pass
+
+
+def read_text(path):
+    with open(path) as f:
+        return f.read()
+
+
+def read_json(path):
+    with open(path) as f:
+        return json.load(f)
+
+
+def bad(path, key, msg):
+    raise SceneError(f"{path}: {key}: {msg}")
+
+
+def read_scene(path, duration=None, feed_scale=None, dt=None):
+    """The comparison's settings from an scg scene (dict). Classes: one per [[groups]],
+    each fed by exactly one [[feeders]] with `patch`."""
+    try:
+        with open(path, "rb") as f:
+            s = tomllib.load(f)
+    except (OSError, tomllib.TOMLDecodeError) as e:
+        raise SceneError(f"{path}: {e}")
+    base = os.path.dirname(os.path.abspath(path))
+    if feed_scale is None:  # as scg's --set feed_scale=F: replaces the scene's
+        feed_scale = float(s.get("feed_scale", 1.0))
+    flow = s.get("flow", {})
+    if flow.get("kind") != "openfoam":
+        bad(path, "flow.kind", 'must be "openfoam"')
+    case = os.path.normpath(os.path.join(base, flow.get("case", "")))
+    if not os.path.isdir(os.path.join(case, "constant", "polyMesh")):
+        bad(path, "flow.case", f"no constant/polyMesh in {case}")
+    if float(flow.get("scale", 1.0)) != 1.0:
+        bad(path, "flow.scale", "only 1.0 (a mesh in metres) is supported")
+    field = flow.get("field", "U")
+    time = flow.get("time", "latest")
+    times = sorted((d for d in os.listdir(case) if re.fullmatch(r"[0-9.eE+-]+", d)
+                    and os.path.isdir(os.path.join(case, d))), key=float)
+    if time == "latest":
+        if not times:
+            bad(path, "flow.time", f"no time folder in {case}")
+        time = times[-1]
+    else:
+        time = next((t for t in times if float(t) == float(time)), None)
+        if time is None:
+            bad(path, "flow.time", f"{flow.get('time')} not among {times} in {case}")
+    field_file = next((os.path.join(case, time, field + ext) for ext in (".gz", "")
+                       if os.path.isfile(os.path.join(case, time, field + ext))), None)
+    if field_file is None:
+        bad(path, "flow.field", f"no {field} in {os.path.join(case, time)}")
+    patches = flow.get("patches", {})
+    walls = list(patches.get("walls", []))
+    outlets = list(patches.get("outlets", []))
+    inlets = list(patches.get("inlets", []))
+    if patches.get("wall_model", "rebound") != "rebound":
+        bad(path, "flow.patches.wall_model", 'must be "rebound" (OpenFOAM: standardWallInteraction rebound)')
+    restitution = float(s.get("material", {}).get("restitution", 1.0))
+    fluid = s.get("fluid", {})
+    rho_f = float(fluid.get("density", 1.2))
+    mu = float(fluid.get("viscosity", 1.8e-5))
+    g = [float(x) for x in s.get("gravity", {}).get("acceleration", [0.0, 0.0, 0.0])]
+    if len(g) != 3:
+        bad(path, "gravity.acceleration", "needs 3 components")
+    dt = s.get("dt") if dt is None else dt
+    if not isinstance(dt, (int, float)) or dt <= 0:
+        bad(path, "dt", "a fixed time step (s) is needed")
+    dur = float(duration if duration is not None else s.get("duration", 0.0))
+    if dur <= 0:
+        bad(path, "duration", "must be positive")
+    interp = flow.get("interpolation", "cell_point")
+    foam_interp = {"cell_value": "cell", "cell_point": "cellPoint", "cell_point_idw": "cellPoint"}.get(interp)
+    if foam_interp is None:
+        bad(path, "flow.interpolation", f"{interp!r} has no OpenFOAM counterpart")
+    groups = s.get("groups", [])
+    if not groups:
+        bad(path, "groups", "no [[groups]]")
+    feeders = s.get("feeders", [])
+    classes = []
+    for i, gr in enumerate(groups):
+        name = gr.get("name")
+        fs = [(j, f) for j, f in enumerate(feeders) if f.get("group") == name]
+        if len(fs) != 1:
+            bad(path, f"groups.{i}", f"group {name!r} needs exactly one [[feeders]] (has {len(fs)})")
+        j, f = fs[0]
+        if "patch" not in f:
+            bad(path, f"feeders.{j}.patch", "the comparison feeds through a patch (patchInjection)")
+        v = f.get("velocity")
+        if not (isinstance(v, list) and len(v) == 3):
+            bad(path, f"feeders.{j}.velocity", "needs a vector (OpenFOAM's U0)")
+        if float(gr.get("alpha", 1.0)) != 1.0:
+            bad(path, f"groups.{i}.alpha", "the comparison is of the original particles (alpha = 1)")
+        start = float(f.get("start", 0.0))
+        stop = min(float(f.get("stop", dur)), dur)
+        classes.append({
+            "group": name, "diameter": float(gr["diameter"]), "density": float(gr["density"]),
+            "patch": f["patch"], "rate": float(f["rate"]) * feed_scale,
+            "start": start, "stop": stop, "velocity": [float(x) for x in v],
+        })
+    return {
+        "scene": os.path.abspath(path), "name": s.get("name", "scene"),
+        "case": case, "time": time, "field": field, "field_file": field_file,
+        "interpolation": interp, "foam_interpolation": foam_interp,
+        "walls": walls, "outlets": outlets, "inlets": inlets, "restitution": restitution,
+        "rho_f": rho_f, "mu": mu, "gravity": g, "dt": float(dt), "duration": dur,
+        "drag": s.get("drag", {}).get("law", "stokes"), "classes": classes,
+        "feed_scale": feed_scale,
+    }
+
+
+def boundary_types(case):
+    """{patch: type} from constant/polyMesh/boundary(.gz)."""
+    p = os.path.join(case, "constant", "polyMesh", "boundary")
+    if os.path.isfile(p + ".gz"):
+        with gzip.open(p + ".gz", "rt") as f:
+            text = f.read()
+    else:
+        text = read_text(p)
+    body = text[text.index("(", text.index("FoamFile") + 10):]
+    return dict(re.findall(r"(\w+)\s*\{[^}]*?type\s+(\w+);", body))
+
+
+def g6(x):
+    return repr(float(x))
+
+
+def cloud_properties(sc, classes, rho_p):
+    inj = []
+    for k, c in enumerate(classes):
+        inj.append(f"""        {c['group']}
+        {{
+            type            patchInjection;
+            patch           {c['patch']};
+            SOI             {g6(c['start'])};
+            duration        {g6(c['stop'] - c['start'])};
+            parcelsPerSecond {g6(c['rate'])};
+            massTotal       0;
+            parcelBasisType fixed;
+            nParticle       1;              // one particle per parcel
+            U0              ({' '.join(g6(x) for x in c['velocity'])});
+            flowRateProfile constant 1;     // not used with parcelBasisType fixed
+            sizeDistribution
+            {{
+                type        fixedValue;
+                fixedValueDistribution {{ value {g6(c['diameter'])}; }}
+            }}
+        }}""")
+    patches = sorted(set(sc["outlets"]) | set(p for p in sc["boundary"] if sc["boundary"][p] != "wall"))
+    interp = sc["foam_interpolation"]
+    return foam.header("dictionary", "constant", "kinematicCloudProperties") + f"""\
+// scg cases/cyclone/vs-openfoam.sh from {os.path.basename(sc['scene'])}: classes {', '.join(c['group'] for c in classes)}
+solution
+{{
+    active          true;
+    coupled         false;      // one-way: the flow is frozen
+    transient       yes;
+    cellValueSourceCorrection off;
+    maxCo           1;
+
+    interpolationSchemes
+    {{
+        rho             cell;
+        U               {interp};
+        mu              cell;
+        thermo:mu       cell;
+    }}
+
+    integrationSchemes
+    {{
+        U               analytical;
+    }}
+
+    sourceTerms
+    {{
+        schemes
+        {{
+        }}
+    }}
+}}
+
+constantProperties
+{{
+    rho0            {g6(rho_p)};
+    youngsModulus   1e8;        // unused (no collision model)
+    poissonsRatio   0.35;
+    constantVolume  false;
+}}
+
+subModels
+{{
+    particleForces
+    {{
+        sphereDrag;             // Cd = 24/Re (1 + Re^(2/3)/6)
+        gravity;
+    }}
+
+    injectionModels
+    {{
+{chr(10).join(inj)}
+    }}
+
+    dispersionModel none;
+
+    patchInteractionModel standardWallInteraction;
+
+    standardWallInteractionCoeffs
+    {{
+        type rebound;           // wall patches: v_n' = -e v_n, v_t' = (1 - mu) v_t
+        e    {g6(sc['restitution'])};
+        mu   0;
+    }}
+    // A parcel reaching a patch that is not of type wall escapes (leaves the cloud).
+
+    heatTransferModel none;
+    surfaceFilmModel none;
+    collisionModel none;
+    stochasticCollisionModel none;
+    radiation off;
+}}
+
+cloudFunctions
+{{
+    {PPP}
+    {{
+        type            patchPostProcessing;
+        maxStoredParcels 100000000;
+        patches         ({' '.join(patches)});
+    }}
+}}
+"""
+
+
+def control_dict(sc):
+    steps = round(sc["duration"] / sc["dt"])
+    return foam.header("dictionary", "system", "controlDict") + f"""\
+application     uncoupledKinematicParcelFoam;
+startFrom       startTime;
+startTime       0;
+stopAt          endTime;
+endTime         {g6(steps * sc['dt'])};
+deltaT          {g6(sc['dt'])};
+adjustTimeStep  no;             // the scene's fixed dt (the solver adjusts it otherwise)
+maxCo           1;
+maxDeltaT       {g6(sc['dt'])};
+writeControl    timeStep;       // written once, at the end
+writeInterval   {steps};
+purgeWrite      0;
+writeFormat     ascii;
+writePrecision  17;
+writeCompression off;
+timeFormat      general;
+timePrecision   12;
+runTimeModifiable no;
+"""
+
+
+def thermo(sc):
+    r = R_UNIVERSAL / MOL_WEIGHT
+    t = P_REF / (sc["rho_f"] * r)
+    th = foam.header("dictionary", "constant", "thermophysicalProperties") + f"""\
+thermoType
+{{
+    type            hePsiThermo;
+    mixture         pureMixture;
+    transport       const;
+    thermo          hConst;
+    equationOfState perfectGas;
+    specie          specie;
+    energy          sensibleInternalEnergy;
+}}
+// rho = p/(R T) = {P_REF:g}/({r:.6g} * {t:.9g}) = {sc['rho_f']} kg/m3
+mixture
+{{
+    specie {{ molWeight {MOL_WEIGHT}; }}
+    thermodynamics {{ Cp 1005; Hf 0; }}
+    transport {{ mu {g6(sc['mu'])}; Pr 0.7; }}
+}}
+"""
+    scalar = lambda name, dim, v: foam.header("volScalarField", "0", name) + (
+        f"dimensions      {dim};\ninternalField   uniform {v!r};\n"
+        'boundaryField\n{\n    ".*" { type zeroGradient; }\n}\n')
+    return th, scalar("p", "[1 -1 -2 0 0 0 0]", P_REF), scalar("T", "[0 0 0 1 0 0 0]", t)
+
+
+def make_cases(sc, out):
+    """One OpenFOAM case per particle density under `out`; returns the plan."""
+    sc["boundary"] = boundary_types(sc["case"])
+    for key in ("walls", "outlets", "inlets"):
+        for p in sc[key]:
+            if p not in sc["boundary"]:
+                bad(sc["scene"], f"flow.patches.{key}", f"no patch {p!r} in the mesh ({sorted(sc['boundary'])})")
+    for p in sc["walls"]:
+        if sc["boundary"][p] != "wall":
+            bad(sc["scene"], "flow.patches.walls", f"patch {p!r} is of type {sc['boundary'][p]}, not wall: "
+                "OpenFOAM's standardWallInteraction rebounds on wall patches only")
+    for p, t in sc["boundary"].items():
+        if t == "wall" and p not in sc["walls"]:
+            bad(sc["scene"], "flow.patches.walls", f"wall patch {p!r} is not listed (scg would remove "
+                "particles there, OpenFOAM rebound them)")
+    for c in sc["classes"]:
+        if c["patch"] not in sc["boundary"]:
+            bad(sc["scene"], "feeders.patch", f"no patch {c['patch']!r} in the mesh")
+    densities = sorted({c["density"] for c in sc["classes"]})
+    runs = []
+    for rho in densities:
+        cls = [c for c in sc["classes"] if c["density"] == rho]
+        d = os.path.join(out, f"rho{rho:g}")
+        if os.path.exists(d):
+            shutil.rmtree(d)
+        os.makedirs(os.path.join(d, "constant", "polyMesh"))
+        os.makedirs(os.path.join(d, "system"))
+        os.makedirs(os.path.join(d, "0"))
+        src = os.path.join(sc["case"], "constant", "polyMesh")
+        for f in os.listdir(src):
+            shutil.copy(os.path.join(src, f), os.path.join(d, "constant", "polyMesh", f))
+        # the scene's field as the frozen U (OpenFOAM reads .gz files itself)
+        shutil.copy(sc["field_file"], os.path.join(d, "0", "U" + (".gz" if sc["field_file"].endswith(".gz") else "")))
+        for sub, name in (("system", "fvSchemes"), ("system", "fvSolution"),
+                          ("constant", "turbulenceProperties")):
+            shutil.copy(os.path.join(HERE, "..", "..", "bench", "openfoam", sub, name), os.path.join(d, sub, name))
+        def w(rel, text):
+            with open(os.path.join(d, rel), "w") as f:
+                f.write(text)
+        w("system/controlDict", control_dict(sc))
+        w("constant/g", foam.header("uniformDimensionedVectorField", "constant", "g")
+          + "dimensions      [0 1 -2 0 0 0 0];\nvalue           (%s);\n" % " ".join(g6(x) for x in sc["gravity"]))
+        w("constant/transportProperties", foam.header("dictionary", "constant", "transportProperties")
+          + f"transportModel  Newtonian;\nnu              {g6(sc['mu'] / sc['rho_f'])};\nrhoInf          {g6(sc['rho_f'])};\n")
+        th, p, t = thermo(sc)
+        w("constant/thermophysicalProperties", th)
+        w("0/p", p)
+        w("0/T", t)
+        w("constant/kinematicCloudProperties", cloud_properties(sc, cls, rho))
+        runs.append({"dir": d, "density": rho, "groups": [c["group"] for c in cls]})
+    plan = {k: v for k, v in sc.items() if k != "boundary"}
+    plan["runs"] = runs
+    with open(os.path.join(out, "plan.json"), "w") as f:
+        json.dump(plan, f, indent=1)
+    return plan
+
+
+# ---- reading OpenFOAM's results ------------------------------------------------------------
+
+def parse_log(log):
+    """Per step (after each `Evolving` block): parcels in the system, ExecutionTime; the
+    last `parcels added` per injector; the wall-clock of each ExecutionTime (LOG.wall)."""
+    parcels, cpu, added, inj = [], [], {}, None
+    with open(log) as f:
+        for ln in f:
+            m = re.match(r"\s*Current number of parcels\s*=\s*(\d+)", ln)
+            if m:
+                parcels.append(int(m.group(1)))
+            m = re.match(r"ExecutionTime = ([0-9.eE+-]+) s", ln)
+            if m:
+                cpu.append(float(m.group(1)))
+            m = re.match(r"\s*Injector (\S+):", ln)
+            if m:
+                inj = m.group(1)
+            m = re.match(r"\s*- parcels added\s*=\s*(\d+)", ln)
+            if m and inj is not None:
+                added[inj] = int(m.group(1))
+    wall = []
+    if os.path.isfile(log + ".wall"):
+        wall = [float(x) for x in read_text(log + ".wall").split()]
+    return {"parcels": parcels, "cpu": cpu, "added": added, "wall": wall}
+
+
+def read_post(case):
+    """{patch: [(time, d, age), ...]} from patchPostProcessing's `<patch>.post` files (one
+    folder per write time)."""
+    root = os.path.join(case, "postProcessing", "lagrangian", CLOUD, PPP)
+    hits = {}
+    if not os.path.isdir(root):
+        return hits
+    for t in sorted(os.listdir(root), key=float):
+        for fn in sorted(os.listdir(os.path.join(root, t))):
+            if fn.endswith(".post"):
+                with open(os.path.join(root, t, fn)) as f:
+                    hits.setdefault(fn[:-5], []).extend(parse_post(f.read()))
+    return hits
+
+
+def parse_post(text):
+    """(time, d, age) per parcel of a .post file. v1912 writes a header line
+    `# Time currentProc (coordinates0 ... coordinates3) (position0 ...) celli ... d dTarget
+    (U0 U1 U2) rho age ...` and one line per parcel with the same columns (vectors in
+    parentheses): the columns are found by name."""
+    cols, out = None, []
+    for ln in text.splitlines():
+        tok = ln.replace("(", " ").replace(")", " ").split()
+        if ln.startswith("#"):
+            cols = tok[1:]
+            continue
+        if not tok:
+            continue
+        if cols is None or len(tok) != len(cols):
+            sys.exit(f"patchPostProcessing: a row of {len(tok)} columns against the header's {cols}")
+        out.append((float(tok[cols.index("Time")]), float(tok[cols.index("d")]), float(tok[cols.index("age")])))
+    return out
+
+
+def nearest_class(d, classes):
+    return min(classes, key=lambda c: abs(math.log(d / c["diameter"])))
+
+
+def d50(classes):
+    """Diameter where the efficiency crosses 0.5 (linear in log d between neighbours)."""
+    pts = sorted((c["diameter"], c["efficiency"]) for c in classes if c["efficiency"] is not None)
+    for (d0, e0), (d1, e1) in zip(pts, pts[1:]):
+        if (e0 - 0.5) * (e1 - 0.5) <= 0 and e0 != e1:
+            f = (0.5 - e0) / (e1 - e0)
+            return math.exp(math.log(d0) + f * (math.log(d1) - math.log(d0)))
+    return None
+
+
+def grade(out, dest):
+    plan = read_json(os.path.join(out, "plan.json"))
+    classes = {c["group"]: dict(c, fed=0, escaped=0, held=0, lost=0, residence_times=[])
+               for c in plan["classes"]}
+    ps = cpu = wall = 0.0
+    notes = []
+    for run in plan["runs"]:
+        d = run["dir"]
+        lg = parse_log(os.path.join(d, "log.foam"))
+        if not lg["cpu"]:
+            sys.exit(f"{d}/log.foam: no step ran")
+        for g in run["groups"]:
+            if g not in lg["added"]:
+                sys.exit(f"{d}/log.foam: no 'parcels added' for injector {g}")
+            classes[g]["fed"] = lg["added"][g]
+        cls = [classes[g] for g in run["groups"]]
+        # timing: the steps after the first (start-up, mesh and field reading excluded)
+        ps += sum(lg["parcels"][1:])
+        cpu += lg["cpu"][-1] - lg["cpu"][0]
+        if len(lg["wall"]) == len(lg["cpu"]):
+            wall += lg["wall"][-1] - lg["wall"][0]
+        for patch, rows in read_post(d).items():
+            for t, dia, age in rows:
+                c = nearest_class(dia, cls)
+                if patch in plan["outlets"]:
+                    c["escaped"] += 1
+                    c["residence_times"].append(age)
+                else:
+                    c["lost"] += 1
+        times = [x for x in os.listdir(d) if re.fullmatch(r"[0-9.eE+-]+", x) and float(x) > 0]
+        if times:
+            last = max(times, key=float)
+            dfile = os.path.join(d, last, "lagrangian", CLOUD, "d")
+            if os.path.isfile(dfile):
+                for dia in foam.foam_list(dfile, float):
+                    nearest_class(dia, cls)["held"] += 1
+        if len(lg["parcels"]) and lg["parcels"][-1] != sum(c["held"] for c in cls):
+            notes.append(f"{d}: the log's last parcel count {lg['parcels'][-1]} differs from the parcels "
+                         f"written ({sum(c['held'] for c in cls)})")
+    out_classes = []
+    for c in plan["classes"]:
+        k = classes[c["group"]]
+        fed = k["fed"]
+        gone = fed - k["escaped"] - k["held"] - k["lost"]
+        if gone:
+            notes.append(f"{c['group']}: {gone} parcels neither escaped, held nor lost (removed by OpenFOAM otherwise)")
+        out_classes.append({
+            "group": c["group"], "diameter": c["diameter"], "density": c["density"],
+            "fed": fed, "escaped": k["escaped"], "held": k["held"], "lost": k["lost"],
+            "efficiency": (1.0 - k["escaped"] / fed) if fed else None,
+            "residence_times": k["residence_times"],
+        })
+    if len(plan["runs"]) > 1:
+        notes.append(f"{len(plan['runs'])} OpenFOAM runs, one per particle density (one cloud has one rho0); "
+                     "particle-steps and times summed")
+    notes += [
+        "uncoupledKinematicParcelFoam, 1 process; frozen U = the scene's "
+        f"{plan['field']} at time {plan['time']}; U interpolation {plan['foam_interpolation']}",
+        "drag: sphereDrag, Cd Re/24 = 1 + Re^(2/3)/6 (scg: " + plan["drag"] + ")",
+        f"walls: standardWallInteraction rebound e = {plan['restitution']}, mu = 0",
+        "escaped: parcels reaching the outlet patch(es) " + ", ".join(plan["outlets"])
+        + "; lost: other non-wall patches; residence time = parcel age at the patch",
+        "particle_steps: sum over steps 2..N of 'Current number of parcels'; cpu_s: ExecutionTime "
+        "(process CPU) of the same steps; wall_s: wall time of the same log lines",
+    ]
+    g = {
+        "code": "openfoam", "version": "v1912", "classes": out_classes, "d50": d50(out_classes),
+        "particle_steps": int(ps), "cpu_s": cpu, "wall_s": wall,
+        "particle_steps_per_s": ps / cpu if cpu > 0 else None, "dt": plan["dt"], "notes": notes,
+    }
+    with open(dest, "w") as f:
+        json.dump(g, f, indent=1)
+        f.write("\n")
+    return g
+
+
+def efficiency(fed, escaped):
+    return 1.0 - escaped / fed if fed else None
+
+
+def sampling_pp(fed1, e1, fed2, e2):
+    """One standard deviation of the difference of two independent binomial escape
+    fractions, percentage points (each class's particles escape or not independently)."""
+    if not fed1 or not fed2 or e1 is None or e2 is None:
+        return None
+    return 100.0 * math.sqrt(e1 * (1 - e1) / fed1 + e2 * (1 - e2) / fed2)
+
+
+def rows(fo, s1):
+    """Per class: (group, d, OpenFOAM class, scg group, efficiency OpenFOAM, scg,
+    difference scg - OpenFOAM in pp, its sampling sigma in pp)."""
+    by = {g["group"]: g for g in s1["groups"]}
+    out = []
+    for c in fo["classes"]:
+        s = by[c["group"]]
+        ef, es = c["efficiency"], efficiency(s["fed"], s["drained"])
+        diff = (es - ef) * 100.0 if es is not None and ef is not None else None
+        out.append((c["group"], c["diameter"], c, s, ef, es, diff, sampling_pp(c["fed"], ef, s["fed"], es)))
+    return out
+
+
+def table(grade_path, scg1_path, scg2_path):
+    fo, s1, s2 = read_json(grade_path), read_json(scg1_path), read_json(scg2_path)
+    print(f"{'class':>6} {'d [µm]':>7} | {'OpenFOAM':>8} {'fed':>5} {'esc':>5} {'held':>5} {'lost':>4} "
+          f"| {'scg':>8} {'fed':>5} {'esc':>5} {'held':>5} {'lost':>4} | {'diff [pp]':>9} {'sigma':>6}")
+    fmt = lambda e: f"{e:8.4f}" if e is not None else f"{'-':>8}"
+    fpp = lambda x, w: f"{x:+{w}.2f}" if x is not None else f"{'-':>{w}}"
+    worst = None
+    for g, d, c, s, ef, es, diff, sig in rows(fo, s1):
+        if diff is not None and (worst is None or abs(diff) > worst):
+            worst = abs(diff)
+        print(f"{g:>6} {d * 1e6:7.3g} | {fmt(ef)} {c['fed']:5d} {c['escaped']:5d} {c['held']:5d} {c['lost']:4d} "
+              f"| {fmt(es)} {s['fed']:5d} {s['drained']:5d} {s['held']:5d} {s['lost']:4d} "
+              f"| {fpp(diff, 9)} {(f'{sig:6.2f}' if sig is not None else '-'):>6}")
+    print("  (efficiency = 1 - escaped/fed; diff = scg - OpenFOAM; sigma: one standard deviation "
+          "of the difference from sampling alone, binomial)")
+    scg_d50 = d50([{"diameter": g["diameter"], "efficiency": efficiency(g["fed"], g["drained"])}
+                   for g in s1["groups"]])
+    um = lambda x: f"{x * 1e6:.2f} µm" if x is not None else "none (the efficiency does not cross 0.5)"
+    print(f"d50: OpenFOAM {um(fo['d50'])}, scg {um(scg_d50)}")
+    for name, res in (("OpenFOAM", [c["residence_times"] for c in fo["classes"]]),):
+        med = [f"{c['group']} {sorted(r)[len(r) // 2]:.3g} s" for c, r in zip(fo["classes"], res) if r]
+        print(f"median residence time of the escaped ({name}): " + (", ".join(med) or "-"))
+    print("speed, particle-steps/s (particle-steps = sum over steps of the particles in the domain):")
+    print(f"  OpenFOAM, 1 process: {fo['particle_steps_per_s']:.4e}  ({fo['particle_steps']} in {fo['cpu_s']:.2f} s "
+          f"CPU: ExecutionTime of steps 2..N; wall {fo['wall_s']:.2f} s)")
+    for s in (s1, s2):
+        print(f"  scg, {s['threads']} thread{'s' if s['threads'] > 1 else ' '}:       {s['particle_steps_per_s']:.4e}  "
+              f"({s['particle_steps']} in {s['wall_s']:.2f} s wall: the run's steps)")
+    print(f"max efficiency difference: {worst:.2f} pp" if worst is not None else "max efficiency difference: -")
+    ratio = s2["particle_steps_per_s"] / fo["particle_steps_per_s"]
+    print(f"speed ratio (scg 2 threads / openfoam 1 process): {ratio:.2f}")
+
+
+def main(argv):
+    import argparse
+    ap = argparse.ArgumentParser(prog="vs_openfoam.py")
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    c = sub.add_parser("case")
+    c.add_argument("scene")
+    c.add_argument("dir")
+    c.add_argument("--duration", type=float)
+    c.add_argument("--feed-scale", type=float)
+    c.add_argument("--dt", type=float)
+    g = sub.add_parser("grade")
+    g.add_argument("dir")
+    g.add_argument("out")
+    t = sub.add_parser("table")
+    t.add_argument("grade")
+    t.add_argument("scg1")
+    t.add_argument("scg2")
+    a = ap.parse_args(argv[1:])
+    try:
+        if a.cmd == "case":
+            plan = make_cases(read_scene(a.scene, a.duration, a.feed_scale, a.dt), a.dir)
+            for r in plan["runs"]:
+                print(r["dir"])
+        elif a.cmd == "grade":
+            grade(a.dir, a.out)
+        else:
+            table(a.grade, a.scg1, a.scg2)
+    except SceneError as e:
+        print(f"error: {e}", file=sys.stderr)
+        sys.exit(2)
+
+
+if __name__ == "__main__":
+    main(sys.argv)
