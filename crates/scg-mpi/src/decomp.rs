@@ -120,6 +120,14 @@ pub fn merge_tally(tallies: &[scg_core::state::Tally]) -> Option<scg_core::state
     Some(out)
 }
 
+/// SplitMix64 of `x`: a well-mixed hash for order-independent digests of ids.
+pub fn splitmix64(x: u64) -> u64 {
+    let mut z = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -21,7 +21,10 @@ use std::time::{Duration, Instant};
 
 use scg_cli::EXIT_BAD_INPUT;
 use scg_cli::run::{RunArgs, ensure_writable, extra_sinks, recording_stem};
+use std::io::Write;
+
 use scg_core::checkpoint::ParticleRecord;
+use scg_core::components::ParticleId;
 use scg_core::frame::{FrameSink, RunMeta};
 use scg_core::stages::contacts::ContactState;
 use scg_core::stages::recording::{FrameRow, RecordingParams, frame_from_rows};
@@ -79,6 +82,18 @@ struct Ranked<'c> {
 impl Ranked<'_> {
     fn me(&self) -> usize {
         self.comm.rank()
+    }
+
+    /// The particles held here and an order-independent digest of their ids (a sum of
+    /// SplitMix64 hashes, so that a lost or duplicated particle changes it).
+    fn id_digest(&mut self) -> (u64, u64) {
+        let mut q = self.sim.world.query::<&ParticleId>();
+        q.iter(&self.sim.world).fold((0, 0), |(n, h), id| {
+            (
+                n + 1,
+                h.wrapping_add(crate::decomp::splitmix64(u64::from(id.0))),
+            )
+        })
     }
 
     /// Move the particles that left this rank's slab to their owners; drop the copies of
@@ -282,6 +297,19 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         let f = r.gather_frame(&params);
         write(f, &mut sinks);
     }
+    // `SCG_MPI_COUNTS=FILE`: rank 0 writes the step, the particle count and an
+    // order-independent digest of the ids after every step (tests: no particle lost or
+    // duplicated).
+    let mut counts_log = match std::env::var_os("SCG_MPI_COUNTS") {
+        Some(p) if root => match std::fs::File::create(&p) {
+            Ok(f) => Some(std::io::BufWriter::new(f)),
+            Err(e) => {
+                eprintln!("error: SCG_MPI_COUNTS {}: {e}", p.to_string_lossy());
+                None
+            }
+        },
+        _ => None,
+    };
     let mut interrupted = false;
     while r.sim.step_count() < steps {
         let first_new = r.sim.world.resource::<NextParticleId>().0;
@@ -308,13 +336,18 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
             failure = Some(e);
         }
         // Control: counts, failures, interrupts.
-        let n = r.sim.frame_rows().len() as u64;
+        let (n, ids) = r.id_digest();
         let flags = u64::from(failure.is_some())
             | u64::from(!ok) << 1
             | u64::from(stop.load(Ordering::Relaxed)) << 2;
-        let all = comm.all_gather_u64(&[n, flags]);
-        let counts: Vec<u64> = all.chunks(2).map(|c| c[0]).collect();
-        let any = all.chunks(2).fold(0, |a, c| a | c[1]);
+        let all = comm.all_gather_u64(&[n, flags, ids]);
+        let counts: Vec<u64> = all.chunks(3).map(|c| c[0]).collect();
+        let any = all.chunks(3).fold(0, |a, c| a | c[1]);
+        if let Some(log) = counts_log.as_mut() {
+            let digest = all.chunks(3).fold(0u64, |a, c| a.wrapping_add(c[2]));
+            let total: u64 = counts.iter().sum();
+            let _ = writeln!(log, "{} {total} {digest}", r.sim.step_count());
+        }
         if any & 0b011 != 0 {
             break;
         }
@@ -331,6 +364,9 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         }
     }
     let wall = t0.elapsed().as_secs_f64();
+    if let Some(mut log) = counts_log.take() {
+        let _ = log.flush();
+    }
 
     // Reports, on rank 0.
     let fails: Vec<Option<String>> = comm
