@@ -9,8 +9,8 @@
 //! the fed particles of its slab and drops the others. Every `record_every` steps rank 0
 //! gathers the particles, sorts them by id and writes the one `.rrd` and `.mcap` (and the
 //! VTK/CSV frames asked for); drained and collision counts are summed over the ranks. When
-//! the counts drift apart (the fullest rank over [`REBALANCE_TOLERANCE`] × the mean), the
-//! slabs are cut again at the quantiles of all positions.
+//! the counts drift apart (the fullest rank over [`REBALANCE_TOLERANCE`] × the mean, checked
+//! every step, at most every [`REBALANCE_MIN_STEPS`] steps), the slabs are cut again at the quantiles of all positions.
 //!
 //! The slabs run along the longest extent of the initial particles, or along the axis
 //! `SCG_MPI_AXIS` names (`x`, `y` or `z`).
@@ -38,6 +38,9 @@ use crate::decomp::{Slabs, longest_axis, merge_tally, needs_rebalance};
 /// The slabs are cut again when the fullest rank holds more than this many times the
 /// mean count.
 pub const REBALANCE_TOLERANCE: f64 = 1.2;
+
+/// Steps at least between two rebalances (each gathers every position on every rank).
+pub const REBALANCE_MIN_STEPS: u64 = 100;
 
 /// What a rank sends to rank 0 for a frame.
 #[derive(Serialize, Deserialize)]
@@ -311,6 +314,7 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         _ => None,
     };
     let mut interrupted = false;
+    let mut last_rebalance = 0;
     while r.sim.step_count() < steps {
         let first_new = r.sim.world.resource::<NextParticleId>().0;
         let t = Instant::now();
@@ -355,7 +359,10 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
             interrupted = true;
             break;
         }
-        if needs_rebalance(&counts, REBALANCE_TOLERANCE) {
+        if r.sim.step_count() >= last_rebalance + REBALANCE_MIN_STEPS
+            && needs_rebalance(&counts, REBALANCE_TOLERANCE)
+        {
+            last_rebalance = r.sim.step_count();
             let t = Instant::now();
             if let Err(e) = r.rebalance() {
                 failure = Some(e);
