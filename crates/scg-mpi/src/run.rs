@@ -99,9 +99,9 @@ impl Ranked<'_> {
         })
     }
 
-    /// Move the particles that left this rank's slab to their owners; drop the copies of
+    /// Take out the particles that left this rank's slab, by owner; drop the copies of
     /// particles fed this step (id ≥ `first_new`) that another rank owns.
-    fn migrate(&mut self, first_new: u32) -> Result<(), String> {
+    fn leaving(&mut self, first_new: u32) -> Vec<Vec<ParticleRecord>> {
         let (me, slabs) = (self.me(), &self.slabs);
         let leaving = self.sim.extract_particles(|_, x| slabs.owner(x) != me);
         let mut out: Vec<Vec<ParticleRecord>> = vec![Vec::new(); self.comm.size()];
@@ -110,6 +110,11 @@ impl Ranked<'_> {
                 out[slabs.owner(p.spec.position)].push(p);
             }
         }
+        out
+    }
+
+    /// Send `out[r]` to rank r and take in what the others send here (a collective).
+    fn deliver(&mut self, out: &[Vec<ParticleRecord>]) -> Result<(), String> {
         let send: Vec<Vec<u8>> = out.iter().map(encode).collect();
         for part in self.comm.all_to_all_bytes(&send) {
             let recs: Vec<ParticleRecord> = decode(&part);
@@ -117,6 +122,12 @@ impl Ranked<'_> {
             self.sim.insert_particles(&recs)?;
         }
         Ok(())
+    }
+
+    /// Move the particles that left this rank's slab to their owners (a collective).
+    fn migrate(&mut self) -> Result<(), String> {
+        let out = self.leaving(u32::MAX);
+        self.deliver(&out)
     }
 
     /// Cut the slabs again at the quantiles of all positions and migrate.
@@ -136,7 +147,7 @@ impl Ranked<'_> {
             .collect();
         self.slabs = Slabs::balanced(axis, self.comm.size(), &all);
         self.rebalances += 1;
-        self.migrate(u32::MAX)
+        self.migrate()
     }
 
     /// Gather the particles on rank 0; the frame there (`None` on the other ranks).
@@ -315,40 +326,48 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
     };
     let mut interrupted = false;
     let mut last_rebalance = 0;
+    let mut sink_failed = false;
     while r.sim.step_count() < steps {
         let first_new = r.sim.world.resource::<NextParticleId>().0;
         let t = Instant::now();
         let stepped = r.sim.step();
         times.compute += t.elapsed();
-        let t = Instant::now();
-        let migrated = r.migrate(first_new);
-        times.migrate += t.elapsed();
-        let t = Instant::now();
-        let mut ok = true;
-        if record && r.sim.step_count().is_multiple_of(params.every) {
-            let f = r.gather_frame(&params);
-            ok = write(f, &mut sinks);
-        }
-        times.record += t.elapsed();
         if let Err(e) = stepped {
             failure = Some(match e {
                 SimError::NonFinite(n) => n.to_string(),
                 e => e.to_string(),
             });
         }
-        if let Err(e) = migrated {
+        // One collective on a quiet step: counts, id digests, failures, interrupts and
+        // whether anybody has particles to send; the exchange only when somebody has.
+        let t = Instant::now();
+        let out = r.leaving(first_new);
+        let sent: u64 = out.iter().map(|o| o.len() as u64).sum();
+        let (held, held_ids) = r.id_digest();
+        let ids = out.iter().flatten().fold(held_ids, |h, p| {
+            h.wrapping_add(crate::decomp::splitmix64(u64::from(p.id)))
+        });
+        let flags = u64::from(failure.is_some())
+            | u64::from(sink_failed) << 1
+            | u64::from(stop.load(Ordering::Relaxed)) << 2;
+        let all = comm.all_gather_u64(&[held + sent, flags, ids, sent]);
+        // (per rank before the exchange: what rebalancing needs)
+        let counts: Vec<u64> = all.chunks(4).map(|c| c[0]).collect();
+        let any = all.chunks(4).fold(0, |a, c| a | c[1]);
+        if all.chunks(4).any(|c| c[3] > 0)
+            && let Err(e) = r.deliver(&out)
+        {
             failure = Some(e);
         }
-        // Control: counts, failures, interrupts.
-        let (n, ids) = r.id_digest();
-        let flags = u64::from(failure.is_some())
-            | u64::from(!ok) << 1
-            | u64::from(stop.load(Ordering::Relaxed)) << 2;
-        let all = comm.all_gather_u64(&[n, flags, ids]);
-        let counts: Vec<u64> = all.chunks(3).map(|c| c[0]).collect();
-        let any = all.chunks(3).fold(0, |a, c| a | c[1]);
+        times.migrate += t.elapsed();
+        let t = Instant::now();
+        if record && r.sim.step_count().is_multiple_of(params.every) {
+            let f = r.gather_frame(&params);
+            sink_failed |= !write(f, &mut sinks);
+        }
+        times.record += t.elapsed();
         if let Some(log) = counts_log.as_mut() {
-            let digest = all.chunks(3).fold(0u64, |a, c| a.wrapping_add(c[2]));
+            let digest = all.chunks(4).fold(0u64, |a, c| a.wrapping_add(c[2]));
             let total: u64 = counts.iter().sum();
             let _ = writeln!(log, "{} {total} {digest}", r.sim.step_count());
         }
