@@ -19,7 +19,8 @@ fn repo(path: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(path)
 }
 
-/// Run `scg run` on `ranks` ranks (1: without mpirun) into `out`; returns stderr.
+/// Run `scg run` on `ranks` ranks (1: without mpirun) into `out`; returns stderr. `axis`
+/// is `SCG_MPI_AXIS`, or `ids` for `SCG_MPI_DECOMP=ids`.
 fn run(ranks: usize, axis: &str, case: &str, set: &[&str], out: &Path) -> String {
     let mut args: Vec<String> = vec![
         "run".into(),
@@ -41,6 +42,7 @@ fn run(ranks: usize, axis: &str, case: &str, set: &[&str], out: &Path) -> String
     let o = cmd
         .args(&args)
         .env("SCG_MPI_AXIS", axis)
+        .env("SCG_MPI_DECOMP", if axis == "ids" { "ids" } else { "slabs" })
         .env("SCG_THREADS", "1")
         // mpirun refuses root without these (CI runs as root).
         .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
@@ -112,10 +114,15 @@ fn same_bits(case: &str, axis: &str, set: &[&str], ranks: &[usize]) {
             digest(&reference),
             "{case} on {n} ranks: the recorded bits differ from 1 rank's"
         );
-        assert!(
-            migrated(&report) > 0,
-            "{case} on {n} ranks: no particle migrated, the test shows nothing: {report}"
-        );
+        if axis == "ids" {
+            assert!(report.contains("by id (no migration)"), "{report}");
+            assert_eq!(migrated(&report), 0, "{report}");
+        } else {
+            assert!(
+                migrated(&report) > 0,
+                "{case} on {n} ranks: no particle migrated, the test shows nothing: {report}"
+            );
+        }
         assert!(out.join(format!("{case}.rrd")).is_file());
     }
 }
@@ -143,6 +150,12 @@ fn vortex_is_bit_identical_on_2_3_4_ranks() {
 fn cyclone_feeders_and_mesh_flow_are_bit_identical_on_3_ranks() {
     // Fed particles (drawn on every rank, kept by their slab's), CFD mesh cells, outlet.
     same_bits("cyclone", "z", &["duration=0.2"], &[3]);
+}
+
+#[test]
+fn cyclone_shared_by_id_is_bit_identical_on_2_and_4_ranks() {
+    // `SCG_MPI_DECOMP=ids`: fed particles kept by the rank their id hashes to.
+    same_bits("cyclone", "ids", &["duration=0.2"], &[2, 4]);
 }
 
 #[test]

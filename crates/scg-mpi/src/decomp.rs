@@ -70,6 +70,27 @@ impl Slabs {
     }
 }
 
+/// Who owns a particle: its slab, or (scenes without pair forces, where no particle needs
+/// its neighbours) a hash of its id, which never changes, so nothing ever migrates and the
+/// counts stay balanced.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Owners {
+    /// By position: slabs.
+    Slabs(Slabs),
+    /// By id over this many ranks.
+    Ids(usize),
+}
+
+impl Owners {
+    /// The rank owning particle `id` at `x`.
+    pub fn owner(&self, id: u32, x: DVec3) -> usize {
+        match self {
+            Owners::Slabs(s) => s.owner(x),
+            Owners::Ids(n) => (splitmix64(u64::from(id)) % (*n).max(1) as u64) as usize,
+        }
+    }
+}
+
 /// The axis along which the positions `xs` extend farthest (x when there are none).
 pub fn longest_axis(xs: impl IntoIterator<Item = DVec3>) -> usize {
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
@@ -169,6 +190,24 @@ mod tests {
         let few = Slabs::balanced(0, 4, &[1.0]);
         assert!(few.cuts.windows(2).all(|w| w[0] <= w[1]));
         assert_eq!(Slabs::balanced(0, 3, &[]).cuts, vec![0.0, 0.0]);
+    }
+
+    #[test]
+    fn owners_by_id_are_balanced_and_fixed() {
+        let o = Owners::Ids(3);
+        let mut counts = [0u64; 3];
+        for id in 0..3000 {
+            let r = o.owner(id, DVec3::splat(id as f64));
+            assert_eq!(r, o.owner(id, DVec3::ZERO), "the position does not matter");
+            counts[r] += 1;
+        }
+        assert!(
+            counts.iter().all(|&c| (900..1100).contains(&c)),
+            "{counts:?}"
+        );
+        let s = Owners::Slabs(Slabs::balanced(0, 2, &[0.0, 1.0]));
+        assert_eq!(s.owner(7, DVec3::new(0.0, 5.0, 5.0)), 0);
+        assert_eq!(s.owner(7, DVec3::new(1.0, 5.0, 5.0)), 1);
     }
 
     #[test]

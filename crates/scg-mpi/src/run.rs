@@ -13,7 +13,9 @@
 //! every step, at most every [`REBALANCE_MIN_STEPS`] steps), the slabs are cut again at the quantiles of all positions.
 //!
 //! The slabs run along the longest extent of the initial particles, or along the axis
-//! `SCG_MPI_AXIS` names (`x`, `y` or `z`).
+//! `SCG_MPI_AXIS` names (`x`, `y` or `z`). `SCG_MPI_DECOMP=ids` shares the particles by a
+//! hash of their id instead: nothing migrates and nothing needs rebalancing, the better
+//! choice while no scene over ranks has pair forces (docs/scaling.md).
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -33,7 +35,7 @@ use scg_core::{SimError, Simulation};
 use serde::{Deserialize, Serialize};
 
 use crate::comm::Comm;
-use crate::decomp::{Slabs, longest_axis, merge_tally, needs_rebalance};
+use crate::decomp::{Owners, Slabs, longest_axis, merge_tally, needs_rebalance};
 
 /// The slabs are cut again when the fullest rank holds more than this many times the
 /// mean count.
@@ -77,7 +79,7 @@ fn all_ok(comm: &Comm, ok: bool) -> bool {
 struct Ranked<'c> {
     comm: &'c Comm,
     sim: Simulation,
-    slabs: Slabs,
+    owners: Owners,
     migrated: u64,
     rebalances: u64,
 }
@@ -102,12 +104,14 @@ impl Ranked<'_> {
     /// Take out the particles that left this rank's slab, by owner; drop the copies of
     /// particles fed this step (id ≥ `first_new`) that another rank owns.
     fn leaving(&mut self, first_new: u32) -> Vec<Vec<ParticleRecord>> {
-        let (me, slabs) = (self.me(), &self.slabs);
-        let leaving = self.sim.extract_particles(|_, x| slabs.owner(x) != me);
+        let (me, owners) = (self.me(), &self.owners);
+        let leaving = self
+            .sim
+            .extract_particles(|id, x| owners.owner(id, x) != me);
         let mut out: Vec<Vec<ParticleRecord>> = vec![Vec::new(); self.comm.size()];
         for p in leaving {
             if p.id < first_new {
-                out[slabs.owner(p.spec.position)].push(p);
+                out[owners.owner(p.id, p.spec.position)].push(p);
             }
         }
         out
@@ -132,7 +136,10 @@ impl Ranked<'_> {
 
     /// Cut the slabs again at the quantiles of all positions and migrate.
     fn rebalance(&mut self) -> Result<(), String> {
-        let axis = self.slabs.axis;
+        let Owners::Slabs(slabs) = &self.owners else {
+            return Ok(());
+        };
+        let axis = slabs.axis;
         let mine: Vec<f64> = self
             .sim
             .frame_rows()
@@ -145,7 +152,7 @@ impl Ranked<'_> {
             .iter()
             .flat_map(|b| decode::<Vec<f64>>(b))
             .collect();
-        self.slabs = Slabs::balanced(axis, self.comm.size(), &all);
+        self.owners = Owners::Slabs(Slabs::balanced(axis, self.comm.size(), &all));
         self.rebalances += 1;
         self.migrate()
     }
@@ -260,13 +267,18 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         _ => longest_axis(rows.iter().map(|r| glam::DVec3::from_array(r.position))),
     };
     let coords: Vec<f64> = rows.iter().map(|r| r.position[axis]).collect();
-    let slabs = Slabs::balanced(axis, comm.size(), &coords);
+    let by_id = std::env::var("SCG_MPI_DECOMP").as_deref() == Ok("ids");
+    let owners = if by_id {
+        Owners::Ids(comm.size())
+    } else {
+        Owners::Slabs(Slabs::balanced(axis, comm.size(), &coords))
+    };
     let me = comm.rank();
-    drop(sim.extract_particles(|_, x| slabs.owner(x) != me));
+    drop(sim.extract_particles(|id, x| owners.owner(id, x) != me));
     let mut r = Ranked {
         comm,
         sim,
-        slabs,
+        owners,
         migrated: 0,
         rebalances: 0,
     };
@@ -283,14 +295,18 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
     if root {
         let n0 = scene.groups.iter().map(|g| g.count()).sum::<usize>();
         eprintln!(
-            "running `{}` on {} MPI ranks × {} threads: {} particles, {} steps of {:.3e} s, slabs along {}",
+            "running `{}` on {} MPI ranks × {} threads: {} particles, {} steps of {:.3e} s, particles {}",
             scene.name,
             comm.size(),
             scg_core::exec::settings().team_size(),
             n0,
             steps,
             scene.dt,
-            ["x", "y", "z"][axis]
+            if by_id {
+                "by id (no migration)".to_string()
+            } else {
+                format!("in slabs along {}", ["x", "y", "z"][axis])
+            }
         );
     }
     let mut times = Times::default();
