@@ -69,6 +69,27 @@ pub const EXIT_BAD_INPUT: i32 = 2;
 
 /// Parse the process arguments and run; returns the exit status.
 pub fn main() -> i32 {
+    main_with(&Launch {
+        run: &run::run,
+        others: true,
+        threads: 0,
+    })
+}
+
+/// How [`main_with`] runs the commands.
+pub struct Launch<'a> {
+    /// `scg run` (another one runs a simulation decomposed over MPI ranks).
+    pub run: &'a dyn Fn(run::RunArgs) -> i32,
+    /// Whether the other subcommands run (on one rank of a decomposed run; the others
+    /// return 0 without doing anything).
+    pub others: bool,
+    /// Worker threads when neither `--threads` nor `SCG_THREADS` says (0 = one per core).
+    pub threads: usize,
+}
+
+/// [`main`], with the commands run as `launch` says.
+pub fn main_with(launch: &Launch) -> i32 {
+    let (run_cmd, others) = (launch.run, launch.others);
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
@@ -81,13 +102,17 @@ pub fn main() -> i32 {
     };
     // The execution settings are read once, here, before anything runs in parallel.
     let mut exec = scg_core::exec::ExecSettings::from_env();
+    if exec.threads == 0 {
+        exec.threads = launch.threads;
+    }
     if let Some(n) = cli.threads {
         exec.threads = n;
     }
     scg_core::exec::configure(exec);
     match cli.command {
-        None => run::run(run::RunArgs::default()),
-        Some(Command::Run(a)) => run::run(a),
+        None => run_cmd(run::RunArgs::default()),
+        Some(Command::Run(a)) => run_cmd(a),
+        Some(_) if !others => 0,
         Some(Command::Check { cases, set }) => cases
             .iter()
             .map(|case| check(case, &set))

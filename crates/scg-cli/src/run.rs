@@ -76,7 +76,9 @@ impl Default for RunArgs {
     }
 }
 
-fn load(args: &RunArgs) -> Result<Scene, i32> {
+/// The scene of `scg run` (its file, the embedded case or a checkpoint's), with the
+/// overrides; `Err` holds the exit status after the message was printed.
+pub fn load(args: &RunArgs) -> Result<Scene, i32> {
     if let Some(path) = &args.restart {
         let c = scg_record::checkpoint::read_checkpoint(path).map_err(|e| {
             eprintln!("error: {e}");

@@ -144,31 +144,124 @@ type RecordQuery<'a> = (
     Option<&'a CellHint>,
 );
 
+/// The record of one particle, from its components.
+fn record_of((id, g, cg, x, v, w, f, t, h, cell): RecordQuery) -> ParticleRecord {
+    ParticleRecord {
+        id: id.0,
+        spec: ParticleSpec {
+            group: g.0,
+            diameter: cg.original_diameter,
+            density: cg.original_density,
+            alpha: cg.alpha,
+            law: cg.law,
+            position: x.0,
+            velocity: v.0,
+        },
+        omega: w.map(|w| w.0),
+        force_torque: f.zip(t).map(|(f, t)| (f.0, t.0)),
+        wall_history: h.map(|h| h.0.clone()),
+        cell: cell.map(|c| c.0),
+    }
+}
+
+/// Spawn the particle of `p` with its whole state (the spawn path derives its
+/// coarse-grained properties again, exactly). Errors when its components differ from what
+/// the world's spawn rules give.
+fn insert_record(w: &mut World, p: &ParticleRecord) -> Result<Entity, String> {
+    let e = spawn_particle_with_id(w, &p.spec, p.id);
+    let mut ent = w.entity_mut(e);
+    let mismatch = || format!("particle {}: its components differ from the scene's", p.id);
+    match (p.omega, ent.get_mut::<AngularVelocity>()) {
+        (Some(o), Some(mut a)) => a.0 = o,
+        (None, None) => {}
+        _ => return Err(mismatch()),
+    }
+    match (p.force_torque, ent.contains::<Force>()) {
+        (Some((f, t)), true) => {
+            ent.get_mut::<Force>().ok_or_else(mismatch)?.0 = f;
+            ent.get_mut::<Torque>().ok_or_else(mismatch)?.0 = t;
+        }
+        (None, false) => {}
+        _ => return Err(mismatch()),
+    }
+    match (&p.wall_history, ent.get_mut::<WallHistory>()) {
+        (Some(h), Some(mut a)) => a.0.clone_from(h),
+        (None, None) => {}
+        _ => return Err(mismatch()),
+    }
+    match (p.cell, ent.get_mut::<CellHint>()) {
+        (Some(c), Some(mut a)) => a.0 = c,
+        (None, None) => {}
+        _ => return Err(mismatch()),
+    }
+    Ok(e)
+}
+
 impl Simulation {
+    /// Remove the particles for which `leave(id, position)` is true and return their
+    /// whole state, in table order (the particles migrating to another rank of a
+    /// decomposed run). Not for scenes with particle contacts, whose pair arrays refer to
+    /// table rows.
+    pub fn extract_particles(
+        &mut self,
+        mut leave: impl FnMut(u32, DVec3) -> bool,
+    ) -> Vec<ParticleRecord> {
+        let mut q = self.world.query::<(Entity, RecordQuery)>();
+        let mut out = Vec::new();
+        let mut gone = Vec::new();
+        for (e, item) in q.iter(&self.world) {
+            if leave(item.0.0, item.3.0) {
+                gone.push(e);
+                out.push(record_of(item));
+            }
+        }
+        for e in gone {
+            self.world.despawn(e);
+        }
+        out
+    }
+
+    /// Add particles with their whole state (from [`Simulation::extract_particles`] of
+    /// another simulation built from the same scene).
+    pub fn insert_particles(&mut self, particles: &[ParticleRecord]) -> Result<(), String> {
+        for p in particles {
+            insert_record(&mut self.world, p)?;
+        }
+        Ok(())
+    }
+
+    /// The particles as a frame records them, in table order.
+    pub fn frame_rows(&mut self) -> Vec<crate::stages::recording::FrameRow> {
+        let mut q = self.world.query::<(
+            &ParticleId,
+            &GroupId,
+            &Position,
+            &Velocity,
+            &Diameter,
+            &Density,
+            &Mass,
+        )>();
+        q.iter(&self.world)
+            .map(
+                |(id, g, x, v, d, rho, m)| crate::stages::recording::FrameRow {
+                    id: id.0,
+                    group: g.0,
+                    position: x.0.to_array(),
+                    velocity: v.0.to_array(),
+                    diameter: d.0,
+                    density: rho.0,
+                    mass: m.0,
+                },
+            )
+            .collect()
+    }
+
     /// The run's state between two steps (`scene` and `scene_file` are left empty for
     /// the caller, who knows the scene text).
     pub fn checkpoint(&mut self) -> Checkpoint {
         let mut q = self.world.query::<RecordQuery>();
         // Table order: the order in which every stage visits the particles.
-        let particles = q
-            .iter(&self.world)
-            .map(|(id, g, cg, x, v, w, f, t, h, cell)| ParticleRecord {
-                id: id.0,
-                spec: ParticleSpec {
-                    group: g.0,
-                    diameter: cg.original_diameter,
-                    density: cg.original_density,
-                    alpha: cg.alpha,
-                    law: cg.law,
-                    position: x.0,
-                    velocity: v.0,
-                },
-                omega: w.map(|w| w.0),
-                force_torque: f.zip(t).map(|(f, t)| (f.0, t.0)),
-                wall_history: h.map(|h| h.0.clone()),
-                cell: cell.map(|c| c.0),
-            })
-            .collect();
+        let particles = q.iter(&self.world).map(record_of).collect();
         let w = &self.world;
         let clock = w.resource::<SimClock>();
         let tally = w.resource::<Tally>();
@@ -244,32 +337,7 @@ impl Simulation {
             w.despawn(e);
         }
         for p in &c.particles {
-            let e = spawn_particle_with_id(w, &p.spec, p.id);
-            let mut ent = w.entity_mut(e);
-            let mismatch = || format!("particle {}: its components differ from the scene's", p.id);
-            match (p.omega, ent.get_mut::<AngularVelocity>()) {
-                (Some(o), Some(mut a)) => a.0 = o,
-                (None, None) => {}
-                _ => return Err(mismatch()),
-            }
-            match (p.force_torque, ent.contains::<Force>()) {
-                (Some((f, t)), true) => {
-                    ent.get_mut::<Force>().ok_or_else(mismatch)?.0 = f;
-                    ent.get_mut::<Torque>().ok_or_else(mismatch)?.0 = t;
-                }
-                (None, false) => {}
-                _ => return Err(mismatch()),
-            }
-            match (&p.wall_history, ent.get_mut::<WallHistory>()) {
-                (Some(h), Some(mut a)) => a.0.clone_from(h),
-                (None, None) => {}
-                _ => return Err(mismatch()),
-            }
-            match (p.cell, ent.get_mut::<CellHint>()) {
-                (Some(c), Some(mut a)) => a.0 = c,
-                (None, None) => {}
-                _ => return Err(mismatch()),
-            }
+            insert_record(w, p)?;
         }
         w.resource_mut::<NextParticleId>().0 = c.next_id;
         {

@@ -42,6 +42,26 @@ type FrameQuery<'w, 's> = Query<
     ),
 >;
 
+/// One particle as a frame records it (with its mass, for the kinetic energy): what a
+/// rank of a decomposed run sends to the rank that writes the recordings.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct FrameRow {
+    /// Particle id.
+    pub id: u32,
+    /// Group.
+    pub group: u32,
+    /// Position, m.
+    pub position: [f64; 3],
+    /// Velocity, m/s.
+    pub velocity: [f64; 3],
+    /// Diameter as simulated, m.
+    pub diameter: f64,
+    /// Density as simulated, kg/m³.
+    pub density: f64,
+    /// Mass as simulated, kg.
+    pub mass: f64,
+}
+
 /// Build the frame of the current state, particles sorted by id, with the standard stats.
 pub fn build_frame(
     clock: &SimClock,
@@ -49,25 +69,49 @@ pub fn build_frame(
     tally: &Tally,
     q: &FrameQuery,
 ) -> Frame {
-    let mut rows: Vec<_> = q.iter().collect();
-    rows.sort_unstable_by_key(|r| r.0.0);
+    let rows: Vec<FrameRow> = q
+        .iter()
+        .map(|(id, g, x, v, d, rho, m)| FrameRow {
+            id: id.0,
+            group: g.0,
+            position: x.0.to_array(),
+            velocity: v.0.to_array(),
+            diameter: d.0,
+            density: rho.0,
+            mass: m.0,
+        })
+        .collect();
+    frame_from_rows(clock.step, clock.time(), params, tally, rows)
+}
+
+/// The frame of `rows` (any order: they are sorted by id here) at `step` and `time` (s),
+/// with the standard stats; `tally` gives the drained and collision counts.
+pub fn frame_from_rows(
+    step: u64,
+    time: f64,
+    params: &RecordingParams,
+    tally: &Tally,
+    mut rows: Vec<FrameRow>,
+) -> Frame {
+    rows.sort_unstable_by_key(|r| r.id);
     let n = rows.len();
-    let mut fr = Frame::with_capacity(clock.step, clock.time(), n);
+    let mut fr = Frame::with_capacity(step, time, n);
     let ng = params.groups.len();
     let mut count = vec![0u64; ng];
     let (mut speed_sum, mut ke) = (0.0, 0.0);
-    for (id, g, x, v, d, rho, m) in rows {
-        fr.id.push(id.0);
-        fr.group.push(g.0);
-        fr.position.push(x.0.to_array());
-        fr.velocity.push(v.0.to_array());
-        fr.diameter.push(d.0);
-        fr.density.push(rho.0);
-        if let Some(c) = count.get_mut(g.0 as usize) {
+    for r in rows {
+        let v = glam::DVec3::from_array(r.velocity);
+        fr.id.push(r.id);
+        fr.group.push(r.group);
+        fr.position.push(r.position);
+        fr.velocity.push(r.velocity);
+        fr.diameter.push(r.diameter);
+        fr.density.push(r.density);
+        if let Some(c) = count.get_mut(r.group as usize) {
             *c += 1;
         }
-        speed_sum += v.0.length();
-        ke += 0.5 * m.0 * v.0.length_squared();
+        speed_sum += v.length();
+        ke += 0.5 * r.mass * v.length_squared();
     }
     for (i, name) in params.groups.iter().enumerate() {
         fr.stats.push((Stat::Count(name).key(), count[i] as f64));

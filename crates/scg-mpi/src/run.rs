@@ -1,0 +1,509 @@
+//! `mpirun -np N scg run CASE`: one simulation decomposed over N ranks.
+//!
+//! Every rank builds the whole scene, keeps the particles of its slab
+//! ([`crate::decomp::Slabs`]) and runs the ordinary step on them with its thread team.
+//! After each step the particles that left the slab migrate with their whole state (the
+//! checkpoint's [`scg_core::checkpoint::ParticleRecord`]: ω, force and torque, wall
+//! history, mesh cell). Every rank runs every feeder from the scene's seed, so the fed
+//! particles, their ids and the random streams are the same on all ranks; each rank keeps
+//! the fed particles of its slab and drops the others. Every `record_every` steps rank 0
+//! gathers the particles, sorts them by id and writes the one `.rrd` and `.mcap` (and the
+//! VTK/CSV frames asked for); drained and collision counts are summed over the ranks. When
+//! the counts drift apart (the fullest rank over [`REBALANCE_TOLERANCE`] × the mean, checked
+//! every step, at most every [`REBALANCE_MIN_STEPS`] steps), the slabs are cut again at the quantiles of all positions.
+//!
+//! The slabs run along the longest extent of the initial particles, or along the axis
+//! `SCG_MPI_AXIS` names (`x`, `y` or `z`). `SCG_MPI_DECOMP=ids` shares the particles by a
+//! hash of their id instead: nothing migrates and nothing needs rebalancing, the better
+//! choice while no scene over ranks has pair forces (docs/scaling.md).
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use scg_cli::EXIT_BAD_INPUT;
+use scg_cli::run::{RunArgs, ensure_writable, extra_sinks, recording_stem};
+use std::io::Write;
+
+use scg_core::checkpoint::ParticleRecord;
+use scg_core::components::ParticleId;
+use scg_core::frame::{FrameSink, RunMeta};
+use scg_core::stages::contacts::ContactState;
+use scg_core::stages::recording::{FrameRow, RecordingParams, frame_from_rows};
+use scg_core::state::{NextParticleId, Tally};
+use scg_core::{SimError, Simulation};
+use serde::{Deserialize, Serialize};
+
+use crate::comm::Comm;
+use crate::decomp::{Owners, Slabs, longest_axis, merge_tally, needs_rebalance};
+
+/// The slabs are cut again when the fullest rank holds more than this many times the
+/// mean count.
+pub const REBALANCE_TOLERANCE: f64 = 1.2;
+
+/// Steps at least between two rebalances (each gathers every position on every rank).
+pub const REBALANCE_MIN_STEPS: u64 = 100;
+
+/// What a rank sends to rank 0 for a frame.
+#[derive(Serialize, Deserialize)]
+struct FramePart {
+    rows: Vec<FrameRow>,
+    drained: Vec<u64>,
+    collisions: Vec<u64>,
+}
+
+/// Wall time of the parts of a decomposed step, on one rank.
+#[derive(Clone, Copy, Debug, Default)]
+struct Times {
+    compute: Duration,
+    migrate: Duration,
+    record: Duration,
+    rebalance: Duration,
+}
+
+fn encode<T: Serialize>(v: &T) -> Vec<u8> {
+    postcard::to_stdvec(v).expect("serialising to memory")
+}
+
+fn decode<'a, T: Deserialize<'a>>(b: &'a [u8]) -> T {
+    postcard::from_bytes(b).expect("a message of another rank of the same build")
+}
+
+/// Whether every rank is fine (`ok` on this one); a collective.
+fn all_ok(comm: &Comm, ok: bool) -> bool {
+    comm.all_gather_u64(&[u64::from(!ok)])
+        .iter()
+        .all(|&f| f == 0)
+}
+
+struct Ranked<'c> {
+    comm: &'c Comm,
+    sim: Simulation,
+    owners: Owners,
+    migrated: u64,
+    rebalances: u64,
+}
+
+impl Ranked<'_> {
+    fn me(&self) -> usize {
+        self.comm.rank()
+    }
+
+    /// The particles held here and an order-independent digest of their ids (a sum of
+    /// SplitMix64 hashes, so that a lost or duplicated particle changes it).
+    fn id_digest(&mut self) -> (u64, u64) {
+        let mut q = self.sim.world.query::<&ParticleId>();
+        q.iter(&self.sim.world).fold((0, 0), |(n, h), id| {
+            (
+                n + 1,
+                h.wrapping_add(crate::decomp::splitmix64(u64::from(id.0))),
+            )
+        })
+    }
+
+    /// Take out the particles that left this rank's slab, by owner; drop the copies of
+    /// particles fed this step (id ≥ `first_new`) that another rank owns.
+    fn leaving(&mut self, first_new: u32) -> Vec<Vec<ParticleRecord>> {
+        let (me, owners) = (self.me(), &self.owners);
+        let leaving = self
+            .sim
+            .extract_particles(|id, x| owners.owner(id, x) != me);
+        let mut out: Vec<Vec<ParticleRecord>> = vec![Vec::new(); self.comm.size()];
+        for p in leaving {
+            if p.id < first_new {
+                out[owners.owner(p.id, p.spec.position)].push(p);
+            }
+        }
+        out
+    }
+
+    /// Send `out[r]` to rank r and take in what the others send here (a collective).
+    fn deliver(&mut self, out: &[Vec<ParticleRecord>]) -> Result<(), String> {
+        let send: Vec<Vec<u8>> = out.iter().map(encode).collect();
+        for part in self.comm.all_to_all_bytes(&send) {
+            let recs: Vec<ParticleRecord> = decode(&part);
+            self.migrated += recs.len() as u64;
+            self.sim.insert_particles(&recs)?;
+        }
+        Ok(())
+    }
+
+    /// Move the particles that left this rank's slab to their owners (a collective).
+    fn migrate(&mut self) -> Result<(), String> {
+        let out = self.leaving(u32::MAX);
+        self.deliver(&out)
+    }
+
+    /// Cut the slabs again at the quantiles of all positions and migrate.
+    fn rebalance(&mut self) -> Result<(), String> {
+        let Owners::Slabs(slabs) = &self.owners else {
+            return Ok(());
+        };
+        let axis = slabs.axis;
+        let mine: Vec<f64> = self
+            .sim
+            .frame_rows()
+            .iter()
+            .map(|r| r.position[axis])
+            .collect();
+        let all: Vec<f64> = self
+            .comm
+            .all_gather_bytes(&encode(&mine))
+            .iter()
+            .flat_map(|b| decode::<Vec<f64>>(b))
+            .collect();
+        self.owners = Owners::Slabs(Slabs::balanced(axis, self.comm.size(), &all));
+        self.rebalances += 1;
+        self.migrate()
+    }
+
+    /// Gather the particles on rank 0; the frame there (`None` on the other ranks).
+    fn gather_frame(&mut self, params: &RecordingParams) -> Option<scg_core::frame::Frame> {
+        let tally = self.sim.world.resource::<Tally>().clone();
+        let part = FramePart {
+            rows: self.sim.frame_rows(),
+            drained: tally.drained.clone(),
+            collisions: tally.collisions.clone(),
+        };
+        let parts = self.comm.gather_bytes(&encode(&part))?;
+        let mut rows = Vec::new();
+        let mut tallies = Vec::new();
+        for b in &parts {
+            let p: FramePart = decode(b);
+            rows.extend(p.rows);
+            let mut t = tally.clone();
+            t.drained = p.drained;
+            t.collisions = p.collisions;
+            tallies.push(t);
+        }
+        let merged = merge_tally(&tallies).unwrap_or(tally);
+        Some(frame_from_rows(
+            self.sim.step_count(),
+            self.sim.time(),
+            params,
+            &merged,
+            rows,
+        ))
+    }
+}
+
+/// Run `scg run` over the ranks of `comm`; returns the exit status (the same on every
+/// rank).
+pub fn run(comm: &Comm, args: RunArgs) -> i32 {
+    let root = comm.rank() == 0;
+    let scene = match scg_cli::run::load(&args) {
+        Ok(s) => s,
+        Err(code) => return code,
+    };
+    let report = scg_scene::check::check(&scene);
+    if root {
+        for m in report.messages() {
+            eprintln!("{m}");
+        }
+    }
+    if report.has_errors() {
+        return EXIT_BAD_INPUT;
+    }
+    let record = !args.no_record;
+    if args.plan {
+        if root {
+            let sim = scene.build(record);
+            println!(
+                "schedule of scene `{}` ({} systems, on each of {} MPI ranks):",
+                scene.name,
+                sim.plan().systems.len(),
+                comm.size()
+            );
+            print!("{}", sim.plan().render());
+        }
+        return 0;
+    }
+    if args.restart.is_some() || args.checkpoint_every.is_some() || args.checkpoint.is_some() {
+        if root {
+            eprintln!(
+                "error: checkpoints are not yet written or read by a run over MPI ranks ({} here): run with one rank",
+                comm.size()
+            );
+        }
+        return EXIT_BAD_INPUT;
+    }
+    // The recording stage is the driver's (gathered on rank 0), not the schedule's.
+    let mut sim = scene.build(false);
+    if sim.world.contains_resource::<ContactState>() {
+        if root {
+            eprintln!(
+                "error: {}: particle contacts are not yet decomposed over MPI ranks (no ghost particles): run with one rank",
+                scene.file
+            );
+        }
+        return EXIT_BAD_INPUT;
+    }
+
+    // Sinks on rank 0; every rank learns whether they could be made.
+    let mut sinks: Option<Box<dyn FrameSink>> = None;
+    let mut paths = Vec::new();
+    let mut made = Ok(());
+    if root && record {
+        made = make_sinks(&scene, &args, &report, &mut paths).map(|s| sinks = Some(s));
+        if let Err((e, _)) = &made {
+            eprintln!("error: {e}");
+        }
+    }
+    if !all_ok(comm, made.is_ok()) {
+        // Rank 0 knows why; the others stop with the same status.
+        let code = match &made {
+            Err((_, c)) => *c as u64,
+            Ok(()) => 0,
+        };
+        return comm.all_gather_u64(&[code]).into_iter().max().unwrap_or(1) as i32;
+    }
+
+    // Initial slabs: equal shares of the initial particles along their longest extent.
+    let rows = sim.frame_rows();
+    let axis = match std::env::var("SCG_MPI_AXIS").as_deref() {
+        Ok("x") => 0,
+        Ok("y") => 1,
+        Ok("z") => 2,
+        _ => longest_axis(rows.iter().map(|r| glam::DVec3::from_array(r.position))),
+    };
+    let coords: Vec<f64> = rows.iter().map(|r| r.position[axis]).collect();
+    let by_id = std::env::var("SCG_MPI_DECOMP").as_deref() == Ok("ids");
+    let owners = if by_id {
+        Owners::Ids(comm.size())
+    } else {
+        Owners::Slabs(Slabs::balanced(axis, comm.size(), &coords))
+    };
+    let me = comm.rank();
+    drop(sim.extract_particles(|id, x| owners.owner(id, x) != me));
+    let mut r = Ranked {
+        comm,
+        sim,
+        owners,
+        migrated: 0,
+        rebalances: 0,
+    };
+
+    let params = RecordingParams {
+        every: scene.record_every.max(1),
+        groups: scene.sim_config(true).groups,
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let _ = signal_hook::flag::register(sig, Arc::clone(&stop));
+    }
+    let steps = scene.steps();
+    if root {
+        let n0 = scene.groups.iter().map(|g| g.count()).sum::<usize>();
+        eprintln!(
+            "running `{}` on {} MPI ranks × {} threads: {} particles, {} steps of {:.3e} s, particles {}",
+            scene.name,
+            comm.size(),
+            scg_core::exec::settings().team_size(),
+            n0,
+            steps,
+            scene.dt,
+            if by_id {
+                "by id (no migration)".to_string()
+            } else {
+                format!("in slabs along {}", ["x", "y", "z"][axis])
+            }
+        );
+    }
+    let mut times = Times::default();
+    let mut sink_err: Option<String> = None;
+    let mut failure: Option<String> = None;
+    let t0 = Instant::now();
+    let mut write = |frame: Option<scg_core::frame::Frame>,
+                     sinks: &mut Option<Box<dyn FrameSink>>| {
+        if let (Some(f), Some(s)) = (frame, sinks.as_mut())
+            && sink_err.is_none()
+            && let Err(e) = s.write_frame(&f)
+        {
+            sink_err = Some(e);
+        }
+        sink_err.is_none()
+    };
+    if record {
+        let f = r.gather_frame(&params);
+        write(f, &mut sinks);
+    }
+    // `SCG_MPI_COUNTS=FILE`: rank 0 writes the step, the particle count and an
+    // order-independent digest of the ids after every step (tests: no particle lost or
+    // duplicated).
+    let mut counts_log = match std::env::var_os("SCG_MPI_COUNTS") {
+        Some(p) if root => match std::fs::File::create(&p) {
+            Ok(f) => Some(std::io::BufWriter::new(f)),
+            Err(e) => {
+                eprintln!("error: SCG_MPI_COUNTS {}: {e}", p.to_string_lossy());
+                None
+            }
+        },
+        _ => None,
+    };
+    let mut interrupted = false;
+    let mut last_rebalance = 0;
+    let mut sink_failed = false;
+    while r.sim.step_count() < steps {
+        let first_new = r.sim.world.resource::<NextParticleId>().0;
+        let t = Instant::now();
+        let stepped = r.sim.step();
+        times.compute += t.elapsed();
+        if let Err(e) = stepped {
+            failure = Some(match e {
+                SimError::NonFinite(n) => n.to_string(),
+                e => e.to_string(),
+            });
+        }
+        // One collective on a quiet step: counts, id digests, failures, interrupts and
+        // whether anybody has particles to send; the exchange only when somebody has.
+        let t = Instant::now();
+        let out = r.leaving(first_new);
+        let sent: u64 = out.iter().map(|o| o.len() as u64).sum();
+        let (held, held_ids) = r.id_digest();
+        let ids = out.iter().flatten().fold(held_ids, |h, p| {
+            h.wrapping_add(crate::decomp::splitmix64(u64::from(p.id)))
+        });
+        let flags = u64::from(failure.is_some())
+            | u64::from(sink_failed) << 1
+            | u64::from(stop.load(Ordering::Relaxed)) << 2;
+        let all = comm.all_gather_u64(&[held + sent, flags, ids, sent]);
+        // (per rank before the exchange: what rebalancing needs)
+        let counts: Vec<u64> = all.chunks(4).map(|c| c[0]).collect();
+        let any = all.chunks(4).fold(0, |a, c| a | c[1]);
+        if all.chunks(4).any(|c| c[3] > 0)
+            && let Err(e) = r.deliver(&out)
+        {
+            failure = Some(e);
+        }
+        times.migrate += t.elapsed();
+        let t = Instant::now();
+        if record && r.sim.step_count().is_multiple_of(params.every) {
+            let f = r.gather_frame(&params);
+            sink_failed |= !write(f, &mut sinks);
+        }
+        times.record += t.elapsed();
+        if let Some(log) = counts_log.as_mut() {
+            let digest = all.chunks(4).fold(0u64, |a, c| a.wrapping_add(c[2]));
+            let total: u64 = counts.iter().sum();
+            let _ = writeln!(log, "{} {total} {digest}", r.sim.step_count());
+        }
+        if any & 0b011 != 0 {
+            break;
+        }
+        if any & 0b100 != 0 {
+            interrupted = true;
+            break;
+        }
+        if r.sim.step_count() >= last_rebalance + REBALANCE_MIN_STEPS
+            && needs_rebalance(&counts, REBALANCE_TOLERANCE)
+        {
+            last_rebalance = r.sim.step_count();
+            let t = Instant::now();
+            if let Err(e) = r.rebalance() {
+                failure = Some(e);
+            }
+            times.rebalance += t.elapsed();
+        }
+    }
+    let wall = t0.elapsed().as_secs_f64();
+    if let Some(mut log) = counts_log.take() {
+        let _ = log.flush();
+    }
+
+    // Reports, on rank 0.
+    let fails: Vec<Option<String>> = comm
+        .all_gather_bytes(&encode(&failure))
+        .iter()
+        .map(|b| decode(b))
+        .collect();
+    let first_failure = fails.iter().flatten().next().cloned();
+    let steps_done = r.sim.step_count();
+    let ps: u64 = comm.all_gather_u64(&[r.sim.particle_steps()]).iter().sum();
+    let per_rank = comm.all_gather_u64(&[
+        times.compute.as_nanos() as u64,
+        times.migrate.as_nanos() as u64,
+        times.record.as_nanos() as u64,
+        times.rebalance.as_nanos() as u64,
+        r.migrated,
+        r.sim.frame_rows().len() as u64,
+    ]);
+    let fin = sinks.as_mut().map_or(Ok(()), |s| s.finish());
+    let mut code = 0;
+    if root {
+        match &first_failure {
+            None => eprintln!(
+                "{} {steps_done} steps (t = {:.6} s) in {wall:.3} s on {} ranks: {:.3e} particle-steps/s, {} slab rebalances",
+                if interrupted {
+                    "interrupted after"
+                } else {
+                    "done:"
+                },
+                r.sim.time(),
+                comm.size(),
+                ps as f64 / wall.max(1e-12),
+                r.rebalances
+            ),
+            Some(e) => eprintln!("error: run stopped at step {steps_done}: {e}"),
+        }
+        eprintln!(
+            "time per rank (s): compute, migration, recording (gather), rebalance; particles migrated in, held at the end:"
+        );
+        for (k, c) in per_rank.chunks(6).enumerate() {
+            let s = |ns: u64| ns as f64 * 1e-9;
+            eprintln!(
+                "  rank {k:<4} {:>9.3} {:>9.3} {:>9.3} {:>9.3}   {:>9} {:>9}",
+                s(c[0]),
+                s(c[1]),
+                s(c[2]),
+                s(c[3]),
+                c[4],
+                c[5]
+            );
+        }
+        for p in &paths {
+            eprintln!("wrote {}", p.display());
+        }
+        if let Some(e) = &sink_err {
+            eprintln!("error: recorder failed: {e}");
+        }
+        if let Err(e) = &fin {
+            eprintln!("error: {e}");
+        }
+    }
+    if first_failure.is_some() || sink_err.is_some() || fin.is_err() {
+        code = 1;
+    }
+    let any_code = comm.all_gather_u64(&[code]).into_iter().max().unwrap_or(0);
+    if any_code != 0 {
+        return any_code as i32;
+    }
+    if interrupted { 130 } else { 0 }
+}
+
+/// The recorders of rank 0: one `.rrd`, one `.mcap` and the VTK/CSV frames asked for
+/// (one writer thread). `Err` holds the message and the exit status.
+fn make_sinks(
+    scene: &scg_scene::Scene,
+    args: &RunArgs,
+    report: &scg_scene::check::Report,
+    paths: &mut Vec<std::path::PathBuf>,
+) -> Result<Box<dyn FrameSink>, (String, i32)> {
+    ensure_writable(&args.out).map_err(|e| (e, EXIT_BAD_INPUT))?;
+    let stem = recording_stem(scene);
+    let meta = scene.run_meta(report.messages());
+    let rrd = args.out.join(format!("{stem}.rrd"));
+    let mcap = args.out.join(format!("{stem}.mcap"));
+    let io = |e: scg_record::RecordError| (e.to_string(), 1);
+    let mut sinks: Vec<Box<dyn FrameSink>> = vec![
+        Box::new(scg_record::RrdSink::create(&rrd, &meta).map_err(io)?),
+        Box::new(scg_record::McapSink::create(&mcap, &meta).map_err(io)?),
+    ];
+    sinks.extend(
+        extra_sinks(&args.vtk, &args.frames_csv, &RunMeta { case: stem, ..meta }).map_err(io)?,
+    );
+    paths.push(rrd);
+    paths.push(mcap);
+    paths.extend(args.vtk.iter().cloned());
+    paths.extend(args.frames_csv.iter().cloned());
+    Ok(Box::new(scg_record::Background::spawn(sinks)))
+}
