@@ -98,6 +98,7 @@ fn cut_size_theory_and_openfoam_column() {
             class("d8", 8e-6, 20, times),
         ],
         total_s: 12.0,
+        cpu_s: None,
         particle_steps: 1000,
         duration: 2.0,
         held_moving: vec![0, 0],

@@ -52,6 +52,10 @@ pub struct StudyArgs {
     /// to add as a column and a curve.
     #[arg(long, value_name = "FILE")]
     pub openfoam: Option<PathBuf>,
+    /// `cyclone` only: do not run; re-write the tables and plots of the finished study in
+    /// this folder (its summary.json and MCAPs) into `--out`, e.g. with `--openfoam`.
+    #[arg(long, value_name = "DIR")]
+    pub from: Option<PathBuf>,
 }
 
 /// One study: its scene and windows.
@@ -118,8 +122,8 @@ pub fn study(a: StudyArgs) -> i32 {
         );
         return EXIT_BAD_INPUT;
     };
-    if a.openfoam.is_some() {
-        eprintln!("error: --openfoam is for `scg study cyclone` only");
+    if a.openfoam.is_some() || a.from.is_some() {
+        eprintln!("error: --openfoam and --from are for `scg study cyclone` only");
         return EXIT_BAD_INPUT;
     }
     let out = a.out.clone().unwrap_or_else(|| {

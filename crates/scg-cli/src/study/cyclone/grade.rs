@@ -121,6 +121,26 @@ pub fn cut_size(classes: &[ClassGrade]) -> Option<f64> {
     d50(&escaped)
 }
 
+/// The corrected (reduced) cut size of Kelsall's bypass correction: the efficiency of the
+/// finest class fed, R, is taken as the share that bypasses the separation (here: fines
+/// held at the walls, which a real cyclone's air would carry out), and d50 is where
+/// η' = (η − R) / (1 − R) first rises through 0.5. `None` without a crossing or when the
+/// finest class has R = 1 (nothing escapes).
+pub fn corrected_cut_size(classes: &[ClassGrade]) -> Option<f64> {
+    let r = classes
+        .iter()
+        .find(|c| c.efficiency.is_finite())?
+        .efficiency;
+    if r >= 1.0 {
+        return None;
+    }
+    let escaped: Vec<(f64, f64)> = classes
+        .iter()
+        .map(|c| (c.diameter, 1.0 - (c.efficiency - r) / (1.0 - r)))
+        .collect();
+    d50(&escaped)
+}
+
 /// W1 distance between the residence times of `v` and those of `reference` (escaped
 /// particles of one class), over the reference's mean residence time; NaN when either has
 /// none.
@@ -197,6 +217,13 @@ mod tests {
         assert_eq!(cs[0].lost_share(), 0.0);
         // Never through 0.5: no cut.
         assert_eq!(cut_size(&cs[2..]), None);
+        // Corrected: R = 0.2, η' = 0, 0.25, 0.75, 1: 0.5 halfway from 2 to 4 µm; from 4 µm
+        // on R = 0.8, η' = 0, 1: halfway from 4 to 8 µm.
+        let d = corrected_cut_size(&cs).unwrap();
+        assert!((d - 3e-6).abs() < 1e-15, "{d}");
+        let d = corrected_cut_size(&cs[2..]).unwrap();
+        assert!((d - 6e-6).abs() < 1e-15, "{d}");
+        assert_eq!(corrected_cut_size(&cs[3..]), None);
     }
 
     #[test]

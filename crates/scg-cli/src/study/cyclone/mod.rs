@@ -18,7 +18,9 @@ pub mod theory;
 
 use std::path::PathBuf;
 
-pub use grade::{ClassGrade, ExternalGrade, cut_size, efficiency, residence_w1};
+pub use grade::{
+    ClassGrade, ExternalGrade, corrected_cut_size, cut_size, efficiency, residence_w1,
+};
 pub use plot::write_plots;
 pub use report::{Criteria, criteria, report, summary, write_tables};
 pub use run::{CycloneRun, Tracker, run_variant};
@@ -87,6 +89,68 @@ pub fn scene_text() -> Result<String, String> {
     ))
 }
 
+/// A finished study read back from `dir`: the runs of its `summary.json`, each with the
+/// snapshot frame (nearest [`SNAPSHOT_AT`]) of its MCAP when there is one. For re-writing
+/// the tables and plots (`scg study cyclone --from DIR`) without running again.
+pub fn read_study(dir: &std::path::Path) -> Result<Vec<CycloneRun>, String> {
+    let path = dir.join("summary.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let s: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    let bad = |what: &str| format!("{}: no {what}", path.display());
+    let vars = s["variants"].as_object().ok_or_else(|| bad("variants"))?;
+    let mut runs = Vec::new();
+    for (name, _, _) in VARIANTS {
+        let Some(v) = vars.get(name) else { continue };
+        let cls = v["classes"].as_array().ok_or_else(|| bad("classes"))?;
+        let classes: Vec<ClassGrade> = cls
+            .iter()
+            .map(|c| {
+                serde_json::from_value(c.clone()).map_err(|e| format!("{}: {e}", path.display()))
+            })
+            .collect::<Result<_, _>>()?;
+        let count = |k: &str| cls.iter().map(|c| c[k].as_u64().unwrap_or(0)).collect();
+        let mut snapshot = (0.0, Vec::new());
+        let mcap = dir.join(format!("cyclone-{name}.mcap"));
+        if mcap.is_file() {
+            let rec =
+                scg_record::read_mcap(&mcap).map_err(|e| format!("{}: {e}", mcap.display()))?;
+            if let Some(f) = rec.frames.iter().min_by(|a, b| {
+                (a.time - SNAPSHOT_AT)
+                    .abs()
+                    .total_cmp(&(b.time - SNAPSHOT_AT).abs())
+            }) {
+                snapshot = (
+                    f.time,
+                    f.position
+                        .iter()
+                        .zip(&f.group)
+                        .map(|(p, g)| (glam::DVec3::from_array(*p), *g))
+                        .collect(),
+                );
+            }
+        }
+        runs.push(CycloneRun {
+            name: name.to_string(),
+            alpha: v["alpha"].as_f64().ok_or_else(|| bad("alpha"))?,
+            law: v["law"].as_str().unwrap_or("").to_string(),
+            classes,
+            total_s: v["total_s"].as_f64().ok_or_else(|| bad("total_s"))?,
+            cpu_s: v["cpu_s"].as_f64(),
+            particle_steps: v["particle_steps"].as_u64().unwrap_or(0),
+            duration: v["duration_s"].as_f64().unwrap_or(f64::NAN),
+            held_moving: count("held_moving"),
+            escaped_late: count("escaped_in_last_s"),
+            unmatched: v["unmatched_departures"].as_u64().unwrap_or(0),
+            snapshot,
+        });
+    }
+    if runs.first().is_none_or(|r| r.name != "original") {
+        return Err(bad("original variant"));
+    }
+    Ok(runs)
+}
+
 /// Run `scg study cyclone`; returns the exit status.
 pub fn study(a: StudyArgs) -> i32 {
     let openfoam = match &a.openfoam {
@@ -118,7 +182,16 @@ pub fn study(a: StudyArgs) -> i32 {
     }
     let (feed, duration) = if a.quick { QUICK } else { FULL };
     let mut runs = Vec::new();
-    for (name, alpha, law) in VARIANTS {
+    if let Some(from) = &a.from {
+        match read_study(from) {
+            Ok(r) => runs = r,
+            Err(e) => {
+                eprintln!("error: --from {e}");
+                return EXIT_BAD_INPUT;
+            }
+        }
+    }
+    for (name, alpha, law) in VARIANTS.iter().copied().filter(|_| a.from.is_none()) {
         let mut overrides = variant_overrides(alpha, law, feed, duration);
         overrides.push(format!("name=\"cyclone-{name}\""));
         overrides.push(format!("record_every={RECORD_EVERY}"));

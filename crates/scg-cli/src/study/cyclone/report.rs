@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::grade::{ClassGrade, ExternalGrade, cut_size, residence_w1};
+use super::grade::{ClassGrade, ExternalGrade, corrected_cut_size, cut_size, residence_w1};
 use super::run::{CycloneRun, LATE, MOVING};
 use super::theory::Cyclone;
 
@@ -103,6 +103,13 @@ pub fn criteria(runs: &[CycloneRun]) -> Vec<Criteria> {
             value: v.total_s / o.total_s,
             limit: Some(1.0 / 6.0),
         });
+        if let (Some(a), Some(b)) = (v.cpu_s, o.cpu_s) {
+            c.push(Criteria {
+                what: "scg2: whole-run CPU time / the original's".into(),
+                value: a / b,
+                limit: Some(1.0 / 6.0),
+            });
+        }
     }
     c
 }
@@ -161,10 +168,13 @@ pub fn summary(
                 "law": v.law,
                 "total_s": v.total_s,
                 "time_ratio_to_original": v.total_s / o.total_s,
+                "cpu_s": opt_num(v.cpu_s),
+                "cpu_ratio_to_original": opt_num(v.cpu_s.zip(o.cpu_s).map(|(a, b)| a / b)),
                 "particle_steps": v.particle_steps,
                 "particle_steps_per_s": v.particle_steps as f64 / v.total_s,
                 "duration_s": v.duration,
                 "d50": opt_num(cut_size(&v.classes)),
+                "d50_corrected": opt_num(corrected_cut_size(&v.classes)),
                 "unmatched_departures": v.unmatched,
                 "classes": classes,
             }),
@@ -188,6 +198,7 @@ pub fn summary(
         serde_json::json!({
             "code": g.code,
             "d50": opt_num(g.d50.or_else(|| cut_size(&g.classes))),
+            "d50_corrected": opt_num(corrected_cut_size(&g.classes)),
             "particle_steps_per_s": opt_num(g.particle_steps_per_s),
             "classes": classes,
         })
@@ -203,7 +214,8 @@ pub fn summary(
             "two_sigma_pp": "two binomial standard errors of the efficiency from the fed count, percentage points",
             "held_moving": format!("held particles faster than {MOVING} m/s at the end"),
             "escaped_in_last_s": format!("escapes during the last {LATE} s of the run"),
-            "d50": "diameter where the efficiency first rises through 0.5, linear between classes, m"
+            "d50": "diameter where the efficiency first rises through 0.5, linear between classes, m",
+            "d50_corrected": "the same for Kelsall's corrected efficiency (eff - R)/(1 - R), R = the finest class's efficiency (the fines held as if they bypassed the separation), m"
         },
         "theory": {
             "density": rho,
@@ -315,28 +327,41 @@ pub fn report(runs: &[CycloneRun], theory: &Cyclone, openfoam: Option<&ExternalG
     let um = |d: Option<f64>| d.map_or("—".to_string(), |d| format!("{:.2} µm", d * 1e6));
     let _ = writeln!(
         s,
-        "\n{:<9} {:>10} {:>10} {:>8} {:>14} {:>12} {:>10}",
-        "variant", "d50", "total [s]", "ratio", "particle-steps", "steps/s", "unmatched"
+        "\n{:<9} {:>10} {:>10} {:>10} {:>8} {:>14} {:>12} {:>10}",
+        "variant",
+        "d50",
+        "d50 corr",
+        "total [s]",
+        "ratio",
+        "particle-steps",
+        "steps/s",
+        "unmatched"
     );
     for v in runs {
         let _ = writeln!(
             s,
-            "{:<9} {:>10} {:>10.1} {:>8.3} {:>14} {:>12.3e} {:>10}",
+            "{:<9} {:>10} {:>10} {:>10.1} {:>8.3} {:>14} {:>12.3e} {:>10}   (CPU {})",
             v.name,
             um(cut_size(&v.classes)),
+            um(corrected_cut_size(&v.classes)),
             v.total_s,
             v.total_s / o.total_s,
             v.particle_steps,
             v.particle_steps as f64 / v.total_s,
-            v.unmatched
+            v.unmatched,
+            v.cpu_s.map_or("—".to_string(), |c| format!(
+                "{c:.1} s, ratio {:.3}",
+                o.cpu_s.map_or(f64::NAN, |oc| c / oc)
+            ))
         );
     }
     if let Some(g) = openfoam {
         let _ = writeln!(
             s,
-            "{:<9} {:>10} {:>10} {:>8} {:>14} {:>12}",
+            "{:<9} {:>10} {:>10} {:>10} {:>8} {:>14} {:>12}",
             g.code,
             um(g.d50.or_else(|| cut_size(&g.classes))),
+            um(corrected_cut_size(&g.classes)),
             "",
             "",
             "",
@@ -349,6 +374,11 @@ pub fn report(runs: &[CycloneRun], theory: &Cyclone, openfoam: Option<&ExternalG
         "cyclone theory at {rho} kg/m³: Lapple d50 = {:.2} µm, Barth–Muschelknautz x50 = {:.2} µm",
         theory.lapple_d50(rho) * 1e6,
         theory.barth_muschelknautz_d50(rho) * 1e6
+    );
+    let _ = writeln!(
+        s,
+        "d50 corr: Kelsall's corrected efficiency (η − R)/(1 − R), R = the finest class's η \
+         (its held fines taken as bypass)"
     );
     let _ = writeln!(s, "\ncriteria (issue 16):");
     for c in criteria(runs) {

@@ -109,6 +109,9 @@ pub struct CycloneRun {
     pub classes: Vec<ClassGrade>,
     /// Wall time of the whole run, s.
     pub total_s: f64,
+    /// CPU time of the process over the run (all threads), s, where the OS tells
+    /// ([`process_cpu_s`]): on a shared machine the wall time also counts the others' load.
+    pub cpu_s: Option<f64>,
     /// Particle-steps integrated.
     pub particle_steps: u64,
     /// Simulated time, s.
@@ -121,6 +124,18 @@ pub struct CycloneRun {
     pub unmatched: u64,
     /// Time of the snapshot, s, and the particles then (position, group).
     pub snapshot: (f64, Vec<(DVec3, u32)>),
+}
+
+/// CPU time (user + system) of this process so far, all threads, s: `/proc/self/stat`
+/// (Linux; clock ticks of 1/100 s); `None` elsewhere.
+pub fn process_cpu_s() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // The command name (field 2) is in parentheses and may hold spaces: count from the
+    // last ')'. utime and stime are fields 14 and 15, i.e. the 12th and 13th after it.
+    let rest = &stat[stat.rfind(')')? + 1..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
 }
 
 /// A held particle faster than this at the end is "still moving", m/s (a tenth of the
@@ -153,6 +168,7 @@ pub fn run_variant(
     let mut query = sim.world.query::<(&ParticleId, &GroupId)>();
     let mut snapshot = (0.0, Vec::new());
     let t0 = Instant::now();
+    let cpu0 = process_cpu_s();
     if mcap.is_some() {
         sim.record_now().map_err(|e| e.to_string())?;
     }
@@ -172,6 +188,7 @@ pub fn run_variant(
         }
     }
     let total_s = t0.elapsed().as_secs_f64();
+    let cpu_s = process_cpu_s().zip(cpu0).map(|(b, a)| b - a);
     sim.finish_recorders().map_err(|e| e.to_string())?;
     let log = sim.world.resource::<OutletLog>().clone();
     let fed = sim.world.resource::<Tally>().fed.clone();
@@ -217,6 +234,7 @@ pub fn run_variant(
         law: g0.law.name().to_string(),
         classes,
         total_s,
+        cpu_s,
         particle_steps: sim.particle_steps(),
         duration: end,
         held_moving,
@@ -229,6 +247,21 @@ pub fn run_variant(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn process_cpu_time_advances() {
+        let Some(a) = process_cpu_s() else {
+            return; // not Linux
+        };
+        let mut x = 0u64;
+        let t = Instant::now();
+        while t.elapsed().as_secs_f64() < 0.05 {
+            x = x.wrapping_mul(6364136223846793005).wrapping_add(1);
+        }
+        std::hint::black_box(x);
+        let b = process_cpu_s().unwrap();
+        assert!(a >= 0.0 && b >= a, "{a} {b}");
+    }
 
     #[test]
     fn tracker_pairs_feeds_with_escapes() {
