@@ -156,3 +156,37 @@ fn cut_size_theory_and_openfoam_column() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn bad_input_exits_2_naming_it() {
+    let scg = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_scg"))
+            .args(args)
+            .current_dir(common::repo(""))
+            .output()
+            .unwrap();
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let (code, err) = scg(&[
+        "study",
+        "cyclone",
+        "--quick",
+        "--set",
+        "dt=-1",
+        "--no-record",
+    ]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("key `dt`"), "{err}");
+    let (code, err) = scg(&["study", "cyclone", "--from", "/nonexistent-scg-study"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("summary.json"), "{err}");
+    let (code, err) = scg(&["study", "cyclone", "--openfoam", "/nonexistent-grade.json"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("grade.json"), "{err}");
+    let (code, err) = scg(&["study", "classifier", "--openfoam", "x.json"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("`scg study cyclone` only"), "{err}");
+}

@@ -191,11 +191,24 @@ pub fn study(a: StudyArgs) -> i32 {
             }
         }
     }
+    let overrides_of = |name: &str, alpha: f64, law: &str| {
+        let mut o = variant_overrides(alpha, law, feed, duration);
+        o.push(format!("name=\"cyclone-{name}\""));
+        o.push(format!("record_every={RECORD_EVERY}"));
+        o.extend(a.set.iter().cloned());
+        o
+    };
+    // Bad `--set` values are bad input (exit 2), found before anything runs.
+    if a.from.is_none() {
+        let (name, alpha, law) = VARIANTS[0];
+        if let Err(e) = scg_scene::parse(&text, "<cyclone>", name, &overrides_of(name, alpha, law))
+        {
+            eprintln!("error: {e}");
+            return EXIT_BAD_INPUT;
+        }
+    }
     for (name, alpha, law) in VARIANTS.iter().copied().filter(|_| a.from.is_none()) {
-        let mut overrides = variant_overrides(alpha, law, feed, duration);
-        overrides.push(format!("name=\"cyclone-{name}\""));
-        overrides.push(format!("record_every={RECORD_EVERY}"));
-        overrides.extend(a.set.iter().cloned());
+        let overrides = overrides_of(name, alpha, law);
         let mcap = (!a.no_record).then(|| out.join(format!("cyclone-{name}.mcap")));
         eprintln!("study cyclone: running variant `{name}` (α = {alpha}, law {law})…");
         match run_variant(name, &text, &overrides, SNAPSHOT_AT, mcap.as_deref()) {
@@ -213,11 +226,7 @@ pub fn study(a: StudyArgs) -> i32 {
             }
             Err(e) => {
                 eprintln!("error: variant `{name}`: {e}");
-                return if e.contains("error in") || e.contains("key") {
-                    EXIT_BAD_INPUT
-                } else {
-                    1
-                };
+                return 1;
             }
         }
     }
