@@ -186,6 +186,15 @@ fn bad_input_exits_2_naming_it() {
     let (code, err) = scg(&["study", "cyclone", "--openfoam", "/nonexistent-grade.json"]);
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("grade.json"), "{err}");
+    let (code, err) = scg(&["study", "cyclone", "--run", "scg2,scg8"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("unknown variant `scg8`"), "{err}");
+    let (code, err) = scg(&["study", "cyclone", "--run", "scg2"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("must include `original`"), "{err}");
+    let (code, err) = scg(&["study", "cyclone", "--cg-feed", "0"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("--cg-feed"), "{err}");
     let (code, err) = scg(&["study", "classifier", "--openfoam", "x.json"]);
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("`scg study cyclone` only"), "{err}");

@@ -56,6 +56,14 @@ pub struct StudyArgs {
     /// this folder (its summary.json and MCAPs) into `--out`, e.g. with `--openfoam`.
     #[arg(long, value_name = "DIR")]
     pub from: Option<PathBuf>,
+    /// `cyclone` only: run just these variants (comma-separated: original, scg2, scg4,
+    /// none2, parcel2), replacing those read with `--from`.
+    #[arg(long, value_name = "NAMES")]
+    pub run: Option<String>,
+    /// `cyclone` only: feed the coarse-grained variants this many times the same-mass
+    /// count (more particles: less sampling noise, no longer the same cost).
+    #[arg(long, value_name = "F", default_value_t = 1.0)]
+    pub cg_feed: f64,
 }
 
 /// One study: its scene and windows.
@@ -122,8 +130,10 @@ pub fn study(a: StudyArgs) -> i32 {
         );
         return EXIT_BAD_INPUT;
     };
-    if a.openfoam.is_some() || a.from.is_some() {
-        eprintln!("error: --openfoam and --from are for `scg study cyclone` only");
+    if a.openfoam.is_some() || a.from.is_some() || a.run.is_some() || a.cg_feed != 1.0 {
+        eprintln!(
+            "error: --openfoam, --from, --run and --cg-feed are for `scg study cyclone` only"
+        );
         return EXIT_BAD_INPUT;
     }
     let out = a.out.clone().unwrap_or_else(|| {

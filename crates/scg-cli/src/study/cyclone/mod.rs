@@ -191,23 +191,51 @@ pub fn study(a: StudyArgs) -> i32 {
             }
         }
     }
+    // The variants to run: `--run`, else all (none with `--from`).
+    let to_run: Vec<(&str, f64, &str)> = match &a.run {
+        Some(list) => {
+            let mut v = Vec::new();
+            for n in list.split(',').map(str::trim).filter(|n| !n.is_empty()) {
+                match VARIANTS.iter().find(|x| x.0 == n) {
+                    Some(x) => v.push(*x),
+                    None => {
+                        eprintln!(
+                            "error: --run: unknown variant `{n}` ({})",
+                            VARIANTS.map(|x| x.0).join(", ")
+                        );
+                        return EXIT_BAD_INPUT;
+                    }
+                }
+            }
+            v
+        }
+        None if a.from.is_some() => Vec::new(),
+        None => VARIANTS.to_vec(),
+    };
+    if a.from.is_none() && to_run.first().is_none_or(|v| v.0 != "original") {
+        eprintln!("error: --run without --from must include `original` first (the reference)");
+        return EXIT_BAD_INPUT;
+    }
+    if !(a.cg_feed.is_finite() && a.cg_feed > 0.0) {
+        eprintln!("error: --cg-feed must be a number > 0, got {}", a.cg_feed);
+        return EXIT_BAD_INPUT;
+    }
     let overrides_of = |name: &str, alpha: f64, law: &str| {
-        let mut o = variant_overrides(alpha, law, feed, duration);
+        let f = if alpha == 1.0 { feed } else { feed * a.cg_feed };
+        let mut o = variant_overrides(alpha, law, f, duration);
         o.push(format!("name=\"cyclone-{name}\""));
         o.push(format!("record_every={RECORD_EVERY}"));
         o.extend(a.set.iter().cloned());
         o
     };
     // Bad `--set` values are bad input (exit 2), found before anything runs.
-    if a.from.is_none() {
-        let (name, alpha, law) = VARIANTS[0];
-        if let Err(e) = scg_scene::parse(&text, "<cyclone>", name, &overrides_of(name, alpha, law))
-        {
-            eprintln!("error: {e}");
-            return EXIT_BAD_INPUT;
-        }
+    if let Some((name, alpha, law)) = to_run.first().copied()
+        && let Err(e) = scg_scene::parse(&text, "<cyclone>", name, &overrides_of(name, alpha, law))
+    {
+        eprintln!("error: {e}");
+        return EXIT_BAD_INPUT;
     }
-    for (name, alpha, law) in VARIANTS.iter().copied().filter(|_| a.from.is_none()) {
+    for (name, alpha, law) in to_run {
         let overrides = overrides_of(name, alpha, law);
         let mcap = (!a.no_record).then(|| out.join(format!("cyclone-{name}.mcap")));
         eprintln!("study cyclone: running variant `{name}` (α = {alpha}, law {law})…");
@@ -222,6 +250,7 @@ pub fn study(a: StudyArgs) -> i32 {
                     v.classes.iter().map(|c| c.held).sum::<u64>(),
                     v.classes.iter().map(|c| c.lost).sum::<u64>(),
                 );
+                runs.retain(|r: &CycloneRun| r.name != v.name);
                 runs.push(v);
             }
             Err(e) => {
@@ -230,6 +259,8 @@ pub fn study(a: StudyArgs) -> i32 {
             }
         }
     }
+    // In the order of VARIANTS (the original first).
+    runs.sort_by_key(|r| VARIANTS.iter().position(|v| v.0 == r.name));
     let theory = Cyclone::OPENFOAM_TUTORIAL;
     print!("{}", report(&runs, &theory, openfoam.as_ref()));
     let outline = match scg_scene::parse(&text, "<cyclone>", "cyclone", &[]) {
