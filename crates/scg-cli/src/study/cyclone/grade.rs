@@ -15,25 +15,35 @@ use crate::analysis::{d50, mean, wasserstein1};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ClassGrade {
     /// Group name.
+    #[serde(default)]
     pub group: String,
     /// Original diameter, m.
     pub diameter: f64,
-    /// Original density, kg/m³.
+    /// Original density, kg/m³ (NaN when a `grade.json` leaves it out).
+    #[serde(default = "nan", with = "nan_as_null")]
     pub density: f64,
     /// Particles fed.
+    #[serde(default)]
     pub fed: u64,
     /// Escaped through the outlet.
+    #[serde(default)]
     pub escaped: u64,
     /// Still inside at the end.
+    #[serde(default)]
     pub held: u64,
     /// Lost through the inlet (or elsewhere).
+    #[serde(default)]
     pub lost: u64,
     /// 1 − escaped / fed (NaN, written null, when none was fed).
-    #[serde(with = "nan_as_null")]
+    #[serde(default = "nan", with = "nan_as_null")]
     pub efficiency: f64,
     /// Feed-to-escape times of the escaped particles, s, sorted.
     #[serde(default)]
     pub residence_times: Vec<f64>,
+}
+
+fn nan() -> f64 {
+    f64::NAN
 }
 
 /// NaN ↔ JSON null (JSON has no NaN).
@@ -242,7 +252,8 @@ mod tests {
             {"group": "d5", "diameter": 5e-6, "density": 2000, "fed": 100, "escaped": 30,
              "held": 68, "lost": 2, "efficiency": 0.1, "residence_times": [2.0, 1.0]},
             {"group": "d8", "diameter": 8e-6, "density": 2000, "fed": 0, "escaped": 0,
-             "held": 0, "lost": 0, "efficiency": null}],
+             "held": 0, "lost": 0, "efficiency": null},
+            {"diameter": 11e-6, "fed": 10, "escaped": 1}],
             "d50": 4.5e-6, "particle_steps_per_s": 1.0e6, "extra": "ignored"}"#;
         let dir = std::env::temp_dir().join(format!("scg-grade-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
@@ -253,6 +264,9 @@ mod tests {
         // Recomputed from the counts (the file's 0.1 disagrees with them).
         assert!((g.classes[0].efficiency - 0.7).abs() < 1e-15);
         assert!(g.classes[1].efficiency.is_nan());
+        // Only the diameter and counts: the rest defaults (density unknown).
+        assert!((g.classes[2].efficiency - 0.9).abs() < 1e-15);
+        assert!(g.classes[2].density.is_nan() && g.classes[2].held == 0);
         assert_eq!(g.classes[0].residence_times, vec![1.0, 2.0]);
         assert_eq!(g.d50, Some(4.5e-6));
         assert_eq!(g.matching(5.000001e-6).map(|c| c.fed), Some(100));
