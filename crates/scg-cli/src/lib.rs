@@ -28,6 +28,7 @@ use clap::{Parser, Subcommand};
         scg check cases/classifier.toml           derived quantities and warnings\n  \
         scg replay recordings/vortex.mcap --verify\n  \
         scg study classifier --quick              the paper's Section 5, reduced\n  \
+        scg study cyclone --quick                 grade efficiency of a real cyclone, five variants\n  \
         scg cost cases/vortex.toml --quick        what accuracy costs in time\n\n\
         Scene format: docs/scenes.md. Threads: --threads N or SCG_THREADS (same bits for any N)."
 )]
@@ -57,8 +58,9 @@ enum Command {
     Bench(bench::BenchArgs),
     /// What accuracy costs in time: sweep α, law, dt, integrator and stiffness on a scene.
     Cost(cost::CostArgs),
-    /// Studies: `classifier`, `classifier-psd` (paper Section 5, Figs 8–10) and
-    /// `classifier-cut` (the steady-state cut size).
+    /// Studies: `classifier`, `classifier-psd` (paper Section 5, Figs 8–10),
+    /// `classifier-cut` (the steady-state cut size) and `cyclone` (grade efficiency of
+    /// cases/cyclone.toml in five coarse-graining variants).
     Study(study::StudyArgs),
     /// Work from an MCAP recording: rebuild .rrd, analyse, verify.
     Replay(replay::ReplayArgs),

@@ -2,9 +2,11 @@
 //! variants (original, CG α = 2 with SCG, CG α = 2 without SCG), then writes the radial
 //! distributions (Fig. 10), top-view snapshots (Fig. 9), drained fractions and the
 //! partition curves with both cut sizes (finite-time drained, steady-state fates), the computing time for 0.1 s (Fig. 8), the normalised W1
-//! distances to the original, and `summary.json`.
+//! distances to the original, and `summary.json`. `scg study cyclone` ([`cyclone`]): grade
+//! efficiency of the OpenFOAM cyclone in five variants, beside cyclone theory and OpenFOAM.
 
-mod plot;
+pub mod cyclone;
+pub(crate) mod plot;
 mod report;
 mod run;
 
@@ -30,8 +32,9 @@ pub const CLASSIFIER_CUT: &str = include_str!("../../../../cases/classifier-cut.
 /// Arguments of `scg study`.
 #[derive(Args, Debug)]
 pub struct StudyArgs {
-    /// `classifier` (paper Table 3), `classifier-psd` (size distribution, partition curve)
-    /// or `classifier-cut` (classes at the cut: the steady-state d50).
+    /// `classifier` (paper Table 3), `classifier-psd` (size distribution, partition curve),
+    /// `classifier-cut` (classes at the cut: the steady-state d50) or `cyclone` (grade
+    /// efficiency of cases/cyclone.toml in five variants).
     pub study: String,
     /// Fewer particles (feed rates scaled down): a few minutes in all.
     #[arg(long)]
@@ -45,6 +48,22 @@ pub struct StudyArgs {
     /// Extra scene overrides applied to every variant (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
+    /// `cyclone` only: OpenFOAM's grade curve (`grade.json` of cases/cyclone/vs-openfoam.sh)
+    /// to add as a column and a curve.
+    #[arg(long, value_name = "FILE")]
+    pub openfoam: Option<PathBuf>,
+    /// `cyclone` only: do not run; re-write the tables and plots of the finished study in
+    /// this folder (its summary.json and MCAPs) into `--out`, e.g. with `--openfoam`.
+    #[arg(long, value_name = "DIR")]
+    pub from: Option<PathBuf>,
+    /// `cyclone` only: run just these variants (comma-separated: original, scg2, scg4,
+    /// none2, parcel2), replacing those read with `--from`.
+    #[arg(long, value_name = "NAMES")]
+    pub run: Option<String>,
+    /// `cyclone` only: feed the coarse-grained variants this many times the same-mass
+    /// count (more particles: less sampling noise, no longer the same cost).
+    #[arg(long, value_name = "F", default_value_t = 1.0)]
+    pub cg_feed: f64,
 }
 
 /// One study: its scene and windows.
@@ -101,13 +120,22 @@ pub fn write_outputs(runs: &[VariantRun], nozzle: f64, out: &Path) -> Result<(),
 
 /// Run `scg study`; returns the exit status.
 pub fn study(a: StudyArgs) -> i32 {
+    if a.study == "cyclone" {
+        return cyclone::study(a);
+    }
     let Some(spec) = spec(&a.study) else {
         eprintln!(
-            "error: unknown study `{}` (classifier, classifier-psd, classifier-cut)",
+            "error: unknown study `{}` (classifier, classifier-psd, classifier-cut, cyclone)",
             a.study
         );
         return EXIT_BAD_INPUT;
     };
+    if a.openfoam.is_some() || a.from.is_some() || a.run.is_some() || a.cg_feed != 1.0 {
+        eprintln!(
+            "error: --openfoam, --from, --run and --cg-feed are for `scg study cyclone` only"
+        );
+        return EXIT_BAD_INPUT;
+    }
     let out = a.out.clone().unwrap_or_else(|| {
         PathBuf::from(format!(
             "recordings/study-{}{}",

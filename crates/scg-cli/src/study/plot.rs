@@ -11,21 +11,28 @@ use crate::chart::legend;
 
 type PlotResult = Result<(), String>;
 
-fn perr<E: std::fmt::Display>(e: E) -> String {
+pub(crate) fn perr<E: std::fmt::Display>(e: E) -> String {
     e.to_string()
 }
 
 /// An SVG drawing area of `size` pixels at `path`, filled white.
-fn svg_root(path: &Path, size: (u32, u32)) -> Result<DrawingArea<SVGBackend<'_>, Shift>, String> {
+pub(crate) fn svg_root(
+    path: &Path,
+    size: (u32, u32),
+) -> Result<DrawingArea<SVGBackend<'_>, Shift>, String> {
     let root = SVGBackend::new(path, size).into_drawing_area();
     root.fill(&WHITE).map_err(perr)?;
     Ok(root)
 }
 
-const VARIANT_COLORS: [plotters::style::RGBColor; 3] = [
+/// Line colours of the variants, in order (black for the original).
+pub(crate) const VARIANT_COLORS: [plotters::style::RGBColor; 6] = [
     plotters::style::RGBColor(0, 0, 0),
     plotters::style::RGBColor(31, 119, 180),
     plotters::style::RGBColor(214, 39, 40),
+    plotters::style::RGBColor(44, 160, 44),
+    plotters::style::RGBColor(148, 103, 189),
+    plotters::style::RGBColor(255, 127, 14),
 ];
 
 /// Fig. 10: per class, the radial distribution of each variant (fraction per bin vs r/R).

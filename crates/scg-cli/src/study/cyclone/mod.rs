@@ -1,0 +1,284 @@
+//! `scg study cyclone`: grade efficiency of the OpenFOAM cyclone (`cases/cyclone.toml`) in
+//! five variants (original, SCG α = 2 and 4, no SCG α = 2, parcel α = 2), each feeding the
+//! same mass (1/α³ as many particles for the coarse-grained), with residence times, the
+//! cut size beside cyclone theory and, optionally, OpenFOAM's grade curve on the same
+//! field (`--openfoam grade.json` of `cases/cyclone/vs-openfoam.sh`).
+//!
+//! * `theory.rs`: Lapple and Barth–Muschelknautz cut sizes;
+//! * `grade.rs`: per-class counts, efficiency, d50, residence-time W1, `grade.json`;
+//! * `run.rs`: one variant, every particle tracked from feed to escape;
+//! * `report.rs`: `report.txt`, `summary.json`, `grade.csv`, the criteria;
+//! * `plot.rs`: the partition curves, residence times, top and side views.
+
+pub mod grade;
+mod plot;
+mod report;
+pub mod run;
+pub mod theory;
+
+use std::path::PathBuf;
+
+pub use grade::{
+    ClassGrade, ExternalGrade, corrected_cut_size, cut_size, efficiency, residence_w1,
+};
+pub use plot::write_plots;
+pub use report::{Criteria, criteria, report, summary, write_tables};
+pub use run::{CycloneRun, Tracker, run_variant};
+pub use theory::Cyclone;
+
+use super::StudyArgs;
+use crate::EXIT_BAD_INPUT;
+
+/// The cyclone scene (embedded so the study runs from any directory; its `flow.case` is
+/// resolved against `cases/`, see [`scene_text`]).
+pub const CYCLONE: &str = include_str!("../../../../../cases/cyclone.toml");
+
+/// The variants: name, α, law.
+pub const VARIANTS: [(&str, f64, &str); 5] = [
+    ("original", 1.0, "scg"),
+    ("scg2", 2.0, "scg"),
+    ("scg4", 4.0, "scg"),
+    ("none2", 2.0, "none"),
+    ("parcel2", 2.0, "parcel"),
+];
+
+/// Feed scale of the full study (on the scene's 200 particles/s per class for 1 s) and
+/// its simulated duration, s.
+pub const FULL: (f64, f64) = (10.0, 4.0);
+/// The same for `--quick`.
+pub const QUICK: (f64, f64) = (0.5, 2.0);
+/// Steps between recorded frames in the study's MCAPs (0.1 s).
+pub const RECORD_EVERY: u64 = 500;
+/// Time of the top / side view snapshot, s (the end of the feed: the spiral is full).
+pub const SNAPSHOT_AT: f64 = 1.0;
+
+/// The scene overrides of one variant: α, law, feed scaled by `feed / α³`, duration.
+pub fn variant_overrides(alpha: f64, law: &str, feed: f64, duration: f64) -> Vec<String> {
+    vec![
+        format!("coarse_grain.alpha={alpha}"),
+        format!("coarse_grain.law=\"{law}\""),
+        format!("feed_scale={:e}", feed / alpha.powi(3)),
+        format!("duration={duration}"),
+    ]
+}
+
+/// The cyclone scene with its mesh case as an absolute path (the embedded scene's
+/// `case = "cyclone/coarse"` is relative to `cases/`), found under `SCG_CASES`, else
+/// `./cases`, else the `cases/` of the source tree the executable was built from.
+pub fn scene_text() -> Result<String, String> {
+    let built = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../cases");
+    let candidates: Vec<PathBuf> = match std::env::var_os("SCG_CASES") {
+        Some(c) => vec![PathBuf::from(c)],
+        None => vec![PathBuf::from("cases"), built],
+    };
+    let Some(dir) = candidates
+        .iter()
+        .map(|c| c.join("cyclone/coarse"))
+        .find(|d| d.join("constant/polyMesh").is_dir())
+    else {
+        return Err(format!(
+            "the cyclone mesh is not at {} (set SCG_CASES to the repository's cases/ folder)",
+            candidates[0].join("cyclone/coarse").display()
+        ));
+    };
+    let dir = dir.canonicalize().map_err(|e| e.to_string())?;
+    Ok(CYCLONE.replacen(
+        "case = \"cyclone/coarse\"",
+        &format!("case = {:?}", dir.display().to_string()),
+        1,
+    ))
+}
+
+/// A finished study read back from `dir`: the runs of its `summary.json`, each with the
+/// snapshot frame (nearest [`SNAPSHOT_AT`]) of its MCAP when there is one. For re-writing
+/// the tables and plots (`scg study cyclone --from DIR`) without running again.
+pub fn read_study(dir: &std::path::Path) -> Result<Vec<CycloneRun>, String> {
+    let path = dir.join("summary.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let s: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    let bad = |what: &str| format!("{}: no {what}", path.display());
+    let vars = s["variants"].as_object().ok_or_else(|| bad("variants"))?;
+    let mut runs = Vec::new();
+    for (name, _, _) in VARIANTS {
+        let Some(v) = vars.get(name) else { continue };
+        let cls = v["classes"].as_array().ok_or_else(|| bad("classes"))?;
+        let classes: Vec<ClassGrade> = cls
+            .iter()
+            .map(|c| {
+                serde_json::from_value(c.clone()).map_err(|e| format!("{}: {e}", path.display()))
+            })
+            .collect::<Result<_, _>>()?;
+        let count = |k: &str| cls.iter().map(|c| c[k].as_u64().unwrap_or(0)).collect();
+        let mut snapshot = (0.0, Vec::new());
+        let mcap = dir.join(format!("cyclone-{name}.mcap"));
+        if mcap.is_file() {
+            let rec =
+                scg_record::read_mcap(&mcap).map_err(|e| format!("{}: {e}", mcap.display()))?;
+            if let Some(f) = rec.frames.iter().min_by(|a, b| {
+                (a.time - SNAPSHOT_AT)
+                    .abs()
+                    .total_cmp(&(b.time - SNAPSHOT_AT).abs())
+            }) {
+                snapshot = (
+                    f.time,
+                    f.position
+                        .iter()
+                        .zip(&f.group)
+                        .map(|(p, g)| (glam::DVec3::from_array(*p), *g))
+                        .collect(),
+                );
+            }
+        }
+        runs.push(CycloneRun {
+            name: name.to_string(),
+            alpha: v["alpha"].as_f64().ok_or_else(|| bad("alpha"))?,
+            law: v["law"].as_str().unwrap_or("").to_string(),
+            classes,
+            total_s: v["total_s"].as_f64().ok_or_else(|| bad("total_s"))?,
+            cpu_s: v["cpu_s"].as_f64(),
+            particle_steps: v["particle_steps"].as_u64().unwrap_or(0),
+            duration: v["duration_s"].as_f64().unwrap_or(f64::NAN),
+            held_moving: count("held_moving"),
+            escaped_late: count("escaped_in_last_s"),
+            unmatched: v["unmatched_departures"].as_u64().unwrap_or(0),
+            snapshot,
+        });
+    }
+    if runs.first().is_none_or(|r| r.name != "original") {
+        return Err(bad("original variant"));
+    }
+    Ok(runs)
+}
+
+/// Run `scg study cyclone`; returns the exit status.
+pub fn study(a: StudyArgs) -> i32 {
+    let openfoam = match &a.openfoam {
+        Some(p) => match ExternalGrade::read(p) {
+            Ok(g) => Some(g),
+            Err(e) => {
+                eprintln!("error: --openfoam {e}");
+                return EXIT_BAD_INPUT;
+            }
+        },
+        None => None,
+    };
+    let text = match scene_text() {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_BAD_INPUT;
+        }
+    };
+    let out = a.out.clone().unwrap_or_else(|| {
+        PathBuf::from(format!(
+            "recordings/study-cyclone{}",
+            if a.quick { "-quick" } else { "" }
+        ))
+    });
+    if let Err(e) = std::fs::create_dir_all(&out) {
+        eprintln!("error: cannot create {}: {e}", out.display());
+        return EXIT_BAD_INPUT;
+    }
+    let (feed, duration) = if a.quick { QUICK } else { FULL };
+    let mut runs = Vec::new();
+    if let Some(from) = &a.from {
+        match read_study(from) {
+            Ok(r) => runs = r,
+            Err(e) => {
+                eprintln!("error: --from {e}");
+                return EXIT_BAD_INPUT;
+            }
+        }
+    }
+    // The variants to run: `--run`, else all (none with `--from`).
+    let to_run: Vec<(&str, f64, &str)> = match &a.run {
+        Some(list) => {
+            let mut v = Vec::new();
+            for n in list.split(',').map(str::trim).filter(|n| !n.is_empty()) {
+                match VARIANTS.iter().find(|x| x.0 == n) {
+                    Some(x) => v.push(*x),
+                    None => {
+                        eprintln!(
+                            "error: --run: unknown variant `{n}` ({})",
+                            VARIANTS.map(|x| x.0).join(", ")
+                        );
+                        return EXIT_BAD_INPUT;
+                    }
+                }
+            }
+            v
+        }
+        None if a.from.is_some() => Vec::new(),
+        None => VARIANTS.to_vec(),
+    };
+    if a.from.is_none() && to_run.first().is_none_or(|v| v.0 != "original") {
+        eprintln!("error: --run without --from must include `original` first (the reference)");
+        return EXIT_BAD_INPUT;
+    }
+    if !(a.cg_feed.is_finite() && a.cg_feed > 0.0) {
+        eprintln!("error: --cg-feed must be a number > 0, got {}", a.cg_feed);
+        return EXIT_BAD_INPUT;
+    }
+    let overrides_of = |name: &str, alpha: f64, law: &str| {
+        let f = if alpha == 1.0 { feed } else { feed * a.cg_feed };
+        let mut o = variant_overrides(alpha, law, f, duration);
+        o.push(format!("name=\"cyclone-{name}\""));
+        o.push(format!("record_every={RECORD_EVERY}"));
+        o.extend(a.set.iter().cloned());
+        o
+    };
+    // Bad `--set` values are bad input (exit 2), found before anything runs.
+    if let Some((name, alpha, law)) = to_run.first().copied()
+        && let Err(e) = scg_scene::parse(&text, "<cyclone>", name, &overrides_of(name, alpha, law))
+    {
+        eprintln!("error: {e}");
+        return EXIT_BAD_INPUT;
+    }
+    for (name, alpha, law) in to_run {
+        let overrides = overrides_of(name, alpha, law);
+        let mcap = (!a.no_record).then(|| out.join(format!("cyclone-{name}.mcap")));
+        eprintln!("study cyclone: running variant `{name}` (α = {alpha}, law {law})…");
+        match run_variant(name, &text, &overrides, SNAPSHOT_AT, mcap.as_deref()) {
+            Ok(v) => {
+                eprintln!(
+                    "  done in {:.1} s ({} particle-steps, fed {}, escaped {}, held {}, lost {})",
+                    v.total_s,
+                    v.particle_steps,
+                    v.classes.iter().map(|c| c.fed).sum::<u64>(),
+                    v.classes.iter().map(|c| c.escaped).sum::<u64>(),
+                    v.classes.iter().map(|c| c.held).sum::<u64>(),
+                    v.classes.iter().map(|c| c.lost).sum::<u64>(),
+                );
+                runs.retain(|r: &CycloneRun| r.name != v.name);
+                runs.push(v);
+            }
+            Err(e) => {
+                eprintln!("error: variant `{name}`: {e}");
+                return 1;
+            }
+        }
+    }
+    // In the order of VARIANTS (the original first).
+    runs.sort_by_key(|r| VARIANTS.iter().position(|v| v.0 == r.name));
+    let theory = Cyclone::OPENFOAM_TUTORIAL;
+    print!("{}", report(&runs, &theory, openfoam.as_ref()));
+    let outline = match scg_scene::parse(&text, "<cyclone>", "cyclone", &[]) {
+        Ok(s) => s.patch_surfaces(),
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 1;
+        }
+    };
+    if let Err(e) = write_tables(&runs, &theory, openfoam.as_ref(), &out)
+        .and_then(|_| write_plots(&runs, openfoam.as_ref(), &theory, &outline, &out))
+    {
+        eprintln!("error: {e}");
+        return 1;
+    }
+    eprintln!(
+        "wrote report.txt, summary.json, grade.csv and the plots under {}",
+        out.display()
+    );
+    0
+}

@@ -1,0 +1,164 @@
+//! Cut sizes of a tangential-inlet cyclone from cyclone theory, beside the simulated d50:
+//! Lapple's (1951) and Barth–Muschelknautz's (Hoffmann & Stein, *Gas Cyclones and Swirl
+//! Tubes*, 2nd ed., ch. 6, clean-gas version). The numbers of `cases/cyclone/README.md`
+//! ("Cut size") are these functions on [`Cyclone::OPENFOAM_TUTORIAL`].
+
+use std::f64::consts::PI;
+
+/// The dimensions of a cyclone with a cylindrical barrel, a conical lower part and a
+/// rectangular tangential inlet, and its gas, SI units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cyclone {
+    /// Barrel radius R, m.
+    pub radius: f64,
+    /// Barrel height h, m.
+    pub barrel_height: f64,
+    /// Total height H (roof to the bottom of the cone), m.
+    pub total_height: f64,
+    /// Diameter of the cone at its bottom B, m.
+    pub cone_bottom: f64,
+    /// Inlet height a (along the axis), m.
+    pub inlet_height: f64,
+    /// Inlet width b (radial), m.
+    pub inlet_width: f64,
+    /// Radius of the inlet's centre line R_in, m.
+    pub inlet_radius: f64,
+    /// Inner radius of the vortex finder R_x, m.
+    pub vortex_finder_radius: f64,
+    /// Outer radius of the vortex finder, m.
+    pub vortex_finder_outer: f64,
+    /// Vortex finder length below the roof S, m.
+    pub vortex_finder_length: f64,
+    /// Inlet gas velocity v_in, m/s.
+    pub inlet_velocity: f64,
+    /// Gas density, kg/m³.
+    pub gas_density: f64,
+    /// Gas dynamic viscosity, Pa·s.
+    pub gas_viscosity: f64,
+    /// Wall friction factor f of Barth–Muschelknautz (0.005 for clean gas).
+    pub friction: f64,
+}
+
+impl Cyclone {
+    /// `cases/cyclone.toml`: OpenFOAM's MPPICFoam/cyclone geometry with air at 10 m/s.
+    pub const OPENFOAM_TUTORIAL: Cyclone = Cyclone {
+        radius: 0.5,
+        barrel_height: 1.0,
+        total_height: 2.0,
+        cone_bottom: 0.3,
+        inlet_height: 0.4,
+        inlet_width: 0.2,
+        inlet_radius: 0.35,
+        vortex_finder_radius: 0.15,
+        vortex_finder_outer: 0.2,
+        vortex_finder_length: 0.4,
+        inlet_velocity: 10.0,
+        gas_density: 1.2,
+        gas_viscosity: 1.8e-5,
+        friction: 0.005,
+    };
+
+    /// Gas flow rate Q = a·b·v_in, m³/s.
+    pub fn flow_rate(&self) -> f64 {
+        self.inlet_height * self.inlet_width * self.inlet_velocity
+    }
+
+    /// Lapple's number of effective turns N_e = (h + (H − h)/2) / a.
+    pub fn lapple_turns(&self) -> f64 {
+        (self.barrel_height + 0.5 * (self.total_height - self.barrel_height)) / self.inlet_height
+    }
+
+    /// Lapple's cut size d50 = √(9 μ b / (2π N_e v_in (ρ_p − ρ))) for particles of density
+    /// `particle_density`, m.
+    pub fn lapple_d50(&self, particle_density: f64) -> f64 {
+        (9.0 * self.gas_viscosity * self.inlet_width
+            / (2.0
+                * PI
+                * self.lapple_turns()
+                * self.inlet_velocity
+                * (particle_density - self.gas_density)))
+            .sqrt()
+    }
+
+    /// Barth–Muschelknautz's inlet constriction coefficient α of a slot inlet, from
+    /// ξ = b / R: α = (1/ξ)·{1 − √(1 + 4[(ξ/2)² − ξ/2]·√(1 − (1 − ξ²)(2ξ − ξ²)))}
+    /// (Hoffmann & Stein eq. 6.1.2, clean gas).
+    pub fn constriction(&self) -> f64 {
+        let xi = self.inlet_width / self.radius;
+        let inner = (1.0 - (1.0 - xi * xi) * (2.0 * xi - xi * xi)).sqrt();
+        (1.0 - (1.0 + 4.0 * ((0.5 * xi).powi(2) - 0.5 * xi) * inner).sqrt()) / xi
+    }
+
+    /// Inner friction area A_R: roof annulus, barrel, cone and the vortex finder's outside, m².
+    pub fn friction_area(&self) -> f64 {
+        let r = self.radius;
+        let rb = 0.5 * self.cone_bottom;
+        let cone_height = self.total_height - self.barrel_height;
+        PI * (r * r - self.vortex_finder_outer.powi(2))
+            + 2.0 * PI * r * self.barrel_height
+            + PI * (r + rb) * ((r - rb).powi(2) + cone_height.powi(2)).sqrt()
+            + 2.0 * PI * self.vortex_finder_outer * self.vortex_finder_length
+    }
+
+    /// Barth–Muschelknautz's tangential velocity at the control surface (the cylinder
+    /// below the vortex finder, radius R_x) v_θCS, m/s.
+    pub fn bm_tangential_velocity(&self) -> f64 {
+        let r = self.radius;
+        let rx = self.vortex_finder_radius;
+        let v_wall = self.inlet_velocity * self.inlet_radius / (self.constriction() * r);
+        v_wall * (r / rx)
+            / (1.0
+                + self.friction * self.friction_area() * v_wall * (r / rx).sqrt()
+                    / (2.0 * self.flow_rate()))
+    }
+
+    /// Barth–Muschelknautz's radial (inward) velocity through the control surface, v_rCS =
+    /// Q / (2π R_x (H − S)), m/s.
+    pub fn bm_radial_velocity(&self) -> f64 {
+        self.flow_rate()
+            / (2.0
+                * PI
+                * self.vortex_finder_radius
+                * (self.total_height - self.vortex_finder_length))
+    }
+
+    /// Barth–Muschelknautz's cut size: the particle whose centrifugal force at the control
+    /// surface balances the Stokes drag of the inward flow,
+    /// x50 = √(18 μ v_rCS R_x / ((ρ_p − ρ) v_θCS²)), m.
+    pub fn barth_muschelknautz_d50(&self, particle_density: f64) -> f64 {
+        (18.0 * self.gas_viscosity * self.bm_radial_velocity() * self.vortex_finder_radius
+            / ((particle_density - self.gas_density) * self.bm_tangential_velocity().powi(2)))
+        .sqrt()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cut_sizes_of_the_readme() {
+        // cases/cyclone/README.md, "Cut size": N_e = 3.75, Lapple 8.3 µm (9.6 / 7.4 at
+        // 1500 / 2500 kg/m³); α = 0.62, A_R = 6.47 m², v_θCS = 26.5 m/s, v_rCS = 0.53 m/s,
+        // Barth–Muschelknautz 4.3 µm (4.9 / 3.8). Tolerance: the README's last digit.
+        let c = Cyclone::OPENFOAM_TUTORIAL;
+        assert!((c.lapple_turns() - 3.75).abs() < 1e-12);
+        assert!((c.flow_rate() - 0.8).abs() < 1e-12);
+        let um = |x: f64| x * 1e6;
+        for (rho, lapple, bm) in [(2000.0, 8.3, 4.3), (1500.0, 9.6, 4.9), (2500.0, 7.4, 3.8)] {
+            assert!((um(c.lapple_d50(rho)) - lapple).abs() < 0.05, "{rho}");
+            assert!(
+                (um(c.barth_muschelknautz_d50(rho)) - bm).abs() < 0.05,
+                "{rho}: {}",
+                um(c.barth_muschelknautz_d50(rho))
+            );
+        }
+        assert!((c.constriction() - 0.62).abs() < 0.005);
+        assert!((c.friction_area() - 6.47).abs() < 0.005);
+        assert!((c.bm_tangential_velocity() - 26.5).abs() < 0.05);
+        assert!((c.bm_radial_velocity() - 0.53).abs() < 0.005);
+        // Lapple: d50 ∝ √(1/(ρ_p − ρ)) exactly.
+        let r = c.lapple_d50(1000.0) / c.lapple_d50(4000.0);
+        assert!((r - ((4000.0 - 1.2) / (1000.0 - 1.2f64)).sqrt()).abs() < 1e-12);
+    }
+}
