@@ -42,7 +42,10 @@ fn run(ranks: usize, axis: &str, case: &str, set: &[&str], out: &Path) -> String
     let o = cmd
         .args(&args)
         .env("SCG_MPI_AXIS", axis)
-        .env("SCG_MPI_DECOMP", if axis == "ids" { "ids" } else { "slabs" })
+        .env(
+            "SCG_MPI_DECOMP",
+            if axis == "ids" { "ids" } else { "slabs" },
+        )
         .env("SCG_THREADS", "1")
         // mpirun refuses root without these (CI runs as root).
         .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
