@@ -108,10 +108,37 @@ const PIECE_ROWS: usize = 4096;
 /// are at least [`parallel_min`] rows, else on the whole at once. The pieces depend on
 /// the row count only, and `body` must treat rows independently.
 pub fn for_each_piece<P: Split>(columns: P, body: impl Fn(P) + Sync) {
-    let rows = columns.rows();
     // Small pieces when the threshold is set low (tests), so that small scenes are cut too.
     let piece = PIECE_ROWS.min(parallel_min().div_ceil(2).max(64));
-    if rows == usize::MAX || rows < parallel_min() || rows < 2 * piece {
+    run_pieces(columns, parallel_min(), piece, body);
+}
+
+/// How many times a plain per-particle update (a few ns) a row of
+/// [`for_each_piece_heavy`] costs, roughly.
+const HEAVY: usize = 64;
+
+/// [`for_each_piece`] for passes whose rows cost about [`HEAVY`] times a plain update: a
+/// particle tracked through a CFD mesh (locate, interpolate, drag: 0.2–1 µs). Those pay
+/// for the team from [`parallel_min`]` / HEAVY` rows (64 by default), in pieces of
+/// `rows / 8` (at least 32 rows, at most `PIECE_ROWS`): the cyclone's coarse-grained
+/// runs, a few thousand particles, ran on one core under the plain threshold. The pieces
+/// depend on the row count only, and `body` must treat rows independently.
+pub fn for_each_piece_heavy<P: Split>(columns: P, body: impl Fn(P) + Sync) {
+    let rows = columns.rows();
+    let min = (parallel_min() / HEAVY).max(2);
+    let piece = if rows == usize::MAX {
+        PIECE_ROWS
+    } else {
+        (rows / 8).clamp(32.min(min.div_ceil(2)), PIECE_ROWS)
+    };
+    run_pieces(columns, min, piece, body);
+}
+
+/// `body` on `columns` in pieces of `piece` rows on the team when there are at least
+/// `min` rows (and two pieces), else on the whole.
+fn run_pieces<P: Split>(columns: P, min: usize, piece: usize, body: impl Fn(P) + Sync) {
+    let rows = columns.rows();
+    if rows == usize::MAX || rows < min || rows < 2 * piece {
         body(columns);
         return;
     }

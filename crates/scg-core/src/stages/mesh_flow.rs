@@ -23,7 +23,7 @@ use glam::DVec3;
 use super::outlet::{OutletLog, remove_departed};
 use super::table::{bypass, columns_mut};
 use crate::components::*;
-use crate::exec::par::for_each_piece;
+use crate::exec::par::for_each_piece_heavy;
 use crate::physics::drag::DragLaw;
 use crate::physics::flow::Fluid;
 use crate::physics::integrate::{
@@ -143,7 +143,7 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
         return;
     };
     let columns = (bypass(xs), bypass(vs), drag, ms, fs, gs, bypass(hs));
-    for_each_piece(columns, |(xs, vs, (sfs, fcs), ms, fs, gs, hs)| {
+    for_each_piece_heavy(columns, |(xs, vs, (sfs, fcs), ms, fs, gs, hs)| {
         let mut d2max = 0.0_f64;
         let mut gone = 0u64;
         for i in 0..xs.len() {
