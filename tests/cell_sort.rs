@@ -109,7 +109,7 @@ struct Stranger;
 fn an_unknown_particle_component_stops_the_sort() {
     let scene = cyclone(&["flow.sort_every=1".into()]);
     let mut sim = scene.build(false);
-    sim.run(30, |_| true).unwrap();
+    sim.run(300, |_| true).unwrap(); // 60 ms: about 60 particles fed
     let es: Vec<Entity> = sim
         .world
         .query_filtered::<Entity, With<ParticleId>>()

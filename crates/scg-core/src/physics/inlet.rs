@@ -346,6 +346,12 @@ mod tests {
             .perturbed(0.2, 4)
             .build()
             .unwrap();
+        // The walls carry the affine field too (they move), so they are type `patch`: at a
+        // no-slip `wall` meeting the inlet cell-point bounds the point values (interp.rs).
+        let mut m = m;
+        for p in &mut m.patches {
+            p.kind = "patch".into();
+        }
         let g = MeshGeometry::new(&m).unwrap();
         let u = |x: DVec3| DVec3::new(2.0 + x.y, 0.5 * x.z, -0.25);
         // patch values at the face centres: linear-exact point values on the boundary too
