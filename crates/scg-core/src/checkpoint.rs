@@ -232,27 +232,11 @@ impl Simulation {
 
     /// The particles as a frame records them, in table order.
     pub fn frame_rows(&mut self) -> Vec<crate::stages::recording::FrameRow> {
-        let mut q = self.world.query::<(
-            &ParticleId,
-            &GroupId,
-            &Position,
-            &Velocity,
-            &Diameter,
-            &Density,
-            &Mass,
-        )>();
+        let mut q = self
+            .world
+            .query::<crate::stages::recording::FrameData>();
         q.iter(&self.world)
-            .map(
-                |(id, g, x, v, d, rho, m)| crate::stages::recording::FrameRow {
-                    id: id.0,
-                    group: g.0,
-                    position: x.0.to_array(),
-                    velocity: v.0.to_array(),
-                    diameter: d.0,
-                    density: rho.0,
-                    mass: m.0,
-                },
-            )
+            .map(crate::stages::recording::frame_row)
             .collect()
     }
 

@@ -28,19 +28,33 @@ pub fn plugin(b: &mut StepBuilder) {
     );
 }
 
-type FrameQuery<'w, 's> = Query<
-    'w,
-    's,
-    (
-        &'static ParticleId,
-        &'static GroupId,
-        &'static Position,
-        &'static Velocity,
-        &'static Diameter,
-        &'static Density,
-        &'static Mass,
-    ),
->;
+/// What a frame reads of a particle.
+pub(crate) type FrameData = (
+    &'static ParticleId,
+    &'static GroupId,
+    &'static Position,
+    &'static Velocity,
+    &'static Diameter,
+    &'static Density,
+    &'static Mass,
+);
+
+type FrameQuery<'w, 's> = Query<'w, 's, FrameData>;
+
+/// The frame row of one particle's [`FrameData`].
+pub(crate) fn frame_row(
+    (id, g, x, v, d, rho, m): bevy_ecs::query::QueryItem<'_, '_, FrameData>,
+) -> FrameRow {
+    FrameRow {
+        id: id.0,
+        group: g.0,
+        position: x.0.to_array(),
+        velocity: v.0.to_array(),
+        diameter: d.0,
+        density: rho.0,
+        mass: m.0,
+    }
+}
 
 /// One particle as a frame records it (with its mass, for the kinetic energy): what a
 /// rank of a decomposed run sends to the rank that writes the recordings.
@@ -69,18 +83,7 @@ pub fn build_frame(
     tally: &Tally,
     q: &FrameQuery,
 ) -> Frame {
-    let rows: Vec<FrameRow> = q
-        .iter()
-        .map(|(id, g, x, v, d, rho, m)| FrameRow {
-            id: id.0,
-            group: g.0,
-            position: x.0.to_array(),
-            velocity: v.0.to_array(),
-            diameter: d.0,
-            density: rho.0,
-            mass: m.0,
-        })
-        .collect();
+    let rows: Vec<FrameRow> = q.iter().map(frame_row).collect();
     frame_from_rows(clock.step, clock.time(), params, tally, rows)
 }
 
