@@ -232,9 +232,7 @@ impl Simulation {
 
     /// The particles as a frame records them, in table order.
     pub fn frame_rows(&mut self) -> Vec<crate::stages::recording::FrameRow> {
-        let mut q = self
-            .world
-            .query::<crate::stages::recording::FrameData>();
+        let mut q = self.world.query::<crate::stages::recording::FrameData>();
         q.iter(&self.world)
             .map(crate::stages::recording::frame_row)
             .collect()
