@@ -19,6 +19,23 @@ fn repo(path: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(path)
 }
 
+/// `scg` on `ranks` ranks through `mpirun --oversubscribe` (or alone when `mpirun` is
+/// false), one thread per rank, allowed to run as root (mpirun refuses root without the
+/// two variables; CI runs as root).
+fn scg_cmd(ranks: usize, mpirun: bool) -> Command {
+    let mut c = if mpirun {
+        let mut c = Command::new("mpirun");
+        c.args(["--oversubscribe", "-np", &ranks.to_string(), scg_bin()]);
+        c
+    } else {
+        Command::new(scg_bin())
+    };
+    c.env("SCG_THREADS", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
+    c
+}
+
 /// Run `scg run` on `ranks` ranks (1: without mpirun) into `out`; returns stderr. `axis`
 /// is `SCG_MPI_AXIS`, or `ids` for `SCG_MPI_DECOMP=ids`.
 fn run(ranks: usize, axis: &str, case: &str, set: &[&str], out: &Path) -> String {
@@ -32,24 +49,13 @@ fn run(ranks: usize, axis: &str, case: &str, set: &[&str], out: &Path) -> String
         args.push("--set".into());
         args.push(s.to_string());
     }
-    let mut cmd = if ranks == 1 {
-        Command::new(scg_bin())
-    } else {
-        let mut c = Command::new("mpirun");
-        c.args(["--oversubscribe", "-np", &ranks.to_string(), scg_bin()]);
-        c
-    };
-    let o = cmd
+    let o = scg_cmd(ranks, ranks > 1)
         .args(&args)
         .env("SCG_MPI_AXIS", axis)
         .env(
             "SCG_MPI_DECOMP",
             if axis == "ids" { "ids" } else { "slabs" },
         )
-        .env("SCG_THREADS", "1")
-        // mpirun refuses root without these (CI runs as root).
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .output()
         .expect("mpirun (OpenMPI) on the PATH");
     let err = String::from_utf8_lossy(&o.stderr).into_owned();
@@ -178,13 +184,11 @@ fn replay_verifies_a_2_rank_recording() {
 #[test]
 fn contacts_are_refused_on_several_ranks() {
     let dir = tempfile::tempdir().unwrap();
-    let o = Command::new("mpirun")
-        .args(["--oversubscribe", "-np", "2", scg_bin(), "run"])
+    let o = scg_cmd(2, true)
+        .arg("run")
         .arg(repo("cases/classifier.toml"))
         .arg("--out")
         .arg(dir.path())
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
@@ -198,25 +202,16 @@ fn contacts_are_refused_on_several_ranks() {
 /// The per-step log of `SCG_MPI_COUNTS` (step, count, id digest) of a run on `ranks`
 /// ranks (through mpirun even for 1), and its report.
 fn counts(ranks: usize, axis: &str, case: &str, set: &[&str], log: &Path) -> (String, String) {
-    let mut cmd = Command::new("mpirun");
-    cmd.args([
-        "--oversubscribe",
-        "-np",
-        &ranks.to_string(),
-        scg_bin(),
-        "run",
-    ])
-    .arg(repo(&format!("cases/{case}.toml")))
-    .arg("--no-record");
+    let mut cmd = scg_cmd(ranks, true);
+    cmd.arg("run")
+        .arg(repo(&format!("cases/{case}.toml")))
+        .arg("--no-record");
     for s in set {
         cmd.args(["--set", s]);
     }
     let o = cmd
         .env("SCG_MPI_AXIS", axis)
         .env("SCG_MPI_COUNTS", log)
-        .env("SCG_THREADS", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .output()
         .expect("mpirun (OpenMPI) on the PATH");
     let err = String::from_utf8_lossy(&o.stderr).into_owned();

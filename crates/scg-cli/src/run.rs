@@ -118,19 +118,29 @@ pub fn ensure_writable(dir: &Path) -> Result<(), String> {
     Ok(())
 }
 
+/// [`load`], then the scene's checks (the report goes into the recordings' metadata):
+/// their messages printed when `print` (one rank of a decomposed run prints them),
+/// `Err(EXIT_BAD_INPUT)` when one is an error.
+pub fn load_checked(args: &RunArgs, print: bool) -> Result<(Scene, scg_scene::check::Report), i32> {
+    let scene = load(args)?;
+    let report = scg_scene::check::check(&scene);
+    if print {
+        for m in report.messages() {
+            eprintln!("{m}");
+        }
+    }
+    if report.has_errors() {
+        return Err(EXIT_BAD_INPUT);
+    }
+    Ok((scene, report))
+}
+
 /// Run `scg run`; returns the exit status.
 pub fn run(args: RunArgs) -> i32 {
-    let scene = match load(&args) {
+    let (scene, report) = match load_checked(&args, true) {
         Ok(s) => s,
         Err(code) => return code,
     };
-    let report = scg_scene::check::check(&scene);
-    for m in report.messages() {
-        eprintln!("{m}");
-    }
-    if report.has_errors() {
-        return EXIT_BAD_INPUT;
-    }
     let record = !args.no_record;
     if args.plan {
         let sim = scene.build(record);

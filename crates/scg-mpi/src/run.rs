@@ -191,19 +191,10 @@ impl Ranked<'_> {
 /// rank).
 pub fn run(comm: &Comm, args: RunArgs) -> i32 {
     let root = comm.rank() == 0;
-    let scene = match scg_cli::run::load(&args) {
+    let (scene, report) = match scg_cli::run::load_checked(&args, root) {
         Ok(s) => s,
         Err(code) => return code,
     };
-    let report = scg_scene::check::check(&scene);
-    if root {
-        for m in report.messages() {
-            eprintln!("{m}");
-        }
-    }
-    if report.has_errors() {
-        return EXIT_BAD_INPUT;
-    }
     let record = !args.no_record;
     if args.plan {
         if root {

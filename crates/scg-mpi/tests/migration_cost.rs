@@ -28,20 +28,25 @@ fn sim() -> Simulation {
     })
 }
 
-#[test]
-fn migrated_particles_keep_their_state() {
-    let mut a = sim();
-    for i in 0..10 {
-        a.spawn(&ParticleSpec {
+/// `n` SCG particles (α = 2) on the x axis at x = 0, 1, …, all with velocity `v`.
+fn spawn_row(s: &mut Simulation, n: usize, v: DVec3) {
+    for i in 0..n {
+        s.spawn(&ParticleSpec {
             group: 0,
             diameter: 1e-4,
             density: 2000.0,
             alpha: 2.0,
             law: CoarseGrainLaw::Scg,
             position: DVec3::new(i as f64, 0.0, 0.0),
-            velocity: DVec3::new(0.0, 1.0, 0.0),
+            velocity: v,
         });
     }
+}
+
+#[test]
+fn migrated_particles_keep_their_state() {
+    let mut a = sim();
+    spawn_row(&mut a, 10, DVec3::new(0.0, 1.0, 0.0));
     a.step().unwrap();
     let before = a.particles();
     let gone: Vec<ParticleRecord> = a.extract_particles(|_, x| x.x >= 5.0);
@@ -62,17 +67,7 @@ fn migrated_particles_keep_their_state() {
 fn migration_cost_per_particle() {
     let n = 100_000;
     let mut a = sim();
-    for i in 0..n {
-        a.spawn(&ParticleSpec {
-            group: 0,
-            diameter: 1e-4,
-            density: 2000.0,
-            alpha: 2.0,
-            law: CoarseGrainLaw::Scg,
-            position: DVec3::new(i as f64, 0.0, 0.0),
-            velocity: DVec3::ZERO,
-        });
-    }
+    spawn_row(&mut a, n, DVec3::ZERO);
     let mut b = sim();
     let t = Instant::now();
     let gone = a.extract_particles(|_, _| true);
