@@ -23,9 +23,14 @@
 //! the ray), [`CellTable::velocity_in`] answers `None` and the caller walks with the
 //! locator. Cells whose tetrahedra are degenerate have no records and always answer `None`.
 //!
-//! Memory: 64 bytes per cell, 32 per cell face, 144 per tetrahedron of the decomposition
-//! (a tetrahedral cell 4 tetrahedra: 0.76 kB; a hexahedron 24: 3.7 kB). [`CellTable::new`]
-//! declines (returns `None`) above [`CellTable::MAX_BYTES`].
+//! A convex cell of triangular faces (every tetrahedral cell) is split into one tetrahedron
+//! per face, and its value is linear in each: such a *simple* cell keeps, per face, `q_f`
+//! and the rows of the value's gradient together (96 bytes), so that a query reads the cell
+//! line and one contiguous run of face records, and nothing else.
+//!
+//! Memory: 64 bytes per cell; a simple cell 96 per face (a tetrahedron: 0.45 kB); any other
+//! 32 per cell face and 144 per tetrahedron of the decomposition (a hexahedron's 24:
+//! 3.7 kB). [`CellTable::new`] declines (returns `None`) above [`CellTable::MAX_BYTES`].
 
 use glam::DVec3;
 
@@ -66,6 +71,17 @@ struct TetRec {
     du: [DVec3; 3],
 }
 
+/// A face of a convex cell of triangular faces (a `simple` cell): the exit ratio's `q` and
+/// the rows of the value's gradient in the face's tetrahedron, together, so that such a
+/// cell is answered from its cell record and one contiguous run of face records.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(32))]
+struct SimpleFace {
+    q: DVec3,
+    /// Rows of G: u = u_c + G·(x − cc) in this face's tetrahedron.
+    g: [DVec3; 3],
+}
+
 /// Per-cell records for locating a point in a known cell and interpolating there (see the
 /// module documentation).
 #[derive(Clone, Debug, Default)]
@@ -73,6 +89,24 @@ pub struct CellTable {
     cells: Vec<CellRec>,
     faces: Vec<FaceRec>,
     tets: Vec<TetRec>,
+    /// Face records of the simple cells (their cell record's `face` indexes here).
+    simple: Vec<SimpleFace>,
+    /// The cell across each of `simple`'s faces ([`NO_CELL`] on the boundary).
+    simple_next: Vec<u32>,
+}
+
+/// No cell (across a boundary face).
+const NO_CELL: u32 = u32::MAX;
+
+/// What [`CellTable::query`] learns of x from cell `c`'s records.
+enum Query {
+    /// x is in the cell; the interpolated value.
+    Inside(DVec3),
+    /// x is beyond this face of a simple cell: the cell across it ([`NO_CELL`] on the
+    /// boundary).
+    Beyond(u32),
+    /// The records cannot tell (not a simple cell, no records, out of range).
+    Unknown,
 }
 
 impl CellTable {
@@ -109,10 +143,21 @@ impl CellTable {
             cells: Vec::with_capacity(nc),
             faces: Vec::with_capacity(n_faces),
             tets: Vec::with_capacity(n_tets),
+            simple: Vec::new(),
+            simple_next: Vec::new(),
         };
+        // room for the cells that may be simple (all faces triangles), each on a line
+        let tri_faced: usize = (0..nc)
+            .map(|c| geom.faces_of(c))
+            .filter(|fs| fs.iter().all(|&f| mesh.face(f as usize).len() == 3))
+            .map(|fs| fs.len() + 1)
+            .sum();
+        t.simple.reserve_exact(tri_faced);
+        t.simple_next.reserve_exact(tri_faced);
         huge_pages(&t.cells);
         huge_pages(&t.faces);
         huge_pages(&t.tets);
+        huge_pages(&t.simple);
         for (c, (&cc, &uc)) in geom.cell_centres.iter().zip(cellv).enumerate() {
             if t.faces.len() % 2 == 1 {
                 // start every cell's face records on a 64-byte line (a tetrahedral cell's
@@ -183,25 +228,49 @@ impl CellTable {
                             })
                         })
                 });
-            if simple {
-                for tr in &mut t.tets[t0..] {
+            let (face, n_faces) = if simple {
+                // the gradient of each face's tetrahedron beside the face's q, and no
+                // general records
+                if t.simple.len() % 2 == 1 {
+                    // start on a 64-byte line (a tetrahedral cell's four: six lines)
+                    t.simple.push(SimpleFace::default());
+                    t.simple_next.push(NO_CELL);
+                }
+                let s0 = t.simple.len();
+                for &f in geom.faces_of(c) {
+                    let fi = f as usize;
+                    let next = if mesh.owner[fi] as usize == c {
+                        mesh.neighbour.get(fi).copied()
+                    } else {
+                        Some(mesh.owner[fi])
+                    };
+                    t.simple_next.push(next.unwrap_or(NO_CELL));
+                }
+                for fr in &t.faces[f0..] {
+                    let tr = &t.tets[fr.tet as usize];
                     let g = [0, 1, 2].map(|j| {
                         tr.m[0] * tr.du[0][j] + tr.m[1] * tr.du[1][j] + tr.m[2] * tr.du[2][j]
                     });
-                    *tr = TetRec {
-                        m: g,
-                        du: [DVec3::ZERO; 3],
-                    };
+                    t.simple.push(SimpleFace { q: fr.q, g });
                 }
-            }
+                t.faces.truncate(f0);
+                t.tets.truncate(t0);
+                (s0, t.simple.len() - s0)
+            } else {
+                (f0, t.faces.len() - f0)
+            };
             t.cells.push(CellRec {
                 cc,
                 uc,
-                face: f0 as u32,
-                n_faces: (t.faces.len() - f0) as u32,
+                face: face as u32,
+                n_faces: n_faces as u32,
                 simple: u32::from(simple),
             });
         }
+        // the general records were sized for every cell: give back what the simple cells
+        // did not use
+        t.faces.shrink_to_fit();
+        t.tets.shrink_to_fit();
         Some(t)
     }
 
@@ -218,6 +287,7 @@ impl CellTable {
         self.cells.len() * size_of::<CellRec>()
             + self.faces.len() * size_of::<FaceRec>()
             + self.tets.len() * size_of::<TetRec>()
+            + self.simple.len() * (size_of::<SimpleFace>() + size_of::<u32>())
     }
 
     /// The interpolated value at x when x is in cell `c` (in one of its tetrahedra, up to
@@ -225,7 +295,73 @@ impl CellTable {
     /// `c` is out of range.
     #[inline]
     pub fn velocity_in(&self, c: u32, x: DVec3) -> Option<DVec3> {
+        match self.query(c, x) {
+            Query::Inside(u) => Some(u),
+            Query::Beyond(_) => None,
+            Query::Unknown => self.general(c, x),
+        }
+    }
+
+    /// The cell holding x and the interpolated value there, found from cell `c` by walking
+    /// across at most `hops` interior faces of simple cells, each the face the ray from
+    /// the cell's centre toward x leaves through (the locator's walk, on the table's
+    /// records). `None` when the table cannot tell within that (x beyond a boundary face,
+    /// a cell that is not simple on the way and does not hold x, too far): ask the locator.
+    #[inline]
+    pub fn walk(&self, mut c: u32, x: DVec3, hops: usize) -> Option<(u32, DVec3)> {
+        for _ in 0..=hops {
+            match self.query(c, x) {
+                Query::Inside(u) => return Some((c, u)),
+                Query::Beyond(NO_CELL) => return None,
+                Query::Beyond(next) => c = next,
+                Query::Unknown => return self.general(c, x).map(|u| (c, u)),
+            }
+        }
+        None
+    }
+
+    /// A simple cell's answer (see [`Query`]).
+    #[inline]
+    fn query(&self, c: u32, x: DVec3) -> Query {
+        let Some(rec) = self.cells.get(c as usize) else {
+            return Query::Unknown;
+        };
+        let d = x - rec.cc;
+        if rec.simple != 0 {
+            // convex, planar faces: inside when the exit ratio is ≤ 1, and then in the
+            // tetrahedron of the exit face
+            let r = rec.face as usize..(rec.face + rec.n_faces) as usize;
+            let (Some(faces), Some(next)) = (self.simple.get(r.clone()), self.simple_next.get(r))
+            else {
+                return Query::Unknown;
+            };
+            let Some(first) = faces.first() else {
+                return Query::Unknown;
+            };
+            let (mut best, mut best_ratio) = (0, first.q.dot(d));
+            for (k, f) in faces.iter().enumerate().skip(1) {
+                let r = f.q.dot(d);
+                if r > best_ratio {
+                    best_ratio = r;
+                    best = k;
+                }
+            }
+            if best_ratio > 1.0 + TOL {
+                return Query::Beyond(next[best]);
+            }
+            let g = &faces[best].g;
+            return Query::Inside(rec.uc + DVec3::new(g[0].dot(d), g[1].dot(d), g[2].dot(d)));
+        }
+        Query::Unknown
+    }
+
+    /// [`CellTable::velocity_in`] for a cell that is not simple.
+    #[inline]
+    fn general(&self, c: u32, x: DVec3) -> Option<DVec3> {
         let rec = self.cells.get(c as usize)?;
+        if rec.simple != 0 {
+            return None;
+        }
         let d = x - rec.cc;
         let faces = self
             .faces
@@ -238,15 +374,6 @@ impl CellTable {
                 best_ratio = r;
                 best = f;
             }
-        }
-        if rec.simple != 0 {
-            // convex, planar faces: inside when the exit ratio is ≤ 1, and then in the
-            // tetrahedron of the exit face
-            if best_ratio > 1.0 + TOL {
-                return None;
-            }
-            let g = &self.tets.get(best.tet as usize)?.m;
-            return Some(rec.uc + DVec3::new(g[0].dot(d), g[1].dot(d), g[2].dot(d)));
         }
         let tets = self
             .tets
@@ -291,6 +418,15 @@ impl CellTable {
             prefetch_bytes(rec, 1);
             return;
         }
+        if rec.simple != 0 {
+            if let Some(f) = self.simple.get(rec.face as usize) {
+                prefetch_bytes(
+                    f,
+                    (rec.n_faces as usize * size_of::<SimpleFace>()).div_ceil(64),
+                );
+            }
+            return;
+        }
         if let Some(f) = self.faces.get(rec.face as usize) {
             prefetch_bytes(
                 f,
@@ -307,6 +443,10 @@ impl CellTable {
         let Some(rec) = self.cells.get(c as usize) else {
             return;
         };
+        if rec.simple != 0 {
+            // all a simple cell's records are its face records
+            return;
+        }
         let Some(faces) = self
             .faces
             .get(rec.face as usize..(rec.face + rec.n_faces) as usize)
@@ -326,7 +466,7 @@ impl CellTable {
         if let Some(f) = best
             && let Some(t) = self.tets.get(f.tet as usize)
         {
-            prefetch_bytes(t, if rec.simple != 0 { 2 } else { 3 });
+            prefetch_bytes(t, 3);
         }
     }
 }
@@ -449,6 +589,64 @@ mod tests {
                     "{shape:?}: {found} of {n}"
                 );
                 assert!(t.velocity_in(u32::MAX, DVec3::ZERO).is_none());
+            }
+        }
+    }
+
+    /// Walking on the table from a cell near x ends in the locator's cell with the
+    /// interpolator's value, or declines; it declines for points outside the mesh and
+    /// walks only on simple cells.
+    #[test]
+    fn table_walk_ends_where_the_locator_does() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        for shape in [CellShape::Tet, CellShape::Hex] {
+            let m = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [6, 6, 6])
+                .shape(shape)
+                .perturbed(0.2, 4)
+                .build()
+                .unwrap();
+            let g = MeshGeometry::new(&m).unwrap();
+            let loc = Locator::new(&m, &g).unwrap();
+            let field = CellField {
+                cells: g
+                    .cell_centres
+                    .iter()
+                    .map(|c| DVec3::new(c.y * c.z, (3.0 * c.x).sin(), c.x * c.x))
+                    .collect(),
+                patches: vec![None; m.patches.len()],
+            };
+            let it = crate::Interpolator::new(&loc, &field, Interpolation::CellPoint).unwrap();
+            let t = CellTable::new(&it).unwrap();
+            let (mut walked, mut n) = (0, 0);
+            for _ in 0..4000 {
+                let x = DVec3::new(rng.random(), rng.random(), rng.random());
+                // start from the cell of a point up to ~1.5 cells away
+                let off = DVec3::new(rng.random(), rng.random(), rng.random()) - 0.5;
+                let Location::Inside(s) = loc.track(0, x + off * 0.5) else {
+                    continue;
+                };
+                let Location::Inside(h) = loc.track(0, x) else {
+                    continue;
+                };
+                n += 1;
+                if let Some((c, u)) = t.walk(s.cell, x, 4) {
+                    if c != s.cell {
+                        walked += 1;
+                    }
+                    assert_eq!(c, h.cell, "{shape:?}: x {x}");
+                    let want = it.at(&h);
+                    assert!((u - want).length() <= 1e-12 * (1.0 + want.length()));
+                }
+                // outside the box: never an answer
+                let out = x + DVec3::new(1.0 + 0.1 * rng.random::<f64>(), 0.0, 0.0);
+                assert!(t.walk(s.cell, out, 64).is_none());
+            }
+            println!("{shape:?}: walked to another cell for {walked} of {n}");
+            if shape == CellShape::Tet {
+                assert!(walked as f64 > 0.3 * n as f64, "{walked} of {n}");
+            } else {
+                // hexahedra are not simple: the table answers only in the start cell
+                assert_eq!(walked, 0);
             }
         }
     }

@@ -182,6 +182,14 @@ impl MeshFlow {
         self.table.as_ref()?.velocity_in(c, x)
     }
 
+    /// The cell holding x and the interpolated velocity there (m/s), found from cell `c`
+    /// with the [`CellTable`] alone, across at most [`TABLE_HOPS`] faces; `None` when the
+    /// table cannot tell (then walk with [`MeshFlow::track`]).
+    #[inline]
+    pub fn walk_table(&self, c: u32, x: DVec3) -> Option<(u32, DVec3)> {
+        self.table.as_ref()?.walk(c, x, TABLE_HOPS)
+    }
+
     /// Interpolated velocity where a point was found, m/s.
     #[inline]
     pub fn at(&self, hit: &Hit) -> DVec3 {
@@ -193,8 +201,8 @@ impl MeshFlow {
     /// mesh the value is extrapolated from the hint's cell ([`Interpolator::velocity`]).
     #[inline]
     pub fn velocity(&self, hint: u32, x: DVec3) -> (DVec3, u32) {
-        if let Some(u) = self.velocity_in(hint, x) {
-            return (u, hint);
+        if let Some((c, u)) = self.walk_table(hint, x) {
+            return (u, c);
         }
         match self.loc.track(hint, x) {
             Location::Inside(h) | Location::Crossed { hit: h, .. } => {
@@ -297,6 +305,10 @@ pub fn reflect(x: DVec3, v: DVec3, p: DVec3, n: DVec3, e: f64) -> (DVec3, DVec3)
     (x1, v1)
 }
 
+/// Most interior faces [`MeshFlow::walk_table`] crosses before it leaves the search to the
+/// locator (whose walk reads far more memory per cell, and knows the boundary).
+pub const TABLE_HOPS: usize = 4;
+
 /// Where a move from `x0` (in cell `h0`) to `x1` ends on the mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Landing {
@@ -329,12 +341,12 @@ pub fn land(
     mut v1: DVec3,
     e: f64,
 ) -> Landing {
-    if flow.velocity_in(h_from, x1).is_some() {
-        // still in the cell of the mid-step point (most steps)
+    if let Some((c, _)) = flow.walk_table(h_from, x1) {
+        // in the cell of the mid-step point (most steps) or a few cells on
         return Landing {
             x: x1,
             v: v1,
-            hint: h_from,
+            hint: c,
         };
     }
     let mut from = h_from;
