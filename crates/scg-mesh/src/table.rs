@@ -20,8 +20,13 @@
 //! coordinates and the value are computed from precomputed inverses instead of from the
 //! points, so they may differ from [`crate::Interpolator::at`]'s in the last bits. When the
 //! point is not found in the cell (it left it, or the chosen face's triangles do not take
-//! the ray), [`CellTable::velocity_in`] answers `None` and the caller walks with the
-//! locator. Cells whose tetrahedra are degenerate have no records and always answer `None`.
+//! the ray), [`CellTable::velocity_in`] answers `None`. [`CellTable::walk`] then goes on
+//! as the locator's walk does, across the face the ray leaves through into the cell beyond
+//! (each record knows the cell across each face), for a few cells; it gives up, and the
+//! caller walks with the locator, at a boundary face or where the records cannot name the
+//! exit. On a mesh finer than a particle's step this keeps most face crossings on the
+//! table's few lines. Cells whose tetrahedra are degenerate have no records and always
+//! answer `None`.
 //!
 //! A convex cell of triangular faces (every tetrahedral cell) is split into one tetrahedron
 //! per face, and its value is linear in each: such a *simple* cell keeps, per face, `q_f`
