@@ -45,4 +45,4 @@ pub use interp::{Interpolation, Interpolator};
 pub use locate::{Hit, Location, Locator};
 pub use polymesh::{CellField, Patch, PolyMesh};
 pub use shared::Shared;
-pub use table::CellTable;
+pub use table::{CellTable, TableWalk};

@@ -96,21 +96,46 @@ pub struct CellTable {
     tets: Vec<TetRec>,
     /// Face records of the simple cells (their cell record's `face` indexes here).
     simple: Vec<SimpleFace>,
-    /// The cell across each of `simple`'s faces ([`NO_CELL`] on the boundary).
+    /// What is across each of `simple`'s faces (see [`BOUNDARY`]).
     simple_next: Vec<u32>,
-    /// The cell across each of `faces`' faces ([`NO_CELL`] on the boundary or padding).
+    /// What is across each of `faces`' faces (see [`BOUNDARY`]; [`NO_CELL`] for padding).
     faces_next: Vec<u32>,
 }
 
-/// No cell (across a boundary face).
+/// Nothing across (padding records).
 const NO_CELL: u32 = u32::MAX;
+
+/// Across a face: the neighbour cell, or for a boundary face `BOUNDARY | face` (the mesh's
+/// face index; meshes have fewer than 2^31 faces).
+const BOUNDARY: u32 = 1 << 31;
+
+/// Where [`CellTable::walk`] ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TableWalk {
+    /// x is in `cell`; the interpolated value there.
+    Inside {
+        /// The cell holding x.
+        cell: u32,
+        /// The interpolated value at x.
+        value: DVec3,
+    },
+    /// The ray toward x leaves `cell` through boundary face `face` (the mesh's index).
+    Boundary {
+        /// The last cell before the boundary.
+        cell: u32,
+        /// The boundary face.
+        face: u32,
+    },
+    /// The table cannot tell (ask the locator).
+    Unknown,
+}
 
 /// What [`CellTable::query`] learns of x from cell `c`'s records.
 enum Query {
     /// x is in the cell; the interpolated value.
     Inside(DVec3),
-    /// x is beyond the face the ray from the centre leaves through: the cell across it
-    /// ([`NO_CELL`] on the boundary).
+    /// x is beyond the face the ray from the centre leaves through: what is across it
+    /// (see [`BOUNDARY`]).
     Beyond(u32),
     /// The records cannot tell (no records, out of range, a ray the exit face's
     /// tetrahedra do not take).
@@ -223,7 +248,7 @@ impl CellTable {
                 } else {
                     Some(mesh.owner[fi])
                 };
-                t.faces_next.push(across.unwrap_or(NO_CELL));
+                t.faces_next.push(across.unwrap_or(BOUNDARY | f));
             }
             if !ok {
                 t.faces.truncate(f0);
@@ -312,21 +337,28 @@ impl CellTable {
         }
     }
 
-    /// The cell holding x and the interpolated value there, found from cell `c` by walking
-    /// across at most `hops` interior faces, each the face the ray from the cell's centre
-    /// toward x leaves through (the locator's walk, on the table's records). `None` when
-    /// the table cannot tell within that (x beyond a boundary face, a warped or non-convex
-    /// cell whose exit the table cannot name, too far): ask the locator.
+    /// Where x is, found from cell `c` by walking across at most `hops` interior faces,
+    /// each the face the ray from the cell's centre toward x leaves through (the locator's
+    /// walk, on the table's records): the cell holding x and the value there, or the
+    /// boundary face the walk meets; [`TableWalk::Unknown`] when the table cannot tell
+    /// within that (a warped or non-convex cell whose exit the records cannot name, too
+    /// far): ask the locator.
     #[inline]
-    pub fn walk(&self, mut c: u32, x: DVec3, hops: usize) -> Option<(u32, DVec3)> {
+    pub fn walk(&self, mut c: u32, x: DVec3, hops: usize) -> TableWalk {
         for _ in 0..=hops {
             match self.query(c, x) {
-                Query::Inside(u) => return Some((c, u)),
-                Query::Beyond(NO_CELL) | Query::Unknown => return None,
+                Query::Inside(value) => return TableWalk::Inside { cell: c, value },
+                Query::Beyond(NO_CELL) | Query::Unknown => return TableWalk::Unknown,
+                Query::Beyond(next) if next & BOUNDARY != 0 => {
+                    return TableWalk::Boundary {
+                        cell: c,
+                        face: next & !BOUNDARY,
+                    };
+                }
                 Query::Beyond(next) => c = next,
             }
         }
-        None
+        TableWalk::Unknown
     }
 
     /// What cell `c`'s records tell of x (see [`Query`]).
@@ -618,7 +650,8 @@ mod tests {
     }
 
     /// Walking on the table from a cell near x ends in the locator's cell with the
-    /// interpolator's value, or declines; it declines for points outside the mesh.
+    /// interpolator's value, or declines; toward a point outside the mesh it meets the
+    /// boundary face the ray crosses, or declines.
     #[test]
     fn table_walk_ends_where_the_locator_does() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
@@ -644,7 +677,7 @@ mod tests {
             };
             let it = crate::Interpolator::new(&loc, &field, Interpolation::CellPoint).unwrap();
             let t = CellTable::new(&it).unwrap();
-            let (mut walked, mut n) = (0, 0);
+            let (mut walked, mut n, mut boundary) = (0, 0, 0);
             for _ in 0..4000 {
                 let x = DVec3::new(rng.random(), rng.random(), rng.random());
                 // start from the cell of a point up to ~1.5 cells away
@@ -656,20 +689,36 @@ mod tests {
                     continue;
                 };
                 n += 1;
-                if let Some((c, u)) = t.walk(s.cell, x, 4) {
-                    if c != s.cell {
-                        walked += 1;
+                match t.walk(s.cell, x, 4) {
+                    TableWalk::Inside { cell, value } => {
+                        if cell != s.cell {
+                            walked += 1;
+                        }
+                        assert_eq!(cell, h.cell, "{shape:?}: x {x}");
+                        let want = it.at(&h);
+                        assert!((value - want).length() <= 1e-12 * (1.0 + want.length()));
                     }
-                    assert_eq!(c, h.cell, "{shape:?}: x {x}");
-                    let want = it.at(&h);
-                    assert!((u - want).length() <= 1e-12 * (1.0 + want.length()));
+                    TableWalk::Boundary { .. } => panic!("{shape:?}: x {x} is inside"),
+                    TableWalk::Unknown => {}
                 }
-                // outside the box: never an answer
-                let out = x + DVec3::new(1.0 + 0.1 * rng.random::<f64>(), 0.0, 0.0);
-                assert!(t.walk(s.cell, out, 64).is_none());
+                // beyond the box's x = 1 side: never inside, and the boundary face met
+                // is one of that side's (its centre at x = 1)
+                let out = DVec3::new(1.0 + 0.1 * rng.random::<f64>(), x.y, x.z);
+                match t.walk(h.cell, out, 64) {
+                    TableWalk::Inside { .. } => panic!("{shape:?}: {out} is outside"),
+                    TableWalk::Boundary { cell, face } => {
+                        boundary += 1;
+                        assert_eq!(m.owner[face as usize], cell);
+                        assert!((g.face_centres[face as usize].x - 1.0).abs() < 1e-9);
+                        assert_ne!(loc.patch_of(face), u32::MAX);
+                        assert!(face as usize >= m.n_internal_faces());
+                    }
+                    TableWalk::Unknown => {}
+                }
             }
             println!("{shape:?}: walked to another cell for {walked} of {n}");
             assert!(walked as f64 > 0.2 * n as f64, "{walked} of {n}");
+            assert!(boundary as f64 > 0.5 * n as f64, "{boundary} of {n}");
         }
     }
 }

@@ -11,7 +11,7 @@ use std::sync::Arc;
 use glam::DVec3;
 use scg_mesh::{
     CellField, CellTable, Hit, Interpolation, Interpolator, Location, Locator, MeshGeometry,
-    PolyMesh,
+    PolyMesh, TableWalk,
 };
 
 /// What a particle meeting a boundary patch does.
@@ -182,12 +182,22 @@ impl MeshFlow {
         self.table.as_ref()?.velocity_in(c, x)
     }
 
-    /// The cell holding x and the interpolated velocity there (m/s), found from cell `c`
-    /// with the [`CellTable`] alone, across at most [`TABLE_HOPS`] faces; `None` when the
-    /// table cannot tell (then walk with [`MeshFlow::track`]).
+    /// Where x is, found from cell `c` with the [`CellTable`] alone across at most
+    /// [`TABLE_HOPS`] faces: the cell holding x and the interpolated velocity there (m/s),
+    /// or the boundary face the walk meets; [`TableWalk::Unknown`] when the table cannot
+    /// tell (then walk with [`MeshFlow::track`]).
     #[inline]
-    pub fn walk_table(&self, c: u32, x: DVec3) -> Option<(u32, DVec3)> {
-        self.table.as_ref()?.walk(c, x, TABLE_HOPS)
+    pub fn walk_table(&self, c: u32, x: DVec3) -> TableWalk {
+        match &self.table {
+            Some(t) => t.walk(c, x, TABLE_HOPS),
+            None => TableWalk::Unknown,
+        }
+    }
+
+    /// The patch of boundary face `f` (`u32::MAX` for an internal face).
+    #[inline]
+    pub fn patch_of(&self, f: u32) -> u32 {
+        self.loc.patch_of(f)
     }
 
     /// Interpolated velocity where a point was found, m/s.
@@ -201,8 +211,8 @@ impl MeshFlow {
     /// mesh the value is extrapolated from the hint's cell ([`Interpolator::velocity`]).
     #[inline]
     pub fn velocity(&self, hint: u32, x: DVec3) -> (DVec3, u32) {
-        if let Some((c, u)) = self.walk_table(hint, x) {
-            return (u, c);
+        if let TableWalk::Inside { cell, value } = self.walk_table(hint, x) {
+            return (value, cell);
         }
         match self.loc.track(hint, x) {
             Location::Inside(h) | Location::Crossed { hit: h, .. } => {
@@ -341,38 +351,48 @@ pub fn land(
     mut v1: DVec3,
     e: f64,
 ) -> Landing {
-    if let Some((c, _)) = flow.walk_table(h_from, x1) {
-        // in the cell of the mid-step point (most steps) or a few cells on
-        return Landing {
-            x: x1,
-            v: v1,
-            hint: c,
-        };
-    }
     let mut from = h_from;
     for _ in 0..MAX_REFLECTIONS {
-        let (face, patch) = match flow.track(from, x1) {
-            Location::Inside(h) => {
+        // The table first: x1 is in the cell of the mid-step point (most steps) or a few
+        // cells on, or the walk meets a boundary face (a particle at a wall). Whether the
+        // point beyond that face is inside the mesh elsewhere (`Location::Crossed`) or not
+        // (`Left`) changes only the cell the next walk starts from, so it is not asked.
+        let (face, patch) = match flow.walk_table(from, x1) {
+            TableWalk::Inside { cell, .. } => {
                 return Landing {
                     x: x1,
                     v: v1,
-                    hint: h.cell,
+                    hint: cell,
                 };
             }
-            Location::Crossed { face, patch, hit } => {
-                // The walk passed a boundary face (a concave boundary, a thin baffle) on
-                // its way to a point inside: the face's role decides, as when leaving.
-                from = hit.cell;
-                (face, patch)
+            TableWalk::Boundary { cell, face } => {
+                from = cell;
+                (face, flow.patch_of(face))
             }
-            Location::Left { face, patch } => (face, patch),
-            Location::Outside => {
-                return Landing {
-                    x: x1,
-                    v: v1,
-                    hint: hint::LOST,
-                };
-            }
+            TableWalk::Unknown => match flow.track(from, x1) {
+                Location::Inside(h) => {
+                    return Landing {
+                        x: x1,
+                        v: v1,
+                        hint: h.cell,
+                    };
+                }
+                Location::Crossed { face, patch, hit } => {
+                    // The walk passed a boundary face (a concave boundary, a thin baffle)
+                    // on its way to a point inside: the face's role decides, as when
+                    // leaving.
+                    from = hit.cell;
+                    (face, patch)
+                }
+                Location::Left { face, patch } => (face, patch),
+                Location::Outside => {
+                    return Landing {
+                        x: x1,
+                        v: v1,
+                        hint: hint::LOST,
+                    };
+                }
+            },
         };
         match flow.role(patch) {
             PatchRole::Wall => {
