@@ -578,6 +578,25 @@ mod tests {
     use crate::{CellField, MeshGeometry};
     use rand::{Rng, SeedableRng};
 
+    /// A unit box of n³ perturbed cells of `shape`, its geometry and a smooth field.
+    fn perturbed_box(shape: CellShape, n: usize) -> (crate::PolyMesh, MeshGeometry, CellField) {
+        let m = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [n, n, n])
+            .shape(shape)
+            .perturbed(0.2, 4)
+            .build()
+            .unwrap();
+        let g = MeshGeometry::new(&m).unwrap();
+        let field = CellField {
+            cells: g
+                .cell_centres
+                .iter()
+                .map(|c| DVec3::new(c.y * c.z, (3.0 * c.x).sin(), c.x * c.x))
+                .collect(),
+            patches: vec![None; m.patches.len()],
+        };
+        (m, g, field)
+    }
+
     /// At random points of perturbed hex, tet and polyhedral boxes, the table finds the
     /// point in the cell the locator finds (or declines) and interpolates the locator's
     /// value to rounding, for every scheme; it declines for another cell.
@@ -589,21 +608,8 @@ mod tests {
             CellShape::Tet,
             CellShape::Poly { refine: 0.3 },
         ] {
-            let m = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [5, 5, 5])
-                .shape(shape)
-                .perturbed(0.2, 4)
-                .build()
-                .unwrap();
-            let g = MeshGeometry::new(&m).unwrap();
+            let (m, g, field) = perturbed_box(shape, 5);
             let loc = Locator::new(&m, &g).unwrap();
-            let field = CellField {
-                cells: g
-                    .cell_centres
-                    .iter()
-                    .map(|c| DVec3::new(c.y * c.z, (3.0 * c.x).sin(), c.x * c.x))
-                    .collect(),
-                patches: vec![None; m.patches.len()],
-            };
             for scheme in [
                 Interpolation::CellPoint,
                 Interpolation::CellPointIdw,
@@ -660,21 +666,8 @@ mod tests {
             CellShape::Hex,
             CellShape::Poly { refine: 0.3 },
         ] {
-            let m = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [6, 6, 6])
-                .shape(shape)
-                .perturbed(0.2, 4)
-                .build()
-                .unwrap();
-            let g = MeshGeometry::new(&m).unwrap();
+            let (m, g, field) = perturbed_box(shape, 6);
             let loc = Locator::new(&m, &g).unwrap();
-            let field = CellField {
-                cells: g
-                    .cell_centres
-                    .iter()
-                    .map(|c| DVec3::new(c.y * c.z, (3.0 * c.x).sin(), c.x * c.x))
-                    .collect(),
-                patches: vec![None; m.patches.len()],
-            };
             let it = crate::Interpolator::new(&loc, &field, Interpolation::CellPoint).unwrap();
             let t = CellTable::new(&it).unwrap();
             let (mut walked, mut n, mut boundary) = (0, 0, 0);
