@@ -166,7 +166,9 @@ csv=$(ls "$work"/fc/vs-openfoam_*.csv | sort | tail -1)
 "$SCG" run "$chk/scene.toml" --set drag.law=stokes --out "$work/rec" --frames-csv "$work/fs" > "$work/scg-check.log" 2>&1 ||
   { tail "$work/scg-check.log" >&2; fail "scg check run (Stokes) failed"; }
 csv_stokes=$(ls "$work"/fs/vs-openfoam_*.csv | sort | tail -1)
-grep -q "field \`U\` (CellPoint)" <("$SCG" check "$chk/scene.toml" 2>&1) || fail "scg is not on cellPoint"
+want=CellPoint
+[ "$INTERP" = cell_point_idw ] && want=CellPointIdw
+grep -q "field \`U\` ($want)" <("$SCG" check "$chk/scene.toml" 2>&1) || fail "scg is not on $INTERP"
 echo "  scg: $(basename "$csv") ($(( CHECK_STEPS + 1 )) steps: OpenFOAM's first step updates the new parcels' velocity twice)"
 py compare "$chk" "$ftime" "$csv" "$CHECK_N" "$csv_stokes" || fail "physics check: the codes disagree (above)"
 rm -rf "$chk" "$work/fc" "$work/fs" "$work/rec"
