@@ -39,9 +39,14 @@ fn scg_cmd(ranks: usize, mpirun: bool) -> Command {
 /// Run `scg run` on `ranks` ranks (1: without mpirun) into `out`; returns stderr. `axis`
 /// is `SCG_MPI_AXIS`, or `ids` for `SCG_MPI_DECOMP=ids`.
 fn run(ranks: usize, axis: &str, case: &str, set: &[&str], out: &Path) -> String {
+    run_file(ranks, axis, &format!("cases/{case}.toml"), set, out)
+}
+
+/// [`run`] of the scene file `file` (relative to the repository).
+fn run_file(ranks: usize, axis: &str, file: &str, set: &[&str], out: &Path) -> String {
     let mut args: Vec<String> = vec![
         "run".into(),
-        repo(&format!("cases/{case}.toml")).display().to_string(),
+        repo(file).display().to_string(),
         "--out".into(),
         out.display().to_string(),
     ];
@@ -181,20 +186,225 @@ fn replay_verifies_a_2_rank_recording() {
     assert!(out.contains("frames bit-identical"), "{out}");
 }
 
+/// The Wasserstein-1 distance between two samples (any sizes): ∫|F_a − F_b| dx over
+/// their empirical distribution functions.
+fn w1(mut a: Vec<f64>, mut b: Vec<f64>) -> f64 {
+    a.sort_unstable_by(f64::total_cmp);
+    b.sort_unstable_by(f64::total_cmp);
+    let (na, nb) = (a.len() as f64, b.len() as f64);
+    let mut all: Vec<f64> = a.iter().chain(&b).copied().collect();
+    all.sort_unstable_by(f64::total_cmp);
+    let (mut ia, mut ib, mut sum) = (0, 0, 0.0);
+    for w in all.windows(2) {
+        while ia < a.len() && a[ia] <= w[0] {
+            ia += 1;
+        }
+        while ib < b.len() && b[ib] <= w[0] {
+            ib += 1;
+        }
+        sum += (ia as f64 / na - ib as f64 / nb).abs() * (w[1] - w[0]);
+    }
+    sum
+}
+
 #[test]
-fn contacts_are_refused_on_several_ranks() {
+fn w1_of_shifted_and_resized_samples() {
+    let a: Vec<f64> = (0..100).map(f64::from).collect();
+    let b: Vec<f64> = a.iter().map(|x| x + 0.5).collect();
+    assert!((w1(a.clone(), b) - 0.5).abs() < 1e-12);
+    assert_eq!(w1(a.clone(), a.clone()), 0.0);
+    // {0, 1} against {0, 0, 1, 1}: the same distribution.
+    assert!(w1(vec![0.0, 1.0], vec![1.0, 0.0, 0.0, 1.0]).abs() < 1e-15);
+    assert!((w1(vec![0.0], vec![0.0, 2.0]) - 1.0).abs() < 1e-15);
+}
+
+/// W1 of the heights (z) and of the distances from the z axis between two frames, and
+/// the largest distance between the two positions of a particle present in both, m.
+fn frame_stats(a: &Frame, b: &Frame) -> (f64, f64, f64) {
+    let z = |f: &Frame| f.position.iter().map(|p| p[2]).collect::<Vec<_>>();
+    let r = |f: &Frame| {
+        f.position
+            .iter()
+            .map(|p| p[0].hypot(p[1]))
+            .collect::<Vec<_>>()
+    };
+    let at: std::collections::HashMap<u32, [f64; 3]> =
+        b.id.iter()
+            .copied()
+            .zip(b.position.iter().copied())
+            .collect();
+    let apart =
+        a.id.iter()
+            .zip(&a.position)
+            .filter_map(|(id, p)| {
+                let q = at.get(id)?;
+                Some((0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt())
+            })
+            .fold(0.0, f64::max);
+    (w1(z(a), z(b)), w1(r(a), r(b)), apart)
+}
+
+/// A scene with particle contacts on 1 rank and on each of `ranks` (slabs along `axis`),
+/// frame by frame against 1 rank: W1 of the heights and radial distances, the largest
+/// per-particle distance and the count. Also 1 rank with `control` (a change that only
+/// reorders the force sums, e.g. another Verlet skin) against 1 rank: the spread that
+/// the chaos of the contacts alone gives. Returns, per frame, (step, count on 1 rank,
+/// collisions on 1 rank) and, per run (control first, then the ranks), per frame
+/// (count, W1 z, W1 r, largest distance).
+#[allow(clippy::type_complexity)]
+fn contact_runs(
+    file: &str,
+    stem: &str,
+    axis: &str,
+    set: &[&str],
+    control: &[&str],
+    ranks: &[usize],
+) -> (Vec<(u64, usize, f64)>, Vec<Vec<(usize, f64, f64, f64)>>) {
+    let dir = tempfile::tempdir().unwrap();
+    let read = |d: &Path| {
+        let rec = scg::record::read_mcap(&d.join(format!("{stem}.mcap"))).unwrap();
+        assert!(rec.complete);
+        rec.frames
+    };
+    let one = dir.path().join("1");
+    run_file(1, axis, file, set, &one);
+    let reference = read(&one);
+    assert!(reference.len() > 2, "{stem}: {} frames", reference.len());
+    let collisions = |f: &Frame| -> f64 {
+        f.stats
+            .iter()
+            .filter(|(k, _)| k.starts_with("collisions/"))
+            .map(|(_, v)| v)
+            .sum()
+    };
+    let frames_1 = reference
+        .iter()
+        .map(|f| (f.step, f.len(), collisions(f)))
+        .collect();
+    let mut runs = Vec::new();
+    let ctl = dir.path().join("control");
+    let with_control: Vec<&str> = set.iter().chain(control).copied().collect();
+    run_file(1, axis, file, &with_control, &ctl);
+    let mut all = vec![(String::from("1 rank with control"), read(&ctl))];
+    for &n in ranks {
+        let out = dir.path().join(n.to_string());
+        let report = run_file(n, axis, file, set, &out);
+        assert!(
+            migrated(&report) > 0,
+            "{stem} on {n} ranks: no particle migrated: {report}"
+        );
+        let ghosts: f64 = report
+            .lines()
+            .skip_while(|l| !l.starts_with("ghost exchange"))
+            .filter(|l| l.trim_start().starts_with("rank "))
+            .filter_map(|l| l.split_whitespace().nth(3)?.parse::<f64>().ok())
+            .sum();
+        assert!(ghosts > 1.0, "{stem} on {n} ranks: no ghosts: {report}");
+        all.push((format!("{n} ranks"), read(&out)));
+    }
+    for (name, frames) in all {
+        assert_eq!(frames.len(), reference.len(), "{stem} on {name}: frames");
+        let mut per = Vec::new();
+        for (a, b) in frames.iter().zip(&reference) {
+            assert_eq!(a.step, b.step);
+            assert!(
+                a.id.windows(2).all(|w| w[0] < w[1]),
+                "{stem} on {name}, step {}: a particle twice",
+                a.step
+            );
+            let (wz, wr, apart) = frame_stats(a, b);
+            eprintln!(
+                "{stem}, {name}, step {}: {} particles ({} on 1 rank), {} collisions, W1 z {wz:.2e} m, W1 r {wr:.2e} m, largest distance from 1 rank {apart:.2e} m",
+                b.step,
+                a.len(),
+                b.len(),
+                collisions(b)
+            );
+            per.push((a.len(), wz, wr, apart));
+        }
+        runs.push(per);
+    }
+    (frames_1, runs)
+}
+
+#[test]
+fn settling_bed_with_contacts_agrees_with_one_rank_on_2_and_4_ranks() {
+    // The golden scene: 150 particles settle into a cup and 200 more are fed on top, a
+    // dense bed of Hertz–Mindlin contacts with friction and rolling friction, cut into
+    // slabs across the bed (x), 15 413 steps. The force sums run in another order than
+    // on one rank (scg-mpi's ghosts module), so the last bits differ and the contacts'
+    // chaos amplifies them (about ×100 per 1000 steps here).
+    let (frames, runs) = contact_runs(
+        "tests/fixtures/golden.toml",
+        "golden",
+        "x",
+        &["record_every=1000"],
+        &["seed=12"],
+        &[2, 4],
+    );
+    let cup = 4.0e-3;
+    let (control, ranks) = runs.split_first().unwrap();
+    let max_of = |r: &[(usize, f64, f64, f64)], f: fn(&(usize, f64, f64, f64)) -> f64| {
+        r.iter().map(f).fold(0.0, f64::max)
+    };
+    let count_gap = |r: &[(usize, f64, f64, f64)]| {
+        r.iter()
+            .zip(&frames)
+            .map(|(a, b)| a.0.abs_diff(b.1))
+            .max()
+            .unwrap()
+    };
+    for (n, r) in [2, 4].iter().zip(ranks) {
+        // Before the chaos has grown (step 2000, over 1000 contacts started, among them
+        // contacts across the slabs): every particle where one rank has it, to 1 nm. A
+        // missing or wrong ghost moves its partner by the overlap (µm) at once.
+        for (f, a) in frames.iter().zip(r).take_while(|(f, _)| f.0 <= 2000) {
+            assert_eq!(a.0, f.1, "{n} ranks, step {}: count", f.0);
+            assert!(
+                a.3 < 1e-9,
+                "{n} ranks, step {}: a particle {:.3e} m from where 1 rank has it",
+                f.0,
+                a.3
+            );
+        }
+        assert!(frames.iter().any(|f| f.0 <= 2000 && f.2 > 1000.0));
+        // After it: the bed is another realisation, as far from 1 rank's as a bed from
+        // another seed is (W1 of heights and radial distances, counts: particles thrown
+        // out of the domain by overlapping feeds).
+        let (wz, wr) = (max_of(r, |x| x.1), max_of(r, |x| x.2));
+        let (cz, cr) = (max_of(control, |x| x.1), max_of(control, |x| x.2));
+        eprintln!(
+            "{n} ranks: largest W1 z {:.2e}, r {:.2e} of the cup radius; another seed: {:.2e}, {:.2e}; count gaps {} and {}",
+            wz / cup,
+            wr / cup,
+            cz / cup,
+            cr / cup,
+            count_gap(r),
+            count_gap(control)
+        );
+        assert!(
+            wz <= cz && wr <= cr,
+            "{n} ranks: W1 z {wz:.3e}, r {wr:.3e} m"
+        );
+        assert!(count_gap(r) <= count_gap(control));
+    }
+}
+
+#[test]
+fn contacts_are_refused_when_shared_by_id() {
     let dir = tempfile::tempdir().unwrap();
     let o = scg_cmd(2, true)
         .arg("run")
         .arg(repo("cases/classifier.toml"))
         .arg("--out")
         .arg(dir.path())
+        .env("SCG_MPI_DECOMP", "ids")
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(
-        err.contains("particle contacts are not yet decomposed"),
+        err.contains("particle contacts over MPI ranks need slabs"),
         "{err}"
     );
 }
