@@ -5,9 +5,9 @@
 //! Before each step (so before the neighbour and force stages, which come first in a
 //! step: nothing moves a particle between the end of one step, the migration, and the
 //! force stage of the next), every rank sends each other rank a copy of its particles
-//! whose coordinate along the slab axis lies within the *halo* h = 2·r_max + skin of
-//! that rank's slab (r_max the largest radius of any particle on any rank, the skin the
-//! scene's Verlet skin). A pair closer than r_i + r_j + skin has its two coordinates
+//! whose coordinate along the slab axis lies within the *halo* h = r + r_max + skin of
+//! that rank's slab (r its radius, r_max the largest radius of the scene's groups after
+//! coarse graining, [`largest_radius`], the skin the scene's Verlet skin). A pair closer than r_i + r_j + skin has its two coordinates
 //! closer than h, so every pair the one-rank list would hold between a particle of this
 //! slab and one of another is listed here, local–ghost. The copies ("ghosts": id, group,
 //! radius, mass, position, velocity, ω — what the pair kernel reads) are sorted by id
@@ -60,10 +60,25 @@ pub struct Migrants {
     pub pairs: Vec<PairHistory>,
 }
 
-/// Halo width, m: a particle within this distance (along the slab axis) of another
-/// rank's slab may touch one of its particles before the next neighbour-list rebuild.
-pub fn halo_width(r_max: f64, skin: f64) -> f64 {
-    2.0 * r_max + skin
+/// Halo width of a particle of radius `r`, m: within this distance (along the slab axis)
+/// of another rank's slab it may come within the skin of one of that rank's particles
+/// (radius ≤ `r_max`), so the neighbour list there must hold it.
+pub fn reach(r: f64, r_max: f64, skin: f64) -> f64 {
+    r + r_max + skin
+}
+
+/// The largest radius a particle of `scene` has, m: every particle, initial or fed, has
+/// its group's coarse-grained diameter (the bound the scene's default skin uses too), so
+/// every rank knows it without asking the others.
+pub fn largest_radius(scene: &scg_scene::Scene) -> f64 {
+    scene
+        .groups
+        .iter()
+        .map(|g| {
+            0.5 * scg_core::physics::scaling::coarse_grain(g.law, g.alpha, g.diameter, g.density)
+                .diameter
+        })
+        .fold(0.0, f64::max)
 }
 
 /// The ranks other than `me` whose slab lies within `halo` of coordinate `c` (along the
@@ -109,7 +124,7 @@ mod exchange {
     use scg_core::stages::contacts::ContactState;
     use scg_core::stages::contacts::ghosts::{Ghosts, table_rows};
 
-    use super::{Migrants, ghost_targets, halo_width};
+    use super::{Migrants, ghost_targets, reach};
     use crate::comm::Comm;
     use crate::decomp::Owners;
     use crate::run::{decode, encode};
@@ -117,6 +132,8 @@ mod exchange {
     /// The ghost exchange of a run with contacts, and what it did.
     #[derive(Debug, Default)]
     pub struct Halo {
+        /// The largest particle radius of the scene, m ([`super::largest_radius`]).
+        pub r_max: f64,
         /// Exchanges so far.
         pub exchanges: u64,
         /// Ghost rows received, summed over the exchanges.
@@ -124,6 +141,14 @@ mod exchange {
     }
 
     impl Halo {
+        /// The exchange of a run of `scene`.
+        pub fn new(scene: &scg_scene::Scene) -> Self {
+            Halo {
+                r_max: super::largest_radius(scene),
+                ..Default::default()
+            }
+        }
+
         /// Give every rank its ghosts for the coming step (a collective; nothing when
         /// the scene has no contacts or the owners are not slabs).
         pub fn exchange(&mut self, comm: &Comm, sim: &mut Simulation, owners: &Owners) {
@@ -138,18 +163,12 @@ mod exchange {
                 return;
             };
             let rows = table_rows(&mut sim.world);
-            let r_local = rows.radius.iter().copied().fold(0.0_f64, f64::max);
-            // Radii are positive: their bits order like the values.
-            let r_max = comm
-                .all_gather_u64(&[r_local.to_bits()])
-                .into_iter()
-                .map(f64::from_bits)
-                .fold(0.0_f64, f64::max);
-            let halo = halo_width(r_max, skin);
             let me = comm.rank();
             let mut out = vec![Ghosts::default(); comm.size()];
             let mut to = Vec::new();
             for k in 0..rows.len() {
+                // Reach of this particle: its radius, the largest of any other, the skin.
+                let halo = reach(rows.radius[k], self.r_max, skin);
                 ghost_targets(slabs, me, rows.pos[k][slabs.axis], halo, &mut to);
                 for &q in &to {
                     out[q].push_row(&rows, k);
@@ -239,7 +258,7 @@ mod tests {
         // A halo wider than a slab reaches past it.
         ghost_targets(&s, 1, 0.6, 1.0, &mut to);
         assert_eq!(to, vec![0, 2, 3]);
-        assert_eq!(halo_width(1e-3, 5e-4), 2.5e-3);
+        assert_eq!(reach(1e-3, 2e-3, 5e-4), 3.5e-3);
     }
 
     /// Every pair closer than r_i + r_j + skin across two slabs has each particle within
@@ -264,7 +283,6 @@ mod tests {
                 )
             })
             .collect();
-        let halo = halo_width(r_max, skin);
         let mut to = Vec::new();
         let mut crossing = 0;
         for (a, &(xa, ra)) in ps.iter().enumerate() {
@@ -274,9 +292,9 @@ mod tests {
                     continue;
                 }
                 crossing += 1;
-                ghost_targets(&s, oa, xa.y, halo, &mut to);
+                ghost_targets(&s, oa, xa.y, reach(ra, r_max, skin), &mut to);
                 assert!(to.contains(&ob), "{xa} of {oa} is not a ghost on {ob}");
-                ghost_targets(&s, ob, xb.y, halo, &mut to);
+                ghost_targets(&s, ob, xb.y, reach(rb, r_max, skin), &mut to);
                 assert!(to.contains(&oa), "{xb} of {ob} is not a ghost on {oa}");
             }
         }

@@ -343,7 +343,7 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         _ => None,
     };
     // Ghost particles (contacts): exchanged before every step.
-    let mut halo = crate::ghosts::Halo::default();
+    let mut halo = crate::ghosts::Halo::new(&scene);
     let mut ghost_time = Duration::ZERO;
     let mut interrupted = false;
     let mut last_rebalance = 0;
