@@ -7,9 +7,12 @@
 //! force stage of the next), every rank sends each other rank a copy of its particles
 //! whose coordinate along the slab axis lies within the *halo* h = r + r_max + skin of
 //! that rank's slab (r its radius, r_max the largest radius of the scene's groups after
-//! coarse graining, [`largest_radius`], the skin the scene's Verlet skin). A pair closer than r_i + r_j + skin has its two coordinates
-//! closer than h, so every pair the one-rank list would hold between a particle of this
-//! slab and one of another is listed here, local–ghost. The copies ("ghosts": id, group,
+//! coarse graining, [`largest_radius`], the skin the scene's Verlet skin): one
+//! point-to-point message to each rank whose slab lies within 2·r_max + skin of its own
+//! ([`peers`]; empty ones too, so that each rank knows what to wait for). A pair closer
+//! than r_i + r_j + skin has its two coordinates closer than either particle's h, so
+//! every pair the one-rank list would hold between a particle of this slab and one of
+//! another is listed here, local–ghost. The copies ("ghosts": id, group,
 //! radius, mass, position, velocity, ω — what the pair kernel reads) are sorted by id
 //! and handed to [`ContactState::set_ghosts`]; the contact stage appends them after the
 //! table's rows, lists the local–local and local–ghost pairs (never ghost–ghost),
@@ -112,6 +115,24 @@ pub fn ghost_targets(slabs: &Slabs, me: usize, c: f64, halo: f64, out: &mut Vec<
     }
 }
 
+/// The ranks whose slab lies within `reach` of slab `me` (other than `me`), ascending:
+/// those that may send this rank ghosts, and receive its own, when no particle reaches
+/// farther than `reach` (2·r_max + skin). Symmetric: q is among r's exactly when r is
+/// among q's.
+pub fn peers(slabs: &Slabs, me: usize, reach: f64) -> Vec<usize> {
+    let n = slabs.ranks();
+    // Slab q spans [cuts[q-1], cuts[q]); the gap between q < r is cuts[r-1] - cuts[q].
+    let gap = |a: usize, b: usize| {
+        let (lo, hi) = (a.min(b), a.max(b));
+        if hi == lo + 1 {
+            0.0
+        } else {
+            slabs.cuts[hi - 1] - slabs.cuts[lo]
+        }
+    };
+    (0..n).filter(|&q| q != me && gap(q, me) <= reach).collect()
+}
+
 #[cfg(feature = "mpi")]
 pub use exchange::Halo;
 
@@ -124,7 +145,7 @@ mod exchange {
     use scg_core::stages::contacts::ContactState;
     use scg_core::stages::contacts::ghosts::{Ghosts, table_rows};
 
-    use super::{Migrants, ghost_targets, reach};
+    use super::{Migrants, ghost_targets, peers, reach};
     use crate::comm::Comm;
     use crate::decomp::Owners;
     use crate::run::{decode, encode};
@@ -174,9 +195,11 @@ mod exchange {
                     out[q].push_row(&rows, k);
                 }
             }
-            let send: Vec<Vec<u8>> = out.iter().map(encode).collect();
+            // Only with the slabs a particle can reach: point to point.
+            let with = peers(slabs, me, reach(self.r_max, self.r_max, skin));
+            let send: Vec<Vec<u8>> = with.iter().map(|&q| encode(&out[q])).collect();
             let mut ghosts = Ghosts::default();
-            for part in comm.all_to_all_bytes(&send) {
+            for part in comm.exchange_with(&with, &send) {
                 ghosts.extend(&decode::<Ghosts>(&part));
             }
             let ghosts = ghosts.sorted_by_id();
@@ -259,6 +282,36 @@ mod tests {
         ghost_targets(&s, 1, 0.6, 1.0, &mut to);
         assert_eq!(to, vec![0, 2, 3]);
         assert_eq!(reach(1e-3, 2e-3, 5e-4), 3.5e-3);
+    }
+
+    #[test]
+    fn peers_are_the_slabs_within_reach_and_symmetric() {
+        let s = Slabs {
+            axis: 2,
+            cuts: vec![0.0, 1.0, 1.2, 3.0],
+        };
+        assert_eq!(peers(&s, 0, 0.1), vec![1]);
+        assert_eq!(peers(&s, 1, 0.1), vec![0, 2]);
+        // Slab 2 is 0.2 thick: from slab 1, slab 3 is 0.2 away.
+        assert_eq!(peers(&s, 1, 0.2), vec![0, 2, 3]);
+        assert_eq!(peers(&s, 4, 0.2), vec![3]);
+        assert_eq!(peers(&s, 4, 10.0), vec![0, 1, 2, 3]);
+        for reach in [0.0, 0.1, 0.2, 1.1, 5.0] {
+            for a in 0..5 {
+                for b in peers(&s, a, reach) {
+                    assert!(peers(&s, b, reach).contains(&a), "{a} {b} {reach}");
+                }
+                // Every rank a particle of slab a is sent to is a peer.
+                let mut to = Vec::new();
+                for c in [-9.0, -0.05, 0.0, 0.5, 0.99, 1.1, 1.25, 2.0, 2.95, 3.5] {
+                    if s.owner(glam::DVec3::new(0.0, 0.0, c)) == a {
+                        ghost_targets(&s, a, c, reach, &mut to);
+                        assert!(to.iter().all(|q| peers(&s, a, reach).contains(q)));
+                    }
+                }
+            }
+        }
+        assert!(peers(&Slabs::new(0, 1), 0, 1.0).is_empty());
     }
 
     /// Every pair closer than r_i + r_j + skin across two slabs has each particle within
