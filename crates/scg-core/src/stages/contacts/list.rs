@@ -27,6 +27,10 @@ use crate::state::{SimClock, StepDisplacement};
 /// set changes (a particle fed or drained), ids, groups, radii, masses and kick factors
 /// are gathered again, the list is rebuilt and each touching pair's history is carried
 /// over by (id_i, id_j).
+///
+/// Ghost rows ([`super::ghosts`]) follow the table's rows: the set changes when their ids
+/// do, their positions are those set for this step, and the list holds no ghost–ghost
+/// pair.
 pub fn maintain_neighbour_list(
     mut state: ResMut<ContactState>,
     clock: Res<SimClock>,

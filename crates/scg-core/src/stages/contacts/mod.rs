@@ -11,6 +11,10 @@
 //!   per particle in slot order and kicks v and ω.
 //!
 //! The result is bit-identical whatever the thread count.
+//!
+//! In a run decomposed over processes (`scg-mpi`), [`ghosts`] adds read-only rows for
+//! the particles other processes own near this one's: they take part in the list and
+//! the pair forces, never in the kicks.
 
 pub mod ghosts;
 pub mod kicks;
