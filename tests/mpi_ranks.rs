@@ -397,7 +397,7 @@ fn settling_bed_with_contacts_agrees_with_one_rank_on_2_and_4_ranks() {
 /// within the 4 ms it runs: about 40 contacts between particles and 2600 particles) on
 /// 4 ranks, slabs along the axis cut again as the particles descend: the same counts
 /// at every frame (nothing drains yet) and W1 of heights and radial positions within
-/// 0.005 of the vessel radius. About 40 s on 2 shared cores (each step exchanges
+/// 0.005 of the vessel radius. About 35 s on 2 shared cores (each step exchanges
 /// ghosts, migrates and rebuilds the list near the cuts, all latency-bound):
 /// `cargo test --release --features mpi --test mpi_ranks classifier_with_contacts -- --ignored`.
 #[test]
