@@ -452,6 +452,52 @@ fn contacts_are_refused_when_shared_by_id() {
     );
 }
 
+#[test]
+fn periodic_contacts_are_refused_on_several_ranks() {
+    // Slabs have no periodic images: a ghost across the box would be missed.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("box.toml");
+    std::fs::write(
+        &scene,
+        r#"
+name = "box"
+duration = 1e-5
+dt = 1e-7
+[material]
+youngs_modulus = 1e8
+poisson_ratio = 0.3
+restitution = 0.7
+friction = 0.3
+[contacts]
+periodic = [0.012, 0.012, 0.012]
+[[groups]]
+name = "p"
+diameter = 1e-3
+density = 2500.0
+count = 20
+region = { kind = "box", min = [0.0, 0.0, 0.0], max = [0.012, 0.012, 0.012] }
+"#,
+    )
+    .unwrap();
+    let o = scg_cmd(2, true)
+        .arg("run")
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("the contacts are periodic"), "{err}");
+    // One rank runs it.
+    let o = scg_cmd(1, false)
+        .args(["run", "--no-record"])
+        .arg(&scene)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
 /// The per-step log of `SCG_MPI_COUNTS` (step, count, id digest) of a run on `ranks`
 /// ranks (through mpirun even for 1), and its report.
 fn counts(ranks: usize, axis: &str, case: &str, set: &[&str], log: &Path) -> (String, String) {
