@@ -435,12 +435,19 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         r.migrated,
         r.sim.frame_rows().len() as u64,
     ]);
-    let builds = r
+    let (builds, build_time) = r
         .sim
         .world
         .get_resource::<ContactState>()
-        .map_or(0, |c| c.list.builds);
-    let ghost_stats = comm.all_gather_u64(&[ghost_time.as_nanos() as u64, halo.received, builds]);
+        .map_or((0, 0), |c| {
+            (c.list.builds, c.list.build_time.as_nanos() as u64)
+        });
+    let ghost_stats = comm.all_gather_u64(&[
+        ghost_time.as_nanos() as u64,
+        halo.received,
+        builds,
+        build_time,
+    ]);
     let fin = sinks.as_mut().map_or(Ok(()), |s| s.finish());
     let mut code = 0;
     if root {
@@ -476,14 +483,15 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         }
         if halo.exchanges > 0 {
             eprintln!(
-                "ghost exchange per rank (s; ghosts held per step on average, neighbour-list builds):"
+                "ghost exchange per rank (s; ghosts held per step on average; neighbour-list builds, their time in s):"
             );
-            for (k, c) in ghost_stats.chunks(3).enumerate() {
+            for (k, c) in ghost_stats.chunks(4).enumerate() {
                 eprintln!(
-                    "  rank {k:<4} {:>9.3}   {:>9.1} {:>9}",
+                    "  rank {k:<4} {:>9.3}   {:>9.1}   {:>9} {:>9.3}",
                     c[0] as f64 * 1e-9,
                     c[1] as f64 / halo.exchanges as f64,
-                    c[2]
+                    c[2],
+                    c[3] as f64 * 1e-9
                 );
             }
         }
