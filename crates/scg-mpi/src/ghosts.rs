@@ -37,11 +37,17 @@
 //! pairs sorted by *row* (table order, which depends on the history of spawns and
 //! despawns on the rank), cut into slots by pair count. On N ranks a particle's rows,
 //! its pairs' orientation (i < j by row) and the slot cuts differ from one rank's, so the
-//! sum is taken in another order and the last bits differ; granular contacts amplify
-//! them. Summing by id would change every single-rank result (the golden recordings),
-//! so it is not done: runs with contacts agree with one rank statistically (counts equal
-//! when nothing drains or feeds depending on the trajectories; distributions within the
-//! tolerances of `tests/mpi_ranks.rs`), drag-only runs still bit for bit.
+//! sum may be taken in another order and the last bits differ where a particle has
+//! several contacts at once; granular contacts amplify them. Summing by id would change
+//! every single-rank result (the golden recordings), so it is not done: dense beds agree
+//! with one rank statistically (`tests/mpi_ranks.rs`), dilute flows whose contacts are
+//! binary (the classifier) and drag-only runs bit for bit.
+//!
+//! # Cost
+//!
+//! Two things a single rank does not do: the exchange every step (latency-bound) and
+//! more list rebuilds (whenever a particle enters or leaves a halo or migrates); the
+//! numbers and what would cut them are in docs/scaling.md.
 //!
 //! [`ContactState::set_ghosts`]: scg_core::stages::contacts::ContactState::set_ghosts
 //! [`ContactState::receive_histories`]: scg_core::stages::contacts::ContactState::receive_histories
