@@ -844,3 +844,120 @@ fn tangential_history_survives_rebuilds_and_set_changes() {
     let spin_bits = &reference[reference.len() - 3..];
     assert!(spin_bits.iter().any(|b| f64::from_bits(*b) != 0.0));
 }
+
+/// Ghost rows stand in for the particles another process owns (the MPI driver's
+/// protocol, without MPI): a jittered lattice of 64 touching spheres with friction and
+/// random velocities, plus a pair that crosses the cut one after the other while in a
+/// sliding contact, run whole in one simulation and split at a cut into two whose
+/// particles are each other's ghosts, particles migrating (with their touching pairs'
+/// histories) when they cross it. The two halves together follow the whole one to
+/// rounding (the force sums may run in another order), count the same collisions, and
+/// the test sees local–ghost contacts, migrations and histories carried along.
+#[test]
+fn ghosts_and_migration_follow_the_whole_simulation() {
+    use scg_core::stages::contacts::ghosts::table_rows;
+    let v = 0.5;
+    let dt = auto_dt_pair(v);
+    let cfg = || config(dt, Some(contact_cfg(0.7, 0.5, None)), None);
+    // The cut runs through the middle of a lattice column: particles cross it.
+    let cut = 0.505 * D;
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let mut specs = Vec::new();
+    for i in 0..4 {
+        for j in 0..4 {
+            for k in 0..4 {
+                let x = DVec3::new(i as f64 - 1.5, j as f64, k as f64) * 1.01 * D;
+                let jitter = DVec3::new(rng.random(), rng.random(), rng.random()) - 0.5;
+                let u = DVec3::new(rng.random(), rng.random(), rng.random()) - 0.5;
+                specs.push(spec(x + 0.004 * D * jitter, u * v, D));
+            }
+        }
+    }
+    // Side by side along y, just touching, closing at 0.05 m/s and sliding past each
+    // other along z, both moving across the cut at 0.5 m/s: the first crosses while the
+    // contact lasts, so its history must go with it.
+    let y = 10.0 * D;
+    specs.push(spec(
+        DVec3::new(cut - 2e-6, y, 0.0),
+        DVec3::new(0.5, -0.025, 0.1),
+        D,
+    ));
+    specs.push(spec(
+        DVec3::new(cut - 12e-6, y - D, 0.0),
+        DVec3::new(0.5, 0.025, -0.1),
+        D,
+    ));
+    let mut whole = Simulation::new(cfg());
+    let mut halves = [Simulation::new(cfg()), Simulation::new(cfg())];
+    for s in &specs {
+        whole.spawn(s);
+        for h in &mut halves {
+            h.spawn(s);
+        }
+    }
+    let side = |x: DVec3| usize::from(x.x >= cut);
+    for (k, h) in halves.iter_mut().enumerate() {
+        drop(h.extract_particles(|_, x| side(x) != k));
+    }
+    let (mut migrated, mut carried, mut ghost_contacts) = (0, 0, 0);
+    for _ in 0..4000 {
+        let rows = [
+            table_rows(&mut halves[0].world),
+            table_rows(&mut halves[1].world),
+        ];
+        for k in 0..2 {
+            halves[k]
+                .world
+                .resource_mut::<ContactState>()
+                .set_ghosts(rows[1 - k].sorted_by_id());
+        }
+        whole.step().unwrap();
+        for h in &mut halves {
+            h.step().unwrap();
+            let st = h.world.resource::<ContactState>();
+            let local = st.local_rows() as u32;
+            ghost_contacts += st
+                .pairs
+                .iter()
+                .filter(|p| p.touching && p.j >= local)
+                .count();
+        }
+        let mut moving = Vec::new();
+        for (k, h) in halves.iter_mut().enumerate() {
+            let out = h.extract_particles(|_, x| side(x) != k);
+            let ids: Vec<u32> = out.iter().map(|p| p.id).collect();
+            let hist = h
+                .world
+                .resource::<ContactState>()
+                .histories_of(|id| ids.contains(&id));
+            moving.push((out, hist));
+        }
+        for (k, (out, hist)) in moving.into_iter().enumerate() {
+            migrated += out.len();
+            carried += hist.len();
+            let to = &mut halves[1 - k];
+            to.insert_particles(&out).unwrap();
+            to.world
+                .resource_mut::<ContactState>()
+                .receive_histories(hist);
+        }
+    }
+    let mut split: Vec<_> = halves.iter_mut().flat_map(|h| h.particles()).collect();
+    split.sort_by_key(|p| p.id);
+    let reference = whole.particles();
+    assert_eq!(split.len(), reference.len());
+    let mut worst: f64 = 0.0;
+    for (a, b) in split.iter().zip(&reference) {
+        assert_eq!(a.id, b.id);
+        worst = worst.max((a.position - b.position).length());
+    }
+    let tally = |s: &Simulation| s.world.resource::<Tally>().collisions[0];
+    let (c_whole, c_split) = (tally(&whole), tally(&halves[0]) + tally(&halves[1]));
+    eprintln!(
+        "largest distance from the whole run {worst:.3e} m; collisions {c_whole} and {c_split}; {migrated} migrations carrying {carried} histories; {ghost_contacts} local–ghost contacts over the steps"
+    );
+    assert!(migrated > 5 && carried > 0 && ghost_contacts > 100);
+    assert!(c_whole > 50);
+    assert_eq!(c_whole, c_split);
+    assert!(worst < 1e-9 * D, "{worst:.3e} m");
+}

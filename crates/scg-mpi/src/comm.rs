@@ -97,6 +97,36 @@ impl Comm {
         split(&buf, &recv_counts)
     }
 
+    /// `send[k]` goes to rank `peers[k]`, and one message comes from each of `peers`,
+    /// returned in the order of `peers`: point to point, no collective. The peers must be
+    /// symmetric (q among this rank's peers exactly when this rank is among q's), and
+    /// every rank must call this the same number of times (messages between two ranks
+    /// arrive in the order they were sent).
+    pub fn exchange_with(&self, peers: &[usize], send: &[Vec<u8>]) -> Vec<Vec<u8>> {
+        assert_eq!(peers.len(), send.len());
+        // The tag of these exchanges (the collectives never match it).
+        const TAG: mpi::Tag = 19;
+        let at = |q: usize| {
+            self.world
+                .process_at_rank(mpi::Rank::try_from(q).expect("a rank"))
+        };
+        mpi::request::scope(|scope| {
+            let sent: Vec<_> = peers
+                .iter()
+                .zip(send)
+                .map(|(&q, b)| at(q).immediate_send_with_tag(scope, &b[..], TAG))
+                .collect();
+            let got = peers
+                .iter()
+                .map(|&q| at(q).receive_vec_with_tag::<u8>(TAG).0)
+                .collect();
+            for r in sent {
+                r.wait();
+            }
+            got
+        })
+    }
+
     /// Every rank's `bytes`, in rank order, on rank 0 (`None` on the others).
     pub fn gather_bytes(&self, bytes: &[u8]) -> Option<Vec<Vec<u8>>> {
         let root = self.world.process_at_rank(0);

@@ -7,10 +7,14 @@
 //!
 //! Drag-only scenes give the same bits on any number of ranks: a step moves each particle
 //! from its own state alone, the fed particles are drawn identically on every rank, and
-//! rank 0 writes frames gathered and sorted by id. Particle contacts are not decomposed
-//! yet (no ghost particles): such scenes are refused on more than one rank.
+//! rank 0 writes frames gathered and sorted by id. Particle contacts are decomposed with
+//! ghost particles ([`ghosts`]): copies of the neighbouring slabs' particles within the
+//! contact reach plus the Verlet skin; such runs agree with one rank statistically, not
+//! bit for bit (the force sums run in row order, see [`ghosts`]). Contacts are refused
+//! with `SCG_MPI_DECOMP=ids` and in periodic boxes.
 
 pub mod decomp;
+pub mod ghosts;
 
 #[cfg(feature = "mpi")]
 pub mod comm;

@@ -15,7 +15,9 @@
 //! The slabs run along the longest extent of the initial particles, or along the axis
 //! `SCG_MPI_AXIS` names (`x`, `y` or `z`). `SCG_MPI_DECOMP=ids` shares the particles by a
 //! hash of their id instead: nothing migrates and nothing needs rebalancing, the better
-//! choice while no scene over ranks has pair forces (docs/scaling.md).
+//! choice for scenes without particle contacts (docs/scaling.md). With contacts, every
+//! rank receives ghost copies of the other slabs' particles near its own before each
+//! step ([`crate::ghosts`]); contacts are refused with `SCG_MPI_DECOMP=ids`.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -61,11 +63,11 @@ struct Times {
     rebalance: Duration,
 }
 
-fn encode<T: Serialize>(v: &T) -> Vec<u8> {
+pub(crate) fn encode<T: Serialize>(v: &T) -> Vec<u8> {
     postcard::to_stdvec(v).expect("serialising to memory")
 }
 
-fn decode<'a, T: Deserialize<'a>>(b: &'a [u8]) -> T {
+pub(crate) fn decode<'a, T: Deserialize<'a>>(b: &'a [u8]) -> T {
     postcard::from_bytes(b).expect("a message of another rank of the same build")
 }
 
@@ -118,12 +120,14 @@ impl Ranked<'_> {
     }
 
     /// Send `out[r]` to rank r and take in what the others send here (a collective).
+    /// With contacts, the particles' touching pairs' histories go with them.
     fn deliver(&mut self, out: &[Vec<ParticleRecord>]) -> Result<(), String> {
-        let send: Vec<Vec<u8>> = out.iter().map(encode).collect();
+        let send: Vec<Vec<u8>> = crate::ghosts::migrants(&self.sim, out)
+            .iter()
+            .map(encode)
+            .collect();
         for part in self.comm.all_to_all_bytes(&send) {
-            let recs: Vec<ParticleRecord> = decode(&part);
-            self.migrated += recs.len() as u64;
-            self.sim.insert_particles(&recs)?;
+            self.migrated += crate::ghosts::arrive(&mut self.sim, decode(&part))? as u64;
         }
         Ok(())
     }
@@ -220,11 +224,19 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
     }
     // The recording stage is the driver's (gathered on rank 0), not the schedule's.
     let mut sim = scene.build(false);
-    if sim.world.contains_resource::<ContactState>() {
+    let by_id = std::env::var("SCG_MPI_DECOMP").as_deref() == Ok("ids");
+    if let Some(c) = sim.world.get_resource::<ContactState>()
+        && (by_id || c.params.periodic.is_some())
+    {
         if root {
             eprintln!(
-                "error: {}: particle contacts are not yet decomposed over MPI ranks (no ghost particles): run with one rank",
-                scene.file
+                "error: {}: particle contacts over MPI ranks need slabs in an open domain ({}): run with one rank or without SCG_MPI_DECOMP=ids",
+                scene.file,
+                if by_id {
+                    "SCG_MPI_DECOMP=ids shares them by id"
+                } else {
+                    "the contacts are periodic"
+                }
             );
         }
         return EXIT_BAD_INPUT;
@@ -258,7 +270,6 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         _ => longest_axis(rows.iter().map(|r| glam::DVec3::from_array(r.position))),
     };
     let coords: Vec<f64> = rows.iter().map(|r| r.position[axis]).collect();
-    let by_id = std::env::var("SCG_MPI_DECOMP").as_deref() == Ok("ids");
     let owners = if by_id {
         Owners::Ids(comm.size())
     } else {
@@ -331,11 +342,17 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         },
         _ => None,
     };
+    // Ghost particles (contacts): exchanged before every step.
+    let mut halo = crate::ghosts::Halo::new(&scene);
+    let mut ghost_time = Duration::ZERO;
     let mut interrupted = false;
     let mut last_rebalance = 0;
     let mut sink_failed = false;
     while r.sim.step_count() < steps {
         let first_new = r.sim.world.resource::<NextParticleId>().0;
+        let t = Instant::now();
+        halo.exchange(comm, &mut r.sim, &r.owners);
+        ghost_time += t.elapsed();
         let t = Instant::now();
         let stepped = r.sim.step();
         times.compute += t.elapsed();
@@ -418,6 +435,19 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         r.migrated,
         r.sim.frame_rows().len() as u64,
     ]);
+    let (builds, build_time) = r
+        .sim
+        .world
+        .get_resource::<ContactState>()
+        .map_or((0, 0), |c| {
+            (c.list.builds, c.list.build_time.as_nanos() as u64)
+        });
+    let ghost_stats = comm.all_gather_u64(&[
+        ghost_time.as_nanos() as u64,
+        halo.received,
+        builds,
+        build_time,
+    ]);
     let fin = sinks.as_mut().map_or(Ok(()), |s| s.finish());
     let mut code = 0;
     if root {
@@ -450,6 +480,20 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
                 c[4],
                 c[5]
             );
+        }
+        if halo.exchanges > 0 {
+            eprintln!(
+                "ghost exchange per rank (s; ghosts held per step on average; neighbour-list builds, their time in s):"
+            );
+            for (k, c) in ghost_stats.chunks(4).enumerate() {
+                eprintln!(
+                    "  rank {k:<4} {:>9.3}   {:>9.1}   {:>9} {:>9.3}",
+                    c[0] as f64 * 1e-9,
+                    c[1] as f64 / halo.exchanges as f64,
+                    c[2],
+                    c[3] as f64 * 1e-9
+                );
+            }
         }
         for p in &paths {
             eprintln!("wrote {}", p.display());

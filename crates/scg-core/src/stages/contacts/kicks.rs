@@ -30,13 +30,14 @@ pub fn apply_contact_kicks(
     // The pair sums are indexed by the rows the neighbour stage gathered this step;
     // every particle kicked is checked to be the one its index names.
     const MOVED: &str = "the particle table changed after the neighbour stage";
-    assert_eq!(ids.len(), st.ids.len(), "{MOVED}");
+    let local = st.local;
+    assert_eq!(ids.len(), local, "{MOVED}");
     let vs = Velocity::peel_slice_mut(bypass(vs));
     let ws = AngularVelocity::peel_slice_mut(bypass(ws));
     let slots = &st.slots;
     let (kick_v, kick_w) = (&st.kick_v, &st.kick_w);
     if !st.sparse {
-        assert!(ParticleId::peel_slice(ids) == st.ids, "{MOVED}");
+        assert!(ParticleId::peel_slice(ids) == &st.ids[..local], "{MOVED}");
         kick_all(vs, ws, slots, kick_v, kick_w);
         return;
     }
@@ -44,7 +45,8 @@ pub fn apply_contact_kicks(
     for s in slots {
         for &k in &s.touched {
             let k = k as usize;
-            if st.marked[k] {
+            // Ghost rows (a decomposed run) are kicked by their owner.
+            if k >= local || st.marked[k] {
                 continue;
             }
             st.marked[k] = true;

@@ -27,6 +27,10 @@ use crate::state::{SimClock, StepDisplacement};
 /// set changes (a particle fed or drained), ids, groups, radii, masses and kick factors
 /// are gathered again, the list is rebuilt and each touching pair's history is carried
 /// over by (id_i, id_j).
+///
+/// Ghost rows ([`super::ghosts`]) follow the table's rows: the set changes when their ids
+/// do, their positions are those set for this step, and the list holds no ghost–ghost
+/// pair.
 pub fn maintain_neighbour_list(
     mut state: ResMut<ContactState>,
     clock: Res<SimClock>,
@@ -38,23 +42,47 @@ pub fn maintain_neighbour_list(
     let drift = disp.take();
     let (ids, groups, xs, ds, ms) = columns(&q).unwrap_or_default();
     let pos = Position::peel_slice(xs);
-    let same_set = ParticleId::peel_slice(ids) == st.ids;
-    if same_set {
-        if !st.list.needs_rebuild(pos, drift) {
+    let table_ids = ParticleId::peel_slice(ids);
+    // Ghost rows (a decomposed run) follow the table's rows; their positions are copied
+    // in each step. Their displacement is not the integrator's here: the exact check
+    // runs every step then.
+    let ghosts = !st.ghosts.is_empty();
+    let all_pos: std::borrow::Cow<[DVec3]> = if ghosts {
+        std::borrow::Cow::Owned([pos, &st.ghosts.pos].concat())
+    } else {
+        std::borrow::Cow::Borrowed(pos)
+    };
+    let drift = if ghosts { None } else { drift };
+    let same_set = st.local == table_ids.len()
+        && st.ids[..st.local] == *table_ids
+        && st.ids[st.local..] == st.ghosts.ids[..];
+    if same_set && st.arrived.is_empty() {
+        if !st.list.needs_rebuild(&all_pos, drift) {
             return;
         }
-        st.list.build(pos, &st.radius);
-        carry_history(st, pos, None);
+        st.list.build(&all_pos, &st.radius);
+        drop_ghost_pairs(st);
+        carry_history(st, &all_pos, None);
         st.slots = layout_slots(&st.list.pairs, st.ids.len());
         return;
     }
     let old_ids = gather(st, ids, groups, ds, ms, clock.dt);
-    st.list.build(pos, &st.radius);
-    carry_history(st, pos, Some(&old_ids));
+    st.list.build(&all_pos, &st.radius);
+    drop_ghost_pairs(st);
+    carry_history(st, &all_pos, Some(&old_ids));
     st.slots = layout_slots(&st.list.pairs, st.ids.len());
 }
 
-/// Gather ids, groups, radii, masses and kick factors of the rows; returns the old ids.
+/// Drop the ghost–ghost pairs from a list just built (with i < j they are the last
+/// ones: i is a ghost row).
+fn drop_ghost_pairs(st: &mut ContactState) {
+    let local = st.local as u32;
+    let keep = st.list.pairs.partition_point(|p| p[0] < local);
+    st.list.pairs.truncate(keep);
+}
+
+/// Gather ids, groups, radii, masses and kick factors of the rows (the table's, then the
+/// ghosts'); returns the old ids.
 fn gather(
     st: &mut ContactState,
     ids: &[ParticleId],
@@ -64,6 +92,7 @@ fn gather(
     dt: f64,
 ) -> Vec<u32> {
     let old_ids = std::mem::replace(&mut st.ids, ids.iter().map(|id| id.0).collect());
+    st.local = ids.len();
     st.group = groups.iter().map(|g| g.0).collect();
     st.radius = ds.iter().map(|d| 0.5 * d.0).collect();
     st.mass = ms.iter().map(|m| m.0).collect();
@@ -71,6 +100,11 @@ fn gather(
     st.kick_w = (st.mass.iter().zip(&st.radius))
         .map(|(&m, &r)| angular_kick_factor(m, 2.0 * r, dt))
         .collect();
+    let g = &st.ghosts;
+    st.ids.extend_from_slice(&g.ids);
+    st.group.extend_from_slice(&g.group);
+    st.radius.extend_from_slice(&g.radius);
+    st.mass.extend_from_slice(&g.mass);
     old_ids
 }
 
@@ -155,6 +189,9 @@ impl ContactState {
         );
         self.sparse = r.sparse;
         self.active = r.active;
+        self.local = n;
+        self.ghosts = Default::default();
+        self.arrived.clear();
         let current = ParticleId::peel_slice(ids) == r.ids.as_slice();
         if current {
             gather(self, ids, groups, ds, ms, dt);
@@ -247,6 +284,33 @@ fn carry_history(st: &mut ContactState, pos: &[DVec3], ids_before: Option<&[u32]
             };
             if let Ok(k) = st.list.pairs.binary_search(&key) {
                 pairs[k].history = h;
+                pairs[k].touching = true;
+            }
+        }
+    }
+    // Histories brought by particles that moved here (a decomposed run), for the pairs
+    // this process did not carry already.
+    if !st.arrived.is_empty() {
+        let arrived = std::mem::take(&mut st.arrived);
+        let wanted: std::collections::HashSet<u32> =
+            arrived.iter().flat_map(|h| [h.a, h.b]).collect();
+        let index: std::collections::HashMap<u32, u32> = (st.ids.iter().enumerate())
+            .filter(|(_, id)| wanted.contains(id))
+            .map(|(k, &id)| (id, k as u32))
+            .collect();
+        for h in arrived {
+            let (Some(&a), Some(&b)) = (index.get(&h.a), index.get(&h.b)) else {
+                continue;
+            };
+            let (key, v) = if a < b {
+                ([a, b], h.history)
+            } else {
+                ([b, a], -h.history)
+            };
+            if let Ok(k) = st.list.pairs.binary_search(&key)
+                && !pairs[k].touching
+            {
+                pairs[k].history = v;
                 pairs[k].touching = true;
             }
         }

@@ -11,7 +11,12 @@
 //!   per particle in slot order and kicks v and ω.
 //!
 //! The result is bit-identical whatever the thread count.
+//!
+//! In a run decomposed over processes (`scg-mpi`), [`ghosts`] adds read-only rows for
+//! the particles other processes own near this one's: they take part in the list and
+//! the pair forces, never in the kicks.
 
+pub mod ghosts;
 pub mod kicks;
 pub mod list;
 pub mod slots;
@@ -71,23 +76,30 @@ impl ContactConfig {
     }
 }
 
-/// The contact arrays indexed by the particle table's rows, the neighbour list and the
-/// pair states (resource).
+/// The contact arrays indexed by the particle table's rows (followed by the ghost rows in
+/// a decomposed run, see [`ghosts`]), the neighbour list and the pair states (resource).
 #[derive(Resource, Debug)]
 pub struct ContactState {
     /// The pair law.
     pub params: PairParams,
-    /// Particle ids, by row (the key of every per-particle array here).
+    /// Particle ids, by row (the key of every per-particle array here): the `local`
+    /// rows of the particle table, then the ghost rows.
     pub ids: Vec<u32>,
+    /// Rows of the particle table at the start of `ids` etc.
+    local: usize,
+    /// Ghost rows set by a decomposed run's driver for the coming step (empty otherwise).
+    ghosts: ghosts::Ghosts,
+    /// Pair histories brought by particles that moved here, for the next rebuild.
+    arrived: Vec<ghosts::PairHistory>,
     /// Groups, by row.
     pub group: Vec<u32>,
     /// Radii, m, by row.
     pub radius: Vec<f64>,
     /// Masses, kg, by row.
     pub mass: Vec<f64>,
-    /// dt/m by row ([`crate::physics::integrate::linear_kick_factor`]), s/kg.
+    /// dt/m by local row ([`crate::physics::integrate::linear_kick_factor`]), s/kg.
     kick_v: Vec<f64>,
-    /// dt/I by row ([`crate::physics::integrate::angular_kick_factor`]), s/(kg·m²).
+    /// dt/I by local row ([`crate::physics::integrate::angular_kick_factor`]), s/(kg·m²).
     kick_w: Vec<f64>,
     /// Verlet list.
     pub list: NeighbourList,
@@ -112,6 +124,9 @@ impl ContactState {
             list: NeighbourList::new(cfg.skin, params.periodic),
             params,
             ids: Vec::new(),
+            local: 0,
+            ghosts: ghosts::Ghosts::default(),
+            arrived: Vec::new(),
             group: Vec::new(),
             radius: Vec::new(),
             mass: Vec::new(),

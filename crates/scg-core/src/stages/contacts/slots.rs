@@ -24,6 +24,9 @@ pub(super) struct Kernel<'a> {
     pub dt: f64,
     /// Group of each particle (collision counts).
     pub group: &'a [u32],
+    /// Rows of the particle table (the rows after are ghosts: their collisions are
+    /// counted by the process that owns them).
+    pub local: usize,
 }
 
 /// Pairs per accumulation slot (the slot count is fixed by the pair count).
@@ -138,8 +141,10 @@ impl Slot {
                         .law
                         .contact_time(p.hertz.m_eff, p.hertz.r_eff, k.par.e_eff, c.approach);
                 self.shortest = self.shortest.min(tc);
-                for g in [group[i], group[j]] {
-                    if let Some(n) = self.collisions.get_mut(g as usize) {
+                for r in [i, j] {
+                    if r < k.local
+                        && let Some(n) = self.collisions.get_mut(group[r] as usize)
+                    {
                         *n += 1;
                     }
                 }
@@ -216,7 +221,7 @@ pub fn particle_contact_forces(
 ) {
     let st = &mut *state;
     let dt = clock.dt;
-    let n = st.ids.len();
+    let n = st.local;
     // The rows the neighbour stage checked this step (nothing spawns or despawns between
     // the two stages).
     let (xs, vs, ws) = columns(&q).unwrap_or_default();
@@ -225,18 +230,46 @@ pub fn particle_contact_forces(
         n,
         "the particle table changed after the neighbour stage"
     );
-    let bodies = Bodies {
-        pos: Position::peel_slice(xs),
-        vel: Velocity::peel_slice(vs),
-        omega: AngularVelocity::peel_slice(ws),
-        radius: &st.radius,
+    let (xs, vs, ws) = (
+        Position::peel_slice(xs),
+        Velocity::peel_slice(vs),
+        AngularVelocity::peel_slice(ws),
+    );
+    // Ghost rows (a decomposed run) after the table's: the states of this step.
+    let g = &st.ghosts;
+    assert_eq!(
+        st.ids[n..],
+        g.ids[..],
+        "the ghosts changed after the neighbour stage"
+    );
+    let joined: Option<[Vec<DVec3>; 3]> = (!g.is_empty()).then(|| {
+        [
+            [xs, &g.pos].concat(),
+            [vs, &g.vel].concat(),
+            [ws, &g.omega].concat(),
+        ]
+    });
+    let bodies = match &joined {
+        Some([x, v, w]) => Bodies {
+            pos: x,
+            vel: v,
+            omega: w,
+            radius: &st.radius,
+        },
+        None => Bodies {
+            pos: xs,
+            vel: vs,
+            omega: ws,
+            radius: &st.radius,
+        },
     };
     // Few contacts last step: record the particles written, so the kick and the next
     // clear visit only those. Many: sum and clear every particle (no bookkeeping).
     st.sparse = st.active * 8 <= n;
-    if st.marked.len() != n {
+    let rows = st.ids.len();
+    if st.marked.len() != rows {
         st.marked.clear();
-        st.marked.resize(n, false);
+        st.marked.resize(rows, false);
     }
     let sparse = st.sparse;
     let groups = tally.collisions.len();
@@ -255,6 +288,7 @@ pub fn particle_contact_forces(
         par: st.params,
         dt,
         group,
+        local: n,
     };
     crate::exec::team::for_each_item(&mut work, |_, (slot, pairs)| {
         slot.run(pairs, &kernel, groups, sparse);
@@ -350,6 +384,7 @@ mod tests {
             par,
             dt: 1e-6,
             group: &group,
+            local: n,
         };
         let run = |avx: bool| {
             let mut slots = layout_slots(&list, n);

@@ -1,0 +1,196 @@
+//! Ghost particles: read-only copies of particles another process owns (a decomposed run,
+//! `scg-mpi`), that this process's particles may touch.
+//!
+//! The contact arrays of [`ContactState`] hold the particle table's rows (`local` of
+//! them) followed by the ghost rows the driver set with [`ContactState::set_ghosts`]
+//! before the step. The neighbour list is built over both, without ghost–ghost pairs;
+//! the force stage computes the local–local and local–ghost pairs; the kicks apply to the
+//! local rows only, so a ghost is never integrated, recorded, counted, drained or fed
+//! (it is not in the particle table at all). A local–ghost pair's tangential history
+//! lives in the pair list like any other and is carried over rebuilds by the two ids, so
+//! it survives a change of the ghost set as long as the pair stays listed. When a
+//! particle moves to another process, its touching pairs' histories go with it
+//! ([`ContactState::histories_of`] → [`ContactState::receive_histories`]) and are taken
+//! up by the next rebuild there.
+//!
+//! Without ghosts (a single process) nothing here runs and no bit of a run changes.
+
+use bevy_ecs::prelude::*;
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use super::ContactState;
+use crate::components::*;
+
+/// Rows of particles as the pair kernel reads them: the ghost rows a driver hands to
+/// [`ContactState::set_ghosts`] (also the rows a driver picks them from, see
+/// [`table_rows`]).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Ghosts {
+    /// Particle ids.
+    pub ids: Vec<u32>,
+    /// Groups.
+    pub group: Vec<u32>,
+    /// Radii, m.
+    pub radius: Vec<f64>,
+    /// Masses, kg.
+    pub mass: Vec<f64>,
+    /// Centres, m.
+    pub pos: Vec<DVec3>,
+    /// Velocities, m/s.
+    pub vel: Vec<DVec3>,
+    /// Angular velocities, rad/s.
+    pub omega: Vec<DVec3>,
+}
+
+impl Ghosts {
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.ids.len()
+    }
+
+    /// True when there is no row.
+    pub fn is_empty(&self) -> bool {
+        self.ids.is_empty()
+    }
+
+    /// Append row `k` of `other`.
+    pub fn push_row(&mut self, other: &Ghosts, k: usize) {
+        self.ids.push(other.ids[k]);
+        self.group.push(other.group[k]);
+        self.radius.push(other.radius[k]);
+        self.mass.push(other.mass[k]);
+        self.pos.push(other.pos[k]);
+        self.vel.push(other.vel[k]);
+        self.omega.push(other.omega[k]);
+    }
+
+    /// Append every row of `other`.
+    pub fn extend(&mut self, other: &Ghosts) {
+        for k in 0..other.len() {
+            self.push_row(other, k);
+        }
+    }
+
+    /// The rows sorted by id (a canonical order, whatever order they arrived in).
+    pub fn sorted_by_id(&self) -> Ghosts {
+        let mut order: Vec<usize> = (0..self.len()).collect();
+        order.sort_unstable_by_key(|&k| self.ids[k]);
+        let mut out = Ghosts::default();
+        for k in order {
+            out.push_row(self, k);
+        }
+        out
+    }
+
+    /// True when every array has one entry per id.
+    fn consistent(&self) -> bool {
+        let n = self.ids.len();
+        [
+            self.group.len(),
+            self.radius.len(),
+            self.mass.len(),
+            self.pos.len(),
+            self.vel.len(),
+            self.omega.len(),
+        ]
+        .iter()
+        .all(|&l| l == n)
+    }
+}
+
+/// The particle table's rows as ghost rows (what a driver picks the ghosts it sends
+/// from), in table order. Empty when the scene has no contacts (no angular velocity).
+pub fn table_rows(world: &mut World) -> Ghosts {
+    let mut q = world.query::<(
+        &ParticleId,
+        &GroupId,
+        &Diameter,
+        &Mass,
+        &Position,
+        &Velocity,
+        &AngularVelocity,
+    )>();
+    let mut g = Ghosts::default();
+    for (id, group, d, m, x, v, w) in q.iter(world) {
+        g.ids.push(id.0);
+        g.group.push(group.0);
+        g.radius.push(0.5 * d.0);
+        g.mass.push(m.0);
+        g.pos.push(x.0);
+        g.vel.push(v.0);
+        g.omega.push(w.0);
+    }
+    g
+}
+
+/// The tangential history of one touching pair, keyed by its particles' ids, as seen
+/// from particle `a` (what migrates with a particle).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PairHistory {
+    /// Id of the particle the history is seen from.
+    pub a: u32,
+    /// Id of the other particle.
+    pub b: u32,
+    /// Tangential displacement, m, as seen from `a`.
+    pub history: DVec3,
+}
+
+impl ContactState {
+    /// Set the ghost rows of the coming step (ids must be distinct and differ from the
+    /// table's). The neighbour stage rebuilds the list when the ghost ids differ from
+    /// those it was built with; otherwise it uses the new states in place of the old.
+    ///
+    /// # Panics
+    /// When the rows' arrays differ in length.
+    pub fn set_ghosts(&mut self, ghosts: Ghosts) {
+        assert!(ghosts.consistent(), "ghost rows of unequal lengths");
+        self.ghosts = ghosts;
+    }
+
+    /// The ghost rows of the coming (or last) step.
+    pub fn ghosts(&self) -> &Ghosts {
+        &self.ghosts
+    }
+
+    /// Rows of the particle table the arrays describe (the rows after them are ghosts).
+    pub fn local_rows(&self) -> usize {
+        self.local
+    }
+
+    /// The touching pairs of the last force stage that involve a particle for which
+    /// `leaving(id)` is true, seen from that particle (both ways when both leave), and
+    /// the histories such a particle brought here that no rebuild took up yet.
+    pub fn histories_of(&self, leaving: impl Fn(u32) -> bool) -> Vec<PairHistory> {
+        let mut out = Vec::new();
+        for p in self.pairs.iter().filter(|p| p.touching) {
+            let (Some(&a), Some(&b)) = (self.ids.get(p.i as usize), self.ids.get(p.j as usize))
+            else {
+                continue;
+            };
+            if leaving(a) {
+                out.push(PairHistory {
+                    a,
+                    b,
+                    history: p.history,
+                });
+            }
+            if leaving(b) {
+                out.push(PairHistory {
+                    a: b,
+                    b: a,
+                    history: -p.history,
+                });
+            }
+        }
+        // Histories that arrived with a particle moving on before a rebuild took them up.
+        out.extend(self.arrived.iter().filter(|h| leaving(h.a)));
+        out
+    }
+
+    /// Histories brought by particles that moved here: the next neighbour-list rebuild
+    /// gives them to their pairs (a pair this process already carries keeps its own).
+    pub fn receive_histories(&mut self, h: impl IntoIterator<Item = PairHistory>) {
+        self.arrived.extend(h);
+    }
+}

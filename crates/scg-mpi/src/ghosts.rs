@@ -1,0 +1,365 @@
+//! Ghost particles: particle contacts over slabs (issue 19).
+//!
+//! # Design
+//!
+//! Before each step (so before the neighbour and force stages, which come first in a
+//! step: nothing moves a particle between the end of one step, the migration, and the
+//! force stage of the next), every rank sends each other rank a copy of its particles
+//! whose coordinate along the slab axis lies within the *halo* h = r + r_max + skin of
+//! that rank's slab (r its radius, r_max the largest radius of the scene's groups after
+//! coarse graining, [`largest_radius`], the skin the scene's Verlet skin): one
+//! point-to-point message to each rank whose slab lies within 2·r_max + skin of its own
+//! ([`peers`]; empty ones too, so that each rank knows what to wait for). A pair closer
+//! than r_i + r_j + skin has its two coordinates closer than either particle's h, so
+//! every pair the one-rank list would hold between a particle of this slab and one of
+//! another is listed here, local–ghost. The copies ("ghosts": id, group,
+//! radius, mass, position, velocity, ω — what the pair kernel reads) are sorted by id
+//! and handed to [`ContactState::set_ghosts`]; the contact stage appends them after the
+//! table's rows, lists the local–local and local–ghost pairs (never ghost–ghost),
+//! computes them and kicks its own particles only. Ghosts are not entities: they are
+//! never integrated, recorded, counted, drained or fed. A contact started between a
+//! local particle and a ghost is counted by each rank for its own particle's group, so
+//! the summed collision counts are one rank's.
+//!
+//! The list is rebuilt when the table's ids or the ghost ids change, and otherwise on the
+//! exact displacement check, run every step while there are ghosts (their displacement
+//! is not the local integrator's bound). A local–ghost pair's tangential history is
+//! carried over rebuilds by the two ids like any other; each of the two ranks keeps its
+//! own copy of it, both computed from the same inputs. When a particle migrates, the
+//! histories of its touching pairs travel with it in the migration message
+//! ([`Migrants`]) and the next rebuild on the new rank takes them up
+//! ([`ContactState::receive_histories`]) for the pairs it did not carry already; its
+//! wall history, ω and mesh cell are in its [`ParticleRecord`].
+//!
+//! # Bits
+//!
+//! A particle's contact force is summed over its pairs in the order of the force slots:
+//! pairs sorted by *row* (table order, which depends on the history of spawns and
+//! despawns on the rank), cut into slots by pair count. On N ranks a particle's rows,
+//! its pairs' orientation (i < j by row) and the slot cuts differ from one rank's, so the
+//! sum may be taken in another order and the last bits differ where a particle has
+//! several contacts at once; granular contacts amplify them. Summing by id would change
+//! every single-rank result (the golden recordings), so it is not done: dense beds agree
+//! with one rank statistically (`tests/mpi_ranks.rs`), dilute flows whose contacts are
+//! binary (the classifier) and drag-only runs bit for bit.
+//!
+//! # Cost
+//!
+//! Two things a single rank does not do: the exchange every step (latency-bound) and
+//! more list rebuilds (whenever a particle enters or leaves a halo or migrates); the
+//! numbers and what would cut them are in docs/scaling.md.
+//!
+//! [`ContactState::set_ghosts`]: scg_core::stages::contacts::ContactState::set_ghosts
+//! [`ContactState::receive_histories`]: scg_core::stages::contacts::ContactState::receive_histories
+//! [`ParticleRecord`]: scg_core::checkpoint::ParticleRecord
+
+use scg_core::checkpoint::ParticleRecord;
+use scg_core::stages::contacts::ghosts::PairHistory;
+use serde::{Deserialize, Serialize};
+
+use crate::decomp::Slabs;
+
+/// What migrates from one rank to another: the particles with their whole state, and the
+/// tangential histories of their touching pairs (contacts), keyed by ids.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Migrants {
+    /// The particles.
+    pub particles: Vec<ParticleRecord>,
+    /// Their touching pairs' histories, seen from the migrating particle.
+    pub pairs: Vec<PairHistory>,
+}
+
+/// Halo width of a particle of radius `r`, m: within this distance (along the slab axis)
+/// of another rank's slab it may come within the skin of one of that rank's particles
+/// (radius ≤ `r_max`), so the neighbour list there must hold it.
+pub fn reach(r: f64, r_max: f64, skin: f64) -> f64 {
+    r + r_max + skin
+}
+
+/// The largest radius a particle of `scene` has, m: every particle, initial or fed, has
+/// its group's coarse-grained diameter (the bound the scene's default skin uses too), so
+/// every rank knows it without asking the others.
+pub fn largest_radius(scene: &scg_scene::Scene) -> f64 {
+    scene
+        .groups
+        .iter()
+        .map(|g| {
+            0.5 * scg_core::physics::scaling::coarse_grain(g.law, g.alpha, g.diameter, g.density)
+                .diameter
+        })
+        .fold(0.0, f64::max)
+}
+
+/// The ranks other than `me` whose slab lies within `halo` of coordinate `c` (along the
+/// slab axis), ascending, into `out` (cleared first). A slab thinner than the halo lets a
+/// particle be a ghost on several ranks. A non-finite coordinate goes nowhere (rank 0's
+/// guard reports the particle).
+pub fn ghost_targets(slabs: &Slabs, me: usize, c: f64, halo: f64, out: &mut Vec<usize>) {
+    out.clear();
+    if !c.is_finite() {
+        return;
+    }
+    let n = slabs.ranks();
+    for q in 0..n {
+        if q == me {
+            continue;
+        }
+        let lo = if q == 0 {
+            f64::NEG_INFINITY
+        } else {
+            slabs.cuts[q - 1]
+        };
+        let hi = if q + 1 == n {
+            f64::INFINITY
+        } else {
+            slabs.cuts[q]
+        };
+        let dist = (lo - c).max(c - hi).max(0.0);
+        if dist <= halo {
+            out.push(q);
+        }
+    }
+}
+
+/// The ranks whose slab lies within `reach` of slab `me` (other than `me`), ascending:
+/// those that may send this rank ghosts, and receive its own, when no particle reaches
+/// farther than `reach` (2·r_max + skin). Symmetric: q is among r's exactly when r is
+/// among q's.
+pub fn peers(slabs: &Slabs, me: usize, reach: f64) -> Vec<usize> {
+    let n = slabs.ranks();
+    // Slab q spans [cuts[q-1], cuts[q]); the gap between q < r is cuts[r-1] - cuts[q].
+    let gap = |a: usize, b: usize| {
+        let (lo, hi) = (a.min(b), a.max(b));
+        if hi == lo + 1 {
+            0.0
+        } else {
+            slabs.cuts[hi - 1] - slabs.cuts[lo]
+        }
+    };
+    (0..n).filter(|&q| q != me && gap(q, me) <= reach).collect()
+}
+
+#[cfg(feature = "mpi")]
+pub use exchange::Halo;
+
+#[cfg(feature = "mpi")]
+mod exchange {
+    use std::collections::HashMap;
+
+    use scg_core::Simulation;
+    use scg_core::checkpoint::ParticleRecord;
+    use scg_core::stages::contacts::ContactState;
+    use scg_core::stages::contacts::ghosts::{Ghosts, table_rows};
+
+    use super::{Migrants, ghost_targets, peers, reach};
+    use crate::comm::Comm;
+    use crate::decomp::Owners;
+    use crate::run::{decode, encode};
+
+    /// The ghost exchange of a run with contacts, and what it did.
+    #[derive(Debug, Default)]
+    pub struct Halo {
+        /// The largest particle radius of the scene, m ([`super::largest_radius`]).
+        pub r_max: f64,
+        /// Exchanges so far.
+        pub exchanges: u64,
+        /// Ghost rows received, summed over the exchanges.
+        pub received: u64,
+    }
+
+    impl Halo {
+        /// The exchange of a run of `scene`.
+        pub fn new(scene: &scg_scene::Scene) -> Self {
+            Halo {
+                r_max: super::largest_radius(scene),
+                ..Default::default()
+            }
+        }
+
+        /// Give every rank its ghosts for the coming step (a collective; nothing when
+        /// the scene has no contacts or the owners are not slabs).
+        pub fn exchange(&mut self, comm: &Comm, sim: &mut Simulation, owners: &Owners) {
+            let Owners::Slabs(slabs) = owners else {
+                return;
+            };
+            let Some(skin) = sim
+                .world
+                .get_resource::<ContactState>()
+                .map(|c| c.list.skin)
+            else {
+                return;
+            };
+            let rows = table_rows(&mut sim.world);
+            let me = comm.rank();
+            let mut out = vec![Ghosts::default(); comm.size()];
+            let mut to = Vec::new();
+            for k in 0..rows.len() {
+                // Reach of this particle: its radius, the largest of any other, the skin.
+                let halo = reach(rows.radius[k], self.r_max, skin);
+                ghost_targets(slabs, me, rows.pos[k][slabs.axis], halo, &mut to);
+                for &q in &to {
+                    out[q].push_row(&rows, k);
+                }
+            }
+            // Only with the slabs a particle can reach: point to point.
+            let with = peers(slabs, me, reach(self.r_max, self.r_max, skin));
+            let send: Vec<Vec<u8>> = with.iter().map(|&q| encode(&out[q])).collect();
+            let mut ghosts = Ghosts::default();
+            for part in comm.exchange_with(&with, &send) {
+                ghosts.extend(&decode::<Ghosts>(&part));
+            }
+            let ghosts = ghosts.sorted_by_id();
+            self.exchanges += 1;
+            self.received += ghosts.len() as u64;
+            sim.world.resource_mut::<ContactState>().set_ghosts(ghosts);
+        }
+    }
+
+    /// The migration messages: `out[r]` to rank r with the histories of its particles'
+    /// touching pairs (the last force stage's, still in [`ContactState`]).
+    pub(crate) fn migrants(sim: &Simulation, out: &[Vec<ParticleRecord>]) -> Vec<Migrants> {
+        let mut msgs: Vec<Migrants> = out
+            .iter()
+            .map(|p| Migrants {
+                particles: p.clone(),
+                pairs: Vec::new(),
+            })
+            .collect();
+        if let Some(st) = sim.world.get_resource::<ContactState>() {
+            let dest: HashMap<u32, usize> = out
+                .iter()
+                .enumerate()
+                .flat_map(|(r, ps)| ps.iter().map(move |p| (p.id, r)))
+                .collect();
+            if !dest.is_empty() {
+                for h in st.histories_of(|id| dest.contains_key(&id)) {
+                    msgs[dest[&h.a]].pairs.push(h);
+                }
+            }
+        }
+        msgs
+    }
+
+    /// Take in what arrived: the particles, and their pairs' histories.
+    pub(crate) fn arrive(sim: &mut Simulation, m: Migrants) -> Result<usize, String> {
+        sim.insert_particles(&m.particles)?;
+        if !m.pairs.is_empty()
+            && let Some(mut st) = sim.world.get_resource_mut::<ContactState>()
+        {
+            st.receive_histories(m.pairs);
+        }
+        Ok(m.particles.len())
+    }
+}
+
+#[cfg(feature = "mpi")]
+pub(crate) use exchange::{arrive, migrants};
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ghosts_go_to_the_slabs_within_the_halo() {
+        // Slabs (-inf, 0), [0, 1), [1, 1.5), [1.5, inf) along x.
+        let s = Slabs {
+            axis: 0,
+            cuts: vec![0.0, 1.0, 1.5],
+        };
+        let mut to = Vec::new();
+        let mut at = |me, c| {
+            ghost_targets(&s, me, c, 0.3, &mut to);
+            to.clone()
+        };
+        assert_eq!(at(1, 0.5), Vec::<usize>::new(), "the middle of a wide slab");
+        assert_eq!(at(1, 0.2), vec![0]);
+        assert_eq!(at(0, -0.3), vec![1], "at the halo's edge");
+        assert_eq!(at(0, -0.31), Vec::<usize>::new());
+        assert_eq!(at(1, 0.9), vec![2], "slab 2 is within 0.1");
+        // Slab 2 is 0.5 wide: from its middle both neighbours are within the halo.
+        assert_eq!(at(2, 1.1), vec![1]);
+        assert_eq!(at(2, 1.25), vec![1, 3]);
+        // A particle far out in the last slab is nobody's ghost; one near the cut is
+        // rank 2's and (0.2 + 0.5 > 0.3) not rank 1's.
+        assert_eq!(at(3, 9.0), Vec::<usize>::new());
+        assert_eq!(at(3, 1.7), vec![2]);
+        assert_eq!(at(3, f64::NAN), Vec::<usize>::new());
+        // A halo wider than a slab reaches past it.
+        ghost_targets(&s, 1, 0.6, 1.0, &mut to);
+        assert_eq!(to, vec![0, 2, 3]);
+        assert_eq!(reach(1e-3, 2e-3, 5e-4), 3.5e-3);
+    }
+
+    #[test]
+    fn peers_are_the_slabs_within_reach_and_symmetric() {
+        let s = Slabs {
+            axis: 2,
+            cuts: vec![0.0, 1.0, 1.2, 3.0],
+        };
+        assert_eq!(peers(&s, 0, 0.1), vec![1]);
+        assert_eq!(peers(&s, 1, 0.1), vec![0, 2]);
+        // Slab 2 is 0.2 thick: from slab 1, slab 3 is 0.2 away.
+        assert_eq!(peers(&s, 1, 0.2), vec![0, 2, 3]);
+        assert_eq!(peers(&s, 4, 0.2), vec![3]);
+        assert_eq!(peers(&s, 4, 10.0), vec![0, 1, 2, 3]);
+        for reach in [0.0, 0.1, 0.2, 1.1, 5.0] {
+            for a in 0..5 {
+                for b in peers(&s, a, reach) {
+                    assert!(peers(&s, b, reach).contains(&a), "{a} {b} {reach}");
+                }
+                // Every rank a particle of slab a is sent to is a peer.
+                let mut to = Vec::new();
+                for c in [-9.0, -0.05, 0.0, 0.5, 0.99, 1.1, 1.25, 2.0, 2.95, 3.5] {
+                    if s.owner(glam::DVec3::new(0.0, 0.0, c)) == a {
+                        ghost_targets(&s, a, c, reach, &mut to);
+                        assert!(to.iter().all(|q| peers(&s, a, reach).contains(q)));
+                    }
+                }
+            }
+        }
+        assert!(peers(&Slabs::new(0, 1), 0, 1.0).is_empty());
+    }
+
+    /// Every pair closer than r_i + r_j + skin across two slabs has each particle within
+    /// the halo of the other's slab (a brute-force check over random particles).
+    #[test]
+    fn every_cross_slab_pair_in_reach_is_seen() {
+        let s = Slabs {
+            axis: 1,
+            cuts: vec![-0.2, 0.0, 0.05, 0.4],
+        };
+        let mut state = 12345u64;
+        let mut rnd = || {
+            state = crate::decomp::splitmix64(state);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (skin, r_max) = (0.01, 0.04);
+        let ps: Vec<(glam::DVec3, f64)> = (0..600)
+            .map(|_| {
+                (
+                    glam::DVec3::new(rnd() * 0.3, rnd() * 1.2 - 0.6, rnd() * 0.3),
+                    r_max * (0.3 + 0.7 * rnd()),
+                )
+            })
+            .collect();
+        let mut to = Vec::new();
+        let mut crossing = 0;
+        for (a, &(xa, ra)) in ps.iter().enumerate() {
+            for &(xb, rb) in &ps[a + 1..] {
+                let (oa, ob) = (s.owner(xa), s.owner(xb));
+                if oa == ob || (xa - xb).length() >= ra + rb + skin {
+                    continue;
+                }
+                crossing += 1;
+                ghost_targets(&s, oa, xa.y, reach(ra, r_max, skin), &mut to);
+                assert!(to.contains(&ob), "{xa} of {oa} is not a ghost on {ob}");
+                ghost_targets(&s, ob, xb.y, reach(rb, r_max, skin), &mut to);
+                assert!(to.contains(&oa), "{xb} of {ob} is not a ghost on {oa}");
+            }
+        }
+        assert!(
+            crossing > 50,
+            "{crossing} pairs across slabs: the test shows nothing"
+        );
+    }
+}
