@@ -17,6 +17,7 @@ pub mod comm;
 pub mod points;
 #[cfg(feature = "mpi")]
 pub mod run;
+pub mod timing;
 
 /// Whether this process was started by an MPI launcher (`mpirun`, `mpiexec`, `srun`).
 pub fn launched_by_mpi() -> bool {
