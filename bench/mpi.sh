@@ -54,7 +54,7 @@ while [ $# -gt 0 ]; do
     --dense) N_DENSE=$2; shift ;;
     --classifier-s) CLASSIFIER_S=$2; shift ;;
     --scg) SCG=$2; shift ;;
-    -h|--help) sed -n '2,37p' "$self"; exit 0 ;;
+    -h|--help) sed -n '2,36p' "$self"; exit 0 ;;
     *) echo "unknown argument: $1" >&2; exit 2 ;;
   esac
   shift
