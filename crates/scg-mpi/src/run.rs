@@ -436,6 +436,14 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
             ),
             Some(e) => eprintln!("error: run stopped at step {steps_done}: {e}"),
         }
+        let share = crate::timing::time_shares(&per_rank);
+        eprintln!(
+            "share of the step time (all ranks): compute {:.1} %, migration {:.1} %, recording (gather) {:.1} %, rebalance {:.1} %",
+            100.0 * share[0],
+            100.0 * share[1],
+            100.0 * share[2],
+            100.0 * share[3]
+        );
         eprintln!(
             "time per rank (s): compute, migration, recording (gather), rebalance; particles migrated in, held at the end:"
         );
@@ -451,14 +459,6 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
                 c[5]
             );
         }
-        let share = crate::timing::time_shares(&per_rank);
-        eprintln!(
-            "share of the step time (all ranks): compute {:.1} %, migration {:.1} %, recording (gather) {:.1} %, rebalance {:.1} %",
-            100.0 * share[0],
-            100.0 * share[1],
-            100.0 * share[2],
-            100.0 * share[3]
-        );
         for p in &paths {
             eprintln!("wrote {}", p.display());
         }
