@@ -110,6 +110,10 @@ run() {
     return 3
   fi
   out=$(grep '^done:' "$log" | head -1) || { cat "$log" >&2; fail "$cfg $scene: no \`done:\` line"; }
+  case "$cfg" in
+    1x2drv|2x1*) echo "$out" | grep -q " on [12] ranks:" ||
+      fail "$cfg: not a decomposed run ($out): is $SCG built with --features mpi?" ;;
+  esac
   local rate
   rate=$(echo "$out" | sed -n 's/.*: \([0-9.e+-]*\) particle-steps\/s.*/\1/p')
   [ -n "$rate" ] || fail "$cfg: no rate in: $out"
