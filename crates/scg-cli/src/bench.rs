@@ -37,6 +37,11 @@ pub struct BenchArgs {
     /// `mesh`: about this many cells (tetrahedra).
     #[arg(long, default_value_t = 100_000)]
     pub cells: u64,
+    /// Write the benchmark's scene (TOML; `dilute` and `dense` `--steps` + 5 steps long,
+    /// `drag` 1 s) to this file instead of running it (not `mesh`: built in memory), e.g.
+    /// to run it over MPI ranks with `scg run` (bench/mpi.sh).
+    #[arg(long, value_name = "FILE")]
+    pub scene_out: Option<std::path::PathBuf>,
 }
 
 /// The mesh benchmark's box: half-width in x and y and height, m (the vortex's axis is z
@@ -250,6 +255,18 @@ pub fn bench(a: BenchArgs) -> i32 {
         BenchKind::Dense => dense_scene(a.particles, a.steps),
         BenchKind::Mesh => String::new(),
     };
+    if let Some(path) = &a.scene_out {
+        if text.is_empty() {
+            eprintln!("error: --scene-out: the mesh benchmark's scene is built in memory");
+            return EXIT_BAD_INPUT;
+        }
+        if let Err(e) = std::fs::write(path, &text) {
+            eprintln!("error: cannot write {}: {e}", path.display());
+            return EXIT_BAD_INPUT;
+        }
+        eprintln!("wrote {}", path.display());
+        return 0;
+    }
     let scene = match a.kind {
         BenchKind::Mesh => {
             let t = Instant::now();

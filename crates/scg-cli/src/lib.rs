@@ -4,6 +4,7 @@ pub mod analysis;
 mod bench;
 mod chart;
 pub mod cost;
+pub mod points;
 pub mod replay;
 pub mod run;
 pub mod study;
@@ -73,6 +74,7 @@ pub const EXIT_BAD_INPUT: i32 = 2;
 pub fn main() -> i32 {
     main_with(&Launch {
         run: &run::run,
+        points: &points::Local,
         others: true,
         threads: 0,
     })
@@ -82,6 +84,9 @@ pub fn main() -> i32 {
 pub struct Launch<'a> {
     /// `scg run` (another one runs a simulation decomposed over MPI ranks).
     pub run: &'a dyn Fn(run::RunArgs) -> i32,
+    /// Where the independent points of `scg cost` and `scg study` run (another one
+    /// spreads them over MPI ranks; those two subcommands run on every rank).
+    pub points: &'a dyn points::Points,
     /// Whether the other subcommands run (on one rank of a decomposed run; the others
     /// return 0 without doing anything).
     pub others: bool,
@@ -114,6 +119,8 @@ pub fn main_with(launch: &Launch) -> i32 {
     match cli.command {
         None => run_cmd(run::RunArgs::default()),
         Some(Command::Run(a)) => run_cmd(a),
+        Some(Command::Study(a)) => study::study(a, launch.points),
+        Some(Command::Cost(a)) => cost::cost(a, launch.points),
         Some(_) if !others => 0,
         Some(Command::Check { cases, set }) => cases
             .iter()
@@ -122,8 +129,6 @@ pub fn main_with(launch: &Launch) -> i32 {
             .unwrap_or(0),
         Some(Command::Bench(a)) => bench::bench(a),
         Some(Command::Replay(a)) => replay::replay(a),
-        Some(Command::Study(a)) => study::study(a),
-        Some(Command::Cost(a)) => cost::cost(a),
     }
 }
 

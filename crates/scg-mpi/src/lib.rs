@@ -18,8 +18,10 @@ pub mod ghosts;
 
 #[cfg(feature = "mpi")]
 pub mod comm;
+pub mod points;
 #[cfg(feature = "mpi")]
 pub mod run;
+pub mod timing;
 
 /// Whether this process was started by an MPI launcher (`mpirun`, `mpiexec`, `srun`).
 pub fn launched_by_mpi() -> bool {
@@ -35,8 +37,10 @@ pub fn launched_by_mpi() -> bool {
 
 /// The `scg` command line of an MPI build. Started by an MPI launcher with more than one
 /// rank, `scg run` runs one simulation over the ranks, each with its share of the cores
-/// (unless `--threads` or `SCG_THREADS` says otherwise), and the other subcommands run on
-/// rank 0 alone; otherwise it is the ordinary `scg` (MPI is not even initialised).
+/// (unless `--threads` or `SCG_THREADS` says otherwise); `scg cost` and `scg study`
+/// spread their independent points (cost points, study variants) over the ranks, each
+/// with its share of the cores, and rank 0 writes the outputs; the other subcommands run
+/// on rank 0 alone. Otherwise it is the ordinary `scg` (MPI is not even initialised).
 #[cfg(feature = "mpi")]
 pub fn main() -> i32 {
     if !launched_by_mpi() {
@@ -61,6 +65,7 @@ pub fn main() -> i32 {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     scg_cli::main_with(&scg_cli::Launch {
         run: &|a| run::run(&comm, a),
+        points: &points::RankPoints { comm: &comm },
         others: comm.rank() == 0,
         threads: (cores / local).max(1),
     })

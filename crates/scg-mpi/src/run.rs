@@ -466,10 +466,18 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
             ),
             Some(e) => eprintln!("error: run stopped at step {steps_done}: {e}"),
         }
+        let share = crate::timing::time_shares(&per_rank);
+        eprintln!(
+            "share of the step time (all ranks): compute {:.1} %, migration {:.1} %, recording (gather) {:.1} %, rebalance {:.1} %",
+            100.0 * share[0],
+            100.0 * share[1],
+            100.0 * share[2],
+            100.0 * share[3]
+        );
         eprintln!(
             "time per rank (s): compute, migration, recording (gather), rebalance; particles migrated in, held at the end:"
         );
-        for (k, c) in per_rank.chunks(6).enumerate() {
+        for (k, c) in per_rank.chunks(crate::timing::FIELDS).enumerate() {
             let s = |ns: u64| ns as f64 * 1e-9;
             eprintln!(
                 "  rank {k:<4} {:>9.3} {:>9.3} {:>9.3} {:>9.3}   {:>9} {:>9}",

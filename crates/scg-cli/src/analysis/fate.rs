@@ -31,7 +31,7 @@ use super::axis::FlowAxis;
 pub const WALL_ZONE: f64 = 1.0e-3;
 
 /// Where fates are decided.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FateBounds {
     /// Seen at or inside this distance from the axis: fine (the nozzle radius), m; 0
     /// without an outlet (then only vanishing decides fine).
@@ -52,7 +52,7 @@ pub enum Fate {
 }
 
 /// Fate counts of one class.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct FateCounts {
     /// Particles decided fine.
     pub fine: u64,

@@ -19,7 +19,7 @@ use super::fate::{FateBounds, FateCounts, Fates, WALL_ZONE};
 use super::stats::{histogram, mean, percentile};
 
 /// Time windows of the analysis.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Params {
     /// Radial distributions are cumulated over frames with from ≤ t ≤ to, s.
     pub from: f64,
@@ -69,7 +69,7 @@ impl Params {
 const T_EPS: f64 = 1e-9;
 
 /// One particle of the snapshot: position across the axis and group.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SnapPoint {
     /// Coordinates in the plane normal to the axis, m.
     pub xy: [f64; 2],
@@ -98,7 +98,7 @@ pub struct Analysis {
 }
 
 /// Per-class result.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ClassResult {
     /// Group name.
     pub name: String,
@@ -122,7 +122,7 @@ pub struct ClassResult {
 }
 
 /// The whole result.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Result {
     /// The parameters.
     pub params: Params,

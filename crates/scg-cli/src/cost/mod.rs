@@ -43,7 +43,11 @@
 //! # Timing
 //!
 //! Points run one after another on the simulator's thread pool (never in parallel), so
-//! that each wall time is not distorted by another run. The wall time of a point is the
+//! that each wall time is not distorted by another run. Under `mpirun -np N` (the MPI
+//! build) the points are spread over the N ranks ([`crate::points`], balanced by their
+//! estimated particle-steps), each rank running its share one after another on its share
+//! of the cores, and rank 0 writes the same files; every number but the times is the same
+//! bits as on one process (each point is deterministic and runs whole on one rank). The wall time of a point is the
 //! whole run of its population, so the speed-up is measured: `wall_ref / wall`, both
 //! standing for the same `N_orig` originals. The old estimate — one particle alone timed,
 //! multiplied by the originals it stands for — is kept beside it as
@@ -70,6 +74,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::EXIT_BAD_INPUT;
+use crate::points::Points;
 
 pub use plot::plot;
 pub use population::{REPRESENTED_DEFAULT, REPRESENTED_QUICK, simulated_count};
@@ -121,8 +126,10 @@ pub struct CostArgs {
     pub set: Vec<String>,
 }
 
-/// Run `scg cost`; returns the exit status.
-pub fn cost(a: CostArgs) -> i32 {
+/// Run `scg cost` with its points run through `points` (every process that shares them
+/// calls this; the one that receives the results writes the files); returns the exit
+/// status.
+pub fn cost(a: CostArgs, points: &dyn Points) -> i32 {
     let mut base = match scg_scene::load(&a.case, &a.set) {
         Ok(s) => s,
         Err(e) => {
@@ -143,38 +150,61 @@ pub fn cost(a: CostArgs) -> i32 {
         return bad(e);
     }
     let n = 1 + pts.iter().filter(|p| **p != reference).count();
-    eprintln!(
-        "scg cost `{}`: {} points of {} s simulated each, run sequentially for honest timings{}",
-        base.name,
-        n,
-        base.duration,
-        if single_particle(&base) {
-            format!(
-                " (single-particle scene: every point runs a population standing for {} \
-                 originals, N/α³ particles, and times one particle alone for the α³ estimate)",
-                d.represented
-            )
-        } else {
-            " (population mode)".to_string()
-        }
-    );
-    let bar = ProgressBar::new(n as u64);
+    let (writer, procs) = (points.writer(), points.processes());
+    let how = if procs > 1 {
+        format!(
+            "spread over {procs} processes, each running its points one after another for \
+             honest timings"
+        )
+    } else {
+        "run sequentially for honest timings".to_string()
+    };
+    if writer {
+        eprintln!(
+            "scg cost `{}`: {} points of {} s simulated each, {how}{}",
+            base.name,
+            n,
+            base.duration,
+            if single_particle(&base) {
+                format!(
+                    " (single-particle scene: every point runs a population standing for {} \
+                     originals, N/α³ particles, and times one particle alone for the α³ \
+                     estimate)",
+                    d.represented
+                )
+            } else {
+                " (population mode)".to_string()
+            }
+        );
+    }
+    let bar = if procs == 1 {
+        ProgressBar::new(n as u64)
+    } else {
+        ProgressBar::hidden()
+    };
     bar.set_style(
         ProgressStyle::with_template("{bar:40} {pos}/{len} points  {elapsed_precise} {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let s = sweep(&base, pts, reference, d.represented, |o| {
-        bar.set_message(format!(
-            "{} α={} {:.1e}s {} particles {}",
+    let swept = sweep(&base, pts, reference, d.represented, points, |o| {
+        let msg = format!(
+            "{} α={} {:.1e}s {} particles {:.2} s",
             o.point.law_name(),
             o.point.alpha,
             o.dt,
             o.particles().round(),
-            report::fmt_err(o.error)
-        ));
+            o.wall_s
+        );
+        if procs > 1 {
+            eprintln!("  point {msg}");
+        }
+        bar.set_message(msg);
         bar.inc(1);
     });
     bar.finish_and_clear();
+    let Some(s) = swept else {
+        return 0;
+    };
     let md = markdown(&s);
     let files = [
         (a.out.join("cost.md"), md.clone()),

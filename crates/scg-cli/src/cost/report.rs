@@ -123,15 +123,21 @@ pub fn markdown(s: &Sweep) -> String {
     let _ = writeln!(
         m,
         "Simulated duration {} s per point. Reference: α = 1, dt × {}, {} integrator, stiffness × {}. \
-         Points ran **sequentially** (one at a time, after an untimed warm-up) so that wall times are not distorted by each other; \
-         other load on the machine still adds noise of some 10 %. Threads: {} (a pass over {} or more \
+         Points ran **sequentially** (one at a time, after an untimed warm-up{}) so that wall times are not distorted by each other; \
+         other load on the machine still adds noise of some 10 %. Threads: {}{} (a pass over {} or more \
          particles runs on all of them, a smaller one on one thread; `--threads N` or \
          `SCG_THREADS`).\n",
         s.duration,
         r.dt_mult,
         r.integrator.name(),
         r.stiffness,
+        if s.processes > 1 {
+            format!(", on each of {} MPI ranks sharing the points", s.processes)
+        } else {
+            String::new()
+        },
         s.threads.0,
+        if s.processes > 1 { " per rank" } else { "" },
         s.threads.1
     );
     if let (true, Some(n)) = (s.single, s.represented) {

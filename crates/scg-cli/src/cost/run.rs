@@ -6,6 +6,7 @@
 use std::time::Instant;
 
 use glam::DVec3;
+use serde::{Deserialize, Serialize};
 
 use scg_core::Simulation;
 use scg_core::physics::scaling::CoarseGrainLaw;
@@ -13,6 +14,7 @@ use scg_core::step::StepSet;
 use scg_scene::Scene;
 
 use crate::analysis::{self, Analysis, Params, SharedAnalysis, cut_size, w1_to};
+use crate::points::{Points, map};
 
 use super::ERROR_FLOOR;
 use super::sweep::{Point, classifier_overrides, is_classifier, point_scene, single_particle};
@@ -21,7 +23,7 @@ use super::sweep::{Point, classifier_overrides, is_classifier, point_scene, sing
 pub type SetTimes = [f64; StepSet::ORDER.len()];
 
 /// The measured result of one point.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Outcome {
     /// The point.
     pub point: Point,
@@ -102,7 +104,7 @@ fn set_times(sim: &Simulation) -> SetTimes {
 }
 
 /// Classifier errors of one point against the reference.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct ClassErrors {
     /// Class names.
     pub names: Vec<String>,
@@ -125,9 +127,11 @@ pub struct Sweep {
     pub single: bool,
     /// Single-particle mode: originals every point's population stands for.
     pub represented: Option<usize>,
-    /// Threads of the simulator's team, and the particle count from which a pass runs on
-    /// it (below it, on the calling thread alone).
+    /// Threads of the simulator's team (of each process), and the particle count from
+    /// which a pass runs on it (below it, on the calling thread alone).
     pub threads: (usize, usize),
+    /// Processes the points were spread over (1: run one after another here).
+    pub processes: usize,
     /// The plan of the reference run, rendered.
     pub plan: String,
     /// Systems per set in the reference run.
@@ -152,11 +156,9 @@ fn run_point(
     represented: Option<usize>,
     steps_base: u64,
     sample_base_steps: u64,
-) -> (Outcome, Vec<DVec3>, String, PlanSets) {
+) -> (Outcome, Vec<DVec3>) {
     let scene = point_scene(base, p, represented);
     let mut sim = scene.build(false);
-    let plan = sim.plan().render();
-    let plan_sets = plan_sets(&sim);
     let m = p.dt_mult as u64;
     let chunk = (sample_base_steps / m).max(1);
     let total = steps_base / m;
@@ -187,17 +189,12 @@ fn run_point(
     (
         Outcome::measured(*p, &sim, scene.dt, wall, failure),
         samples,
-        plan,
-        plan_sets,
     )
 }
 
 /// Run one classifier point with the analysis attached (its frames cost a little time,
 /// the same for every point).
-fn run_classifier_point(
-    base: &Scene,
-    p: &Point,
-) -> (Outcome, Option<analysis::Result>, String, PlanSets) {
+fn run_classifier_point(base: &Scene, p: &Point) -> (Outcome, Option<analysis::Result>) {
     let scene = match scg_scene::parse(
         &base.source,
         &base.file,
@@ -208,13 +205,11 @@ fn run_classifier_point(
         Err(e) => {
             let dt = base.dt * p.dt_mult as f64;
             let fail = Outcome::unmeasured(*p, dt, Some(e.to_string()));
-            return (fail, None, String::new(), Vec::new());
+            return (fail, None);
         }
     };
     let params = Params::for_scene(&scene, 0.5 * scene.duration, scene.duration);
     let mut sim = scene.build(true);
-    let plan = sim.plan().render();
-    let plan_sets = plan_sets(&sim);
     let meta = scene.run_meta(Vec::new());
     let analysis = SharedAnalysis::attach(&mut sim, Analysis::new(&meta, &scene.flow, params));
     let t0 = Instant::now();
@@ -225,12 +220,7 @@ fn run_classifier_point(
     let _ = sim.finish_recorders();
     let result = analysis.result().ok();
     let failure = r.err().map(|e| e.to_string());
-    (
-        Outcome::measured(*p, &sim, scene.dt, wall, failure),
-        result,
-        plan,
-        plan_sets,
-    )
+    (Outcome::measured(*p, &sim, scene.dt, wall, failure), result)
 }
 
 /// The team size and the parallel threshold in force.
@@ -275,52 +265,106 @@ pub fn population_error_note() -> &'static str {
      particle-steps are measured"
 }
 
-/// Run the whole sweep. `progress` is called after each point.
-/// `represented`: originals every point of a single-particle scene stands for.
+/// The plan of the reference run, rendered, and its systems per set (from the scene
+/// built, not run: the same plan as the run's).
+fn reference_plan(
+    base: &Scene,
+    reference: &Point,
+    population: Option<usize>,
+) -> (String, PlanSets) {
+    let scene = if is_classifier(base) {
+        match scg_scene::parse(
+            &base.source,
+            &base.file,
+            &base.name,
+            &classifier_overrides(base, reference),
+        ) {
+            Ok(s) => s,
+            Err(_) => return (String::new(), Vec::new()),
+        }
+    } else {
+        point_scene(base, reference, population)
+    };
+    let sim = scene.build(is_classifier(base));
+    (sim.plan().render(), plan_sets(&sim))
+}
+
+/// Estimated cost of a point (to balance the points over processes): simulated particles
+/// over the dt multiplier (single-particle scenes: the population, plus the original
+/// alone; population scenes: 1/α³ of the scene's).
+fn point_cost(base: &Scene, p: &Point, represented: usize) -> f64 {
+    let n = if single_particle(base) {
+        super::population::simulated_count(p, represented) as f64 + 1.0
+    } else {
+        p.alpha.powi(-3)
+    };
+    n / p.dt_mult as f64
+}
+
+/// Run the whole sweep through `points` (the reference first, then every other point,
+/// each timed on its own; spread over processes by another [`Points`] than
+/// [`crate::points::Local`]). `progress` is called after each point this process ran
+/// (its error is not known yet: NaN). `represented`: originals every point of a
+/// single-particle scene stands for. The finished sweep on the process that writes the
+/// outputs, `None` on the others.
 pub fn sweep(
     base: &Scene,
     pts: &[Point],
     reference: Point,
     represented: usize,
+    points: &dyn Points,
     mut progress: impl FnMut(&Outcome),
-) -> Sweep {
+) -> Option<Sweep> {
+    // The reference first, then the other points in order.
+    let jobs: Vec<Point> = std::iter::once(reference)
+        .chain(pts.iter().copied().filter(|p| *p != reference))
+        .collect();
+    let cost: Vec<f64> = jobs
+        .iter()
+        .map(|p| point_cost(base, p, represented))
+        .collect();
     if is_classifier(base) {
-        return sweep_classifier(base, pts, reference, progress);
+        let runs = map(points, jobs.len(), &cost, |i| {
+            let r = run_classifier_point(base, &jobs[i]);
+            progress(&r.0);
+            r
+        })?;
+        return Some(sweep_classifier(base, runs, reference, points.processes()));
     }
     let single = single_particle(base);
     let steps_base = base.steps();
     // Sample interval: the scene's record interval, rounded up to a multiple of every dt
     // multiplier, so that all points sample at the same times.
-    let lcm = pts
+    let lcm = jobs
         .iter()
-        .chain(std::iter::once(&reference))
         .map(|p| p.dt_mult as u64)
         .fold(1u64, |a, b| a / gcd(a, b) * b);
     let sample = base.record_every.max(1).div_ceil(lcm) * lcm;
     let population = single.then_some(represented);
-    // The original alone at a point: the wall time of the α³ estimate.
-    let alone = |p: &Point| single.then(|| run_point(base, p, None, steps_base, sample).0.wall_s);
-    // Warm-up (thread pool, caches, clock ramp): a tenth of the reference, untimed, so
-    // that the reference time every speed-up divides is not the slowest by accident.
+    // Warm-up (thread pool, caches, clock ramp) in every process: a tenth of the
+    // reference, untimed, so that the reference time every speed-up divides is not the
+    // slowest by accident.
     let _ = run_point(base, &reference, population, steps_base / 10, sample);
-    let (mut ref_out, ref_traj, plan, plan_sets) =
-        run_point(base, &reference, population, steps_base, sample);
-    ref_out.alone_wall_s = alone(&reference);
-    progress(&ref_out);
+    let runs = map(points, jobs.len(), &cost, |i| {
+        let p = &jobs[i];
+        let (mut o, traj) = run_point(base, p, population, steps_base, sample);
+        // The original alone at the point: the wall time of the α³ estimate.
+        o.alone_wall_s = single.then(|| run_point(base, p, None, steps_base, sample).0.wall_s);
+        progress(&o);
+        (o, traj)
+    })?;
+    let (plan, plan_sets) = reference_plan(base, &reference, population);
+    let ref_traj = &runs[0].1;
     let length = ref_traj.iter().map(|d| d.length()).fold(0.0, f64::max);
     let mut notes = Vec::new();
     if !single {
         notes.push(population_error_note().to_string());
     }
-    let mut outcomes = vec![ref_out.clone()];
-    outcomes[0].error = if single { 0.0 } else { f64::NAN };
-    for p in pts {
-        if *p == reference {
-            continue;
-        }
-        let (mut o, traj, _, _) = run_point(base, p, population, steps_base, sample);
-        o.alone_wall_s = alone(p);
-        if single {
+    let mut outcomes = Vec::with_capacity(runs.len());
+    for (i, (mut o, traj)) in runs.iter().cloned().enumerate() {
+        if i == 0 {
+            o.error = if single { 0.0 } else { f64::NAN };
+        } else if single {
             let n = traj.len().min(ref_traj.len());
             // RMS over the sample times (NaN propagates): unlike the maximum, it does not
             // saturate once both particles have reached the vessel wall.
@@ -333,45 +377,43 @@ pub fn sweep(
                 o.error = f64::NAN;
             }
         }
-        progress(&o);
         outcomes.push(o);
     }
-    Sweep {
+    Some(Sweep {
         scene: base.name.clone(),
         duration: base.duration,
         single,
         represented: population,
         threads: team(),
+        processes: points.processes(),
         plan,
         plan_sets,
         reference,
         length,
         outcomes,
         notes,
-    }
+    })
 }
 
-/// The classifier sweep: error = largest per-class W1 (/ vessel radius) to the reference.
+/// The classifier sweep from its runs (the reference first): error = largest per-class
+/// W1 (/ vessel radius) to the reference.
 fn sweep_classifier(
     base: &Scene,
-    pts: &[Point],
+    runs: Vec<(Outcome, Option<analysis::Result>)>,
     reference: Point,
-    mut progress: impl FnMut(&Outcome),
+    processes: usize,
 ) -> Sweep {
-    let (mut ref_out, ref_res, plan, plan_sets) = run_classifier_point(base, &reference);
-    if let Some(r) = &ref_res {
-        let ce = class_errors(r, r);
-        ref_out.error = ce.w1.iter().copied().fold(0.0, f64::max);
-        ref_out.classes = Some(ce);
-    }
-    progress(&ref_out);
-    let mut outcomes = vec![ref_out];
-    for p in pts {
-        if *p == reference {
-            continue;
-        }
-        let (mut o, res, _, _) = run_classifier_point(base, p);
-        if let (Some(r), Some(v), None) = (&ref_res, &res, &o.failure) {
+    let (plan, plan_sets) = reference_plan(base, &reference, None);
+    let ref_res = runs[0].1.clone();
+    let mut outcomes = Vec::with_capacity(runs.len());
+    for (i, (mut o, res)) in runs.into_iter().enumerate() {
+        if i == 0 {
+            if let Some(r) = &ref_res {
+                let ce = class_errors(r, r);
+                o.error = ce.w1.iter().copied().fold(0.0, f64::max);
+                o.classes = Some(ce);
+            }
+        } else if let (Some(r), Some(v), None) = (&ref_res, &res, &o.failure) {
             let ce = class_errors(r, v);
             o.error = ce.w1.iter().copied().fold(
                 0.0,
@@ -379,7 +421,6 @@ fn sweep_classifier(
             );
             o.classes = Some(ce);
         }
-        progress(&o);
         outcomes.push(o);
     }
     Sweep {
@@ -388,6 +429,7 @@ fn sweep_classifier(
         single: false,
         represented: None,
         threads: team(),
+        processes,
         plan,
         plan_sets,
         reference,

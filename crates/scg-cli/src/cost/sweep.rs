@@ -21,7 +21,7 @@ pub struct Design {
 }
 
 /// One point of the sweep.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Point {
     /// Law (`None` = the original, α = 1).
     pub law: Option<CoarseGrainLaw>,

@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 
 use crate::EXIT_BAD_INPUT;
+use crate::points::{Points, map};
 
 /// W1 of each class to the reference variant (lives in [`crate::analysis`]).
 pub use crate::analysis::w1_to;
@@ -118,10 +119,12 @@ pub fn write_outputs(runs: &[VariantRun], nozzle: f64, out: &Path) -> Result<(),
     write_plots(runs, nozzle, out)
 }
 
-/// Run `scg study`; returns the exit status.
-pub fn study(a: StudyArgs) -> i32 {
+/// Run `scg study` with its variants run through `points` (every process that shares
+/// them calls this; the one that receives the results writes the outputs, the MCAPs are
+/// written by the process that ran the variant); returns the exit status.
+pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
     if a.study == "cyclone" {
-        return cyclone::study(a);
+        return cyclone::study(a, points);
     }
     let Some(spec) = spec(&a.study) else {
         eprintln!(
@@ -147,9 +150,28 @@ pub fn study(a: StudyArgs) -> i32 {
         eprintln!("error: cannot create {}: {e}", out.display());
         return EXIT_BAD_INPUT;
     }
-    let mut runs = Vec::new();
-    let mut nozzle = 0.0;
-    for (name, sets) in VARIANTS {
+    let nozzle = scg_scene::parse(spec.scene, "<study>", spec.name, &[])
+        .ok()
+        .and_then(|s| s.outlet)
+        .map_or(0.0, |o| o.geometry.nozzle_radius);
+    // The variants are independent: spread over processes by `points` (estimated cost
+    // 1/α³: feeders keep the solid volume rate), the results in variant order.
+    let cost: Vec<f64> = VARIANTS
+        .iter()
+        .map(|(_, sets)| {
+            sets.iter()
+                .find_map(|s| s.strip_prefix("coarse_grain.alpha="))
+                .and_then(|a| a.parse::<f64>().ok())
+                .map_or(1.0, |a| a.powi(-3))
+        })
+        .collect();
+    let mut failed = false;
+    let results = map(points, VARIANTS.len(), &cost, |i| {
+        let (name, sets) = VARIANTS[i];
+        if failed {
+            // A variant of this process failed: the study stops (the rest is not run).
+            return Err(String::new());
+        }
         let mut overrides: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
         overrides.push(format!("name=\"{}-{name}\"", spec.name));
         if a.quick {
@@ -158,21 +180,27 @@ pub fn study(a: StudyArgs) -> i32 {
         overrides.extend(a.set.iter().cloned());
         let mcap = (!a.no_record).then(|| out.join(format!("{}-{name}.mcap", spec.name)));
         eprintln!("study {}: running variant `{name}`…", spec.name);
-        match run_variant(name, spec.scene, &overrides, spec.window, mcap.as_deref()) {
-            Ok(v) => {
-                eprintln!(
-                    "  done in {:.1} s ({} resident, 0.1 s took {:.2} s)",
-                    v.total_s, v.resident, v.time_s
-                );
-                runs.push(v);
-            }
+        let r = run_variant(name, spec.scene, &overrides, spec.window, mcap.as_deref());
+        match &r {
+            Ok(v) => eprintln!(
+                "  {name} done in {:.1} s ({} resident, 0.1 s took {:.2} s)",
+                v.total_s, v.resident, v.time_s
+            ),
             Err(e) => {
+                failed = true;
                 eprintln!("error: variant `{name}`: {e}");
-                return 1;
             }
         }
-        if let Ok(s) = scg_scene::parse(spec.scene, "<study>", spec.name, &[]) {
-            nozzle = s.outlet.map_or(0.0, |o| o.geometry.nozzle_radius);
+        r
+    });
+    let Some(results) = results else {
+        return 0;
+    };
+    let mut runs = Vec::new();
+    for r in results {
+        match r {
+            Ok(v) => runs.push(v),
+            Err(_) => return 1,
         }
     }
     print!("{}", report(&runs));

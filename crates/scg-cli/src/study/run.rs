@@ -8,7 +8,7 @@ use scg_core::stages::outlet::OutletLog;
 use crate::analysis::{self, Analysis, Params, SharedAnalysis};
 
 /// One variant's run.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct VariantRun {
     /// Variant name.
     pub name: String,

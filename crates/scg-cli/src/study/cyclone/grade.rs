@@ -46,12 +46,13 @@ fn nan() -> f64 {
     f64::NAN
 }
 
-/// NaN ↔ JSON null (JSON has no NaN).
+/// NaN ↔ JSON null (JSON has no NaN); binary formats (postcard, between MPI ranks) keep
+/// the f64 bits as they are.
 mod nan_as_null {
     use serde::{Deserialize, Deserializer, Serializer};
 
     pub fn serialize<S: Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
-        if x.is_finite() {
+        if x.is_finite() || !s.is_human_readable() {
             s.serialize_f64(*x)
         } else {
             s.serialize_none()
@@ -59,7 +60,11 @@ mod nan_as_null {
     }
 
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+        if d.is_human_readable() {
+            Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+        } else {
+            f64::deserialize(d)
+        }
     }
 }
 
@@ -200,6 +205,22 @@ impl ExternalGrade {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn class_grades_travel_between_ranks_bit_exact_and_as_json_with_null() {
+        // Nothing fed: efficiency NaN; an unknown density: NaN with a payload.
+        let mut c = ClassGrade::new("g", 1e-6, f64::NAN, [0, 0, 0, 0], vec![]);
+        c.density = f64::from_bits(f64::NAN.to_bits() | 7);
+        let bytes = postcard::to_stdvec(&c).unwrap();
+        let back: ClassGrade = postcard::from_bytes(&bytes).unwrap();
+        assert_eq!(back.density.to_bits(), c.density.to_bits());
+        assert_eq!(back.efficiency.to_bits(), c.efficiency.to_bits());
+        assert_eq!(back.group, "g");
+        let json = serde_json::to_string(&c).unwrap();
+        assert!(json.contains("\"efficiency\":null"), "{json}");
+        let back: ClassGrade = serde_json::from_str(&json).unwrap();
+        assert!(back.efficiency.is_nan() && back.density.is_nan());
+    }
 
     fn class(d_um: f64, fed: u64, escaped: u64, times: Vec<f64>) -> ClassGrade {
         ClassGrade::new(

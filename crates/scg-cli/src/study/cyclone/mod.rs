@@ -28,6 +28,7 @@ pub use theory::Cyclone;
 
 use super::StudyArgs;
 use crate::EXIT_BAD_INPUT;
+use crate::points::{Points, map};
 
 /// The cyclone scene (embedded so the study runs from any directory; its `flow.case` is
 /// resolved against `cases/`, see [`scene_text`]).
@@ -151,8 +152,9 @@ pub fn read_study(dir: &std::path::Path) -> Result<Vec<CycloneRun>, String> {
     Ok(runs)
 }
 
-/// Run `scg study cyclone`; returns the exit status.
-pub fn study(a: StudyArgs) -> i32 {
+/// Run `scg study cyclone` with its variants run through `points` (see
+/// [`super::study`]); returns the exit status.
+pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
     let openfoam = match &a.openfoam {
         Some(p) => match ExternalGrade::read(p) {
             Ok(g) => Some(g),
@@ -235,28 +237,47 @@ pub fn study(a: StudyArgs) -> i32 {
         eprintln!("error: {e}");
         return EXIT_BAD_INPUT;
     }
-    for (name, alpha, law) in to_run {
+    // The variants are independent: spread over processes by `points` (estimated cost
+    // 1/α³ of the original's, the same mass fed), the results in `to_run` order.
+    let cost: Vec<f64> = to_run.iter().map(|v| v.1.powi(-3)).collect();
+    let mut failed = false;
+    let results = map(points, to_run.len(), &cost, |i| {
+        let (name, alpha, law) = to_run[i];
+        if failed {
+            // A variant of this process failed: the study stops (the rest is not run).
+            return Err(String::new());
+        }
         let overrides = overrides_of(name, alpha, law);
         let mcap = (!a.no_record).then(|| out.join(format!("cyclone-{name}.mcap")));
         eprintln!("study cyclone: running variant `{name}` (α = {alpha}, law {law})…");
-        match run_variant(name, &text, &overrides, SNAPSHOT_AT, mcap.as_deref()) {
+        let r = run_variant(name, &text, &overrides, SNAPSHOT_AT, mcap.as_deref());
+        match &r {
+            Ok(v) => eprintln!(
+                "  {name} done in {:.1} s ({} particle-steps, fed {}, escaped {}, held {}, lost {})",
+                v.total_s,
+                v.particle_steps,
+                v.classes.iter().map(|c| c.fed).sum::<u64>(),
+                v.classes.iter().map(|c| c.escaped).sum::<u64>(),
+                v.classes.iter().map(|c| c.held).sum::<u64>(),
+                v.classes.iter().map(|c| c.lost).sum::<u64>(),
+            ),
+            Err(e) => {
+                failed = true;
+                eprintln!("error: variant `{name}`: {e}");
+            }
+        }
+        r
+    });
+    let Some(results) = results else {
+        return 0;
+    };
+    for r in results {
+        match r {
             Ok(v) => {
-                eprintln!(
-                    "  done in {:.1} s ({} particle-steps, fed {}, escaped {}, held {}, lost {})",
-                    v.total_s,
-                    v.particle_steps,
-                    v.classes.iter().map(|c| c.fed).sum::<u64>(),
-                    v.classes.iter().map(|c| c.escaped).sum::<u64>(),
-                    v.classes.iter().map(|c| c.held).sum::<u64>(),
-                    v.classes.iter().map(|c| c.lost).sum::<u64>(),
-                );
                 runs.retain(|r: &CycloneRun| r.name != v.name);
                 runs.push(v);
             }
-            Err(e) => {
-                eprintln!("error: variant `{name}`: {e}");
-                return 1;
-            }
+            Err(_) => return 1,
         }
     }
     // In the order of VARIANTS (the original first).

@@ -97,7 +97,7 @@ impl Tracker {
 }
 
 /// One variant's run.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct CycloneRun {
     /// Variant name.
     pub name: String,
