@@ -24,17 +24,15 @@
 #   2x1 slabs  `mpirun -np 2 scg run --threads 1` (slabs along the longest extent)
 #   2x1 ids    the same with SCG_MPI_DECOMP=ids (particles shared by id: nothing migrates)
 # Rate = particle-steps / wall time of the stepping loop (the `done:` line; summed over the
-# ranks). Shares = the decomposed run's `share of the step time` line (compute, migration
-# = the per-step collective, the exchange and the wait for the slower rank, recording,
-# rebalance), of the best run.
+# ranks). Shares = the decomposed run's `share of the step time` line (compute, ghost
+# exchange, migration = the per-step collective, the exchange and the wait for the slower
+# rank, recording, rebalance), of the best run.
 #
-# Particle contacts: a scene with `[contacts]` is refused on more than one rank until ghost
-# particles are merged (branch `ghost`; with them, contacts in periodic boxes and shared
-# by id stay refused). Each scene is first run with its contacts on 2 ranks in slabs; when
-# refused (the message is printed), the dense bed is skipped and the dilute cloud and the
-# classifier run WITHOUT particle contacts in every configuration (their `[contacts]`
-# table removed; the classifier keeps its wall contacts); a configuration refusing them
-# otherwise (by id) is shown as refused. Rerun after merging the ghost branch.
+# Particle contacts run over ranks with ghost particles (slabs; in periodic boxes the slabs
+# wrap round the box); shared by id they are refused, and that configuration is shown as
+# refused. Each scene is first run with its contacts on 2 ranks in slabs; were that
+# refused (the message is printed), the dense bed would be skipped and the dilute cloud
+# and the classifier run WITHOUT particle contacts in every configuration.
 set -euo pipefail
 self=$(realpath "$0")
 cd "$(dirname "$self")/.."
@@ -119,8 +117,8 @@ run() {
   [ -n "$rate" ] || fail "$cfg: no rate in: $out"
   local share
   share=$(grep '^share of the step time' "$log" | sed -n \
-    's/.*compute \([0-9.]*\) %, migration \([0-9.]*\) %, recording (gather) \([0-9.]*\) %, rebalance \([0-9.]*\) %.*/\1 \2 \3 \4/p')
-  echo "$rate ${share:-- - - -}"
+    's/.*compute \([0-9.]*\) %, ghost exchange \([0-9.]*\) %, migration \([0-9.]*\) %, recording (gather) \([0-9.]*\) %, rebalance \([0-9.]*\) %.*/\1 \2 \3 \4 \5/p')
+  echo "$rate ${share:-- - - - -}"
 }
 
 CONFIGS=(1x2 1x1 1x2drv 2x1slabs 2x1ids)
@@ -158,7 +156,7 @@ bench_scene() {
       fi
     done
   done
-  printf '%s\n' "$name (best of $REPS; particle-steps/s; shares of the step time in %: compute migration gather rebalance)"
+  printf '%s\n' "$name (best of $REPS; particle-steps/s; shares of the step time in %: compute ghosts migration gather rebalance)"
   for cfg in "${CONFIGS[@]}"; do
     if [ "${best[$cfg]}" = refused ]; then
       printf '  %-32s %10s   %s\n' "$(label "$cfg")" "-" "${shares[$cfg]}"
@@ -190,7 +188,7 @@ contact_scene() {
       bench_scene "$name (no particle contacts)" "$nc" "$@"
     else
       echo "$name: skipped, 2 ranks refuse its contacts ($why)"
-      echo "  (without the ghost branch every scene with [contacts] is refused; with it, periodic boxes are)"
+      echo "  (a build without ghost particles refuses every scene with [contacts] on several ranks)"
     fi
   else
     fail "$name: the 2-rank probe failed"

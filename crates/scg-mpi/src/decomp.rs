@@ -10,12 +10,17 @@ use glam::DVec3;
 
 /// Slabs along axis `axis` (0 = x, 1 = y, 2 = z): rank r owns the positions whose
 /// coordinate c satisfies `cuts[r-1] <= c < cuts[r]` (the first and last slabs are open).
+/// Along a periodic axis (`period` P: particle contacts in a periodic box [0, P), whose
+/// positions are not wrapped) c is the coordinate wrapped into [0, P), the first slab
+/// starts at 0, the last ends at P, and the two are neighbours across the box's side.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Slabs {
     /// The axis cut.
     pub axis: usize,
     /// Ascending cut coordinates, m; one fewer than the ranks.
     pub cuts: Vec<f64>,
+    /// Length of the periodic box along `axis`, m (`None`: open).
+    pub period: Option<f64>,
 }
 
 impl Slabs {
@@ -25,7 +30,39 @@ impl Slabs {
         Slabs {
             axis: axis.min(2),
             cuts: vec![0.0; ranks.max(1) - 1],
+            period: None,
         }
+    }
+
+    /// The coordinate of x that decides its slab: along the axis, wrapped into [0, P)
+    /// when the axis is periodic.
+    #[inline]
+    pub fn coord(&self, x: DVec3) -> f64 {
+        self.wrap(x[self.axis])
+    }
+
+    /// `c` wrapped into [0, P) along a periodic axis, else `c`.
+    #[inline]
+    pub fn wrap(&self, c: f64) -> f64 {
+        match self.period {
+            Some(p) if c.is_finite() => {
+                let w = c - p * (c / p).floor();
+                if w >= p { 0.0 } else { w }
+            }
+            _ => c,
+        }
+    }
+
+    /// Slab q's extent along the axis, m: [lo, hi) (infinite at the open ends).
+    pub fn bounds(&self, q: usize) -> (f64, f64) {
+        let n = self.ranks();
+        let (first, last) = match self.period {
+            Some(p) => (0.0, p),
+            None => (f64::NEG_INFINITY, f64::INFINITY),
+        };
+        let lo = if q == 0 { first } else { self.cuts[q - 1] };
+        let hi = if q + 1 >= n { last } else { self.cuts[q] };
+        (lo, hi)
     }
 
     /// Number of slabs (ranks).
@@ -36,7 +73,7 @@ impl Slabs {
     /// The rank owning position `x` (a non-finite coordinate goes to rank 0, whose guard
     /// reports it).
     pub fn owner(&self, x: DVec3) -> usize {
-        let c = x[self.axis];
+        let c = self.coord(x);
         if !c.is_finite() {
             return 0;
         }
@@ -46,9 +83,18 @@ impl Slabs {
     /// Slabs along `axis` holding equal shares (±1) of the particles at the coordinates
     /// `coords` (any order): each cut lies halfway between the last coordinate of one
     /// share and the first of the next. The result depends only on the multiset of
-    /// coordinates, so every rank computes the same cuts from the same data.
-    pub fn balanced(axis: usize, ranks: usize, coords: &[f64]) -> Self {
-        let mut c: Vec<f64> = coords.iter().copied().filter(|c| c.is_finite()).collect();
+    /// coordinates, so every rank computes the same cuts from the same data. Along a
+    /// periodic axis (`period`) the coordinates are wrapped into [0, P) first.
+    pub fn balanced(axis: usize, ranks: usize, coords: &[f64], period: Option<f64>) -> Self {
+        let open = Slabs {
+            period,
+            ..Slabs::new(axis, 1)
+        };
+        let mut c: Vec<f64> = coords
+            .iter()
+            .map(|&c| open.wrap(c))
+            .filter(|c| c.is_finite())
+            .collect();
         c.sort_unstable_by(f64::total_cmp);
         let n = c.len();
         let ranks = ranks.max(1);
@@ -66,6 +112,7 @@ impl Slabs {
         Slabs {
             axis: axis.min(2),
             cuts,
+            period,
         }
     }
 }
@@ -158,6 +205,7 @@ mod tests {
         let s = Slabs {
             axis: 1,
             cuts: vec![-1.0, 2.0],
+            period: None,
         };
         let at = |y| s.owner(DVec3::new(100.0, y, -7.0));
         assert_eq!(at(-5.0), 0);
@@ -171,10 +219,30 @@ mod tests {
     }
 
     #[test]
+    fn periodic_slabs_own_wrapped_coordinates() {
+        // A box [0, 3) along z cut at 1 and 2; positions are not wrapped.
+        let s = Slabs::balanced(2, 3, &[0.5, 1.5, 2.5, 3.5, 4.5, 5.5], Some(3.0));
+        assert_eq!(s.cuts, vec![1.0, 2.0]);
+        let at = |z| s.owner(DVec3::new(0.0, 0.0, z));
+        assert_eq!(at(0.2), 0);
+        assert_eq!(at(3.2), 0, "one box up is the same place");
+        assert_eq!(at(-0.2), 2, "just below 0 is the top of the box");
+        assert_eq!(at(-1.5), 1);
+        assert_eq!(at(2.999), 2);
+        assert_eq!(at(f64::NAN), 0);
+        assert_eq!(s.bounds(0), (0.0, 1.0));
+        assert_eq!(s.bounds(2), (2.0, 3.0));
+        assert_eq!(s.wrap(-1e-18), 0.0, "rounding up to P folds to 0");
+        let open = Slabs::balanced(2, 3, &[0.5, 1.5, 2.5], None);
+        assert_eq!(open.bounds(0), (f64::NEG_INFINITY, 1.0));
+        assert_eq!(open.owner(DVec3::new(0.0, 0.0, -0.2)), 0);
+    }
+
+    #[test]
     fn balanced_cuts_share_the_particles_equally() {
         // 10 coordinates in scrambled order over 3 ranks: shares of 3, 3, 4.
         let coords = [9.0, 0.0, 5.0, 1.0, 8.0, 2.0, 7.0, 3.0, 6.0, 4.0];
-        let s = Slabs::balanced(2, 3, &coords);
+        let s = Slabs::balanced(2, 3, &coords, None);
         assert_eq!(s.cuts, vec![2.5, 5.5]);
         let mut counts = [0u64; 3];
         for c in coords {
@@ -185,11 +253,11 @@ mod tests {
         // Order does not matter.
         let mut rev = coords;
         rev.reverse();
-        assert_eq!(Slabs::balanced(2, 3, &rev), s);
+        assert_eq!(Slabs::balanced(2, 3, &rev, None), s);
         // Fewer particles than ranks, or none: still ascending cuts.
-        let few = Slabs::balanced(0, 4, &[1.0]);
+        let few = Slabs::balanced(0, 4, &[1.0], None);
         assert!(few.cuts.windows(2).all(|w| w[0] <= w[1]));
-        assert_eq!(Slabs::balanced(0, 3, &[]).cuts, vec![0.0, 0.0]);
+        assert_eq!(Slabs::balanced(0, 3, &[], None).cuts, vec![0.0, 0.0]);
     }
 
     #[test]
@@ -205,7 +273,7 @@ mod tests {
             counts.iter().all(|&c| (900..1100).contains(&c)),
             "{counts:?}"
         );
-        let s = Owners::Slabs(Slabs::balanced(0, 2, &[0.0, 1.0]));
+        let s = Owners::Slabs(Slabs::balanced(0, 2, &[0.0, 1.0], None));
         assert_eq!(s.owner(7, DVec3::new(0.0, 5.0, 5.0)), 0);
         assert_eq!(s.owner(7, DVec3::new(1.0, 5.0, 5.0)), 1);
     }

@@ -21,6 +21,11 @@
 //! local particle and a ghost is counted by each rank for its own particle's group, so
 //! the summed collision counts are one rank's.
 //!
+//! In a periodic box the slabs wrap round it along their axis ([`Slabs::period`]): the
+//! coordinates are taken in [0, P), the first and last slabs meet at the box's side, and
+//! a particle within its halo of a slab across that side is sent to it (at its own,
+//! unwrapped position: the pair list and kernel take the minimum image).
+//!
 //! The list is rebuilt when the table's ids or the ghost ids change, and otherwise on the
 //! exact displacement check, run every step while there are ghosts (their displacement
 //! is not the local integrator's bound). A local–ghost pair's tangential history is
@@ -99,22 +104,21 @@ pub fn ghost_targets(slabs: &Slabs, me: usize, c: f64, halo: f64, out: &mut Vec<
     if !c.is_finite() {
         return;
     }
-    let n = slabs.ranks();
-    for q in 0..n {
+    // Along a periodic axis: the coordinate in [0, P) and its images one box away.
+    let c = slabs.wrap(c);
+    let images = match slabs.period {
+        Some(p) => [c, c - p, c + p],
+        None => [c; 3],
+    };
+    for q in 0..slabs.ranks() {
         if q == me {
             continue;
         }
-        let lo = if q == 0 {
-            f64::NEG_INFINITY
-        } else {
-            slabs.cuts[q - 1]
-        };
-        let hi = if q + 1 == n {
-            f64::INFINITY
-        } else {
-            slabs.cuts[q]
-        };
-        let dist = (lo - c).max(c - hi).max(0.0);
+        let (lo, hi) = slabs.bounds(q);
+        let dist = images
+            .iter()
+            .map(|&ci| (lo - ci).max(ci - hi).max(0.0))
+            .fold(f64::INFINITY, f64::min);
         if dist <= halo {
             out.push(q);
         }
@@ -127,13 +131,18 @@ pub fn ghost_targets(slabs: &Slabs, me: usize, c: f64, halo: f64, out: &mut Vec<
 /// among q's.
 pub fn peers(slabs: &Slabs, me: usize, reach: f64) -> Vec<usize> {
     let n = slabs.ranks();
-    // Slab q spans [cuts[q-1], cuts[q]); the gap between q < r is cuts[r-1] - cuts[q].
+    // Slab q spans [cuts[q-1], cuts[q]); the gap between q < r is cuts[r-1] - cuts[q],
+    // and along a periodic axis also the way round: from r's end to P, from 0 to q's start.
     let gap = |a: usize, b: usize| {
         let (lo, hi) = (a.min(b), a.max(b));
-        if hi == lo + 1 {
+        let direct = if hi == lo + 1 {
             0.0
         } else {
             slabs.cuts[hi - 1] - slabs.cuts[lo]
+        };
+        match slabs.period {
+            Some(p) => direct.min(slabs.bounds(lo).0 + (p - slabs.bounds(hi).1)),
+            None => direct,
         }
     };
     (0..n).filter(|&q| q != me && gap(q, me) <= reach).collect()
@@ -265,6 +274,7 @@ mod tests {
         let s = Slabs {
             axis: 0,
             cuts: vec![0.0, 1.0, 1.5],
+            period: None,
         };
         let mut to = Vec::new();
         let mut at = |me, c| {
@@ -295,6 +305,7 @@ mod tests {
         let s = Slabs {
             axis: 2,
             cuts: vec![0.0, 1.0, 1.2, 3.0],
+            period: None,
         };
         assert_eq!(peers(&s, 0, 0.1), vec![1]);
         assert_eq!(peers(&s, 1, 0.1), vec![0, 2]);
@@ -321,45 +332,97 @@ mod tests {
     }
 
     /// Every pair closer than r_i + r_j + skin across two slabs has each particle within
-    /// the halo of the other's slab (a brute-force check over random particles).
+    /// the halo of the other's slab (a brute-force check over random particles), in an
+    /// open domain and along a periodic axis (positions spread over three boxes, the
+    /// minimum image for the distance); the ranks a particle goes to are its slab's peers.
     #[test]
     fn every_cross_slab_pair_in_reach_is_seen() {
-        let s = Slabs {
+        let open = Slabs {
             axis: 1,
             cuts: vec![-0.2, 0.0, 0.05, 0.4],
+            period: None,
         };
-        let mut state = 12345u64;
-        let mut rnd = || {
-            state = crate::decomp::splitmix64(state);
-            (state >> 11) as f64 / (1u64 << 53) as f64
+        let periodic = Slabs {
+            axis: 1,
+            cuts: vec![0.1, 0.3, 0.35, 0.9],
+            period: Some(1.2),
         };
-        let (skin, r_max) = (0.01, 0.04);
-        let ps: Vec<(glam::DVec3, f64)> = (0..600)
-            .map(|_| {
-                (
-                    glam::DVec3::new(rnd() * 0.3, rnd() * 1.2 - 0.6, rnd() * 0.3),
-                    r_max * (0.3 + 0.7 * rnd()),
-                )
-            })
-            .collect();
-        let mut to = Vec::new();
-        let mut crossing = 0;
-        for (a, &(xa, ra)) in ps.iter().enumerate() {
-            for &(xb, rb) in &ps[a + 1..] {
-                let (oa, ob) = (s.owner(xa), s.owner(xb));
-                if oa == ob || (xa - xb).length() >= ra + rb + skin {
-                    continue;
+        for s in [open, periodic] {
+            let mut state = 12345u64;
+            let mut rnd = || {
+                state = crate::decomp::splitmix64(state);
+                (state >> 11) as f64 / (1u64 << 53) as f64
+            };
+            let (skin, r_max) = (0.01, 0.04);
+            let spread = if s.period.is_some() { 3.6 } else { 1.2 };
+            let ps: Vec<(glam::DVec3, f64)> = (0..600)
+                .map(|_| {
+                    (
+                        glam::DVec3::new(rnd() * 0.3, rnd() * spread - 0.6, rnd() * 0.3),
+                        r_max * (0.3 + 0.7 * rnd()),
+                    )
+                })
+                .collect();
+            let sep = |a: glam::DVec3, b: glam::DVec3| {
+                let mut d = b - a;
+                if let Some(p) = s.period {
+                    d.y -= p * (d.y / p).round();
                 }
-                crossing += 1;
-                ghost_targets(&s, oa, xa.y, reach(ra, r_max, skin), &mut to);
-                assert!(to.contains(&ob), "{xa} of {oa} is not a ghost on {ob}");
-                ghost_targets(&s, ob, xb.y, reach(rb, r_max, skin), &mut to);
-                assert!(to.contains(&oa), "{xb} of {ob} is not a ghost on {oa}");
+                d.length()
+            };
+            let mut to = Vec::new();
+            let mut crossing = 0;
+            let halo = reach(r_max, r_max, skin);
+            for (a, &(xa, ra)) in ps.iter().enumerate() {
+                for &(xb, rb) in &ps[a + 1..] {
+                    let (oa, ob) = (s.owner(xa), s.owner(xb));
+                    if oa == ob || sep(xa, xb) >= ra + rb + skin {
+                        continue;
+                    }
+                    crossing += 1;
+                    ghost_targets(&s, oa, xa.y, reach(ra, r_max, skin), &mut to);
+                    assert!(to.contains(&ob), "{xa} of {oa} is not a ghost on {ob}");
+                    assert!(to.iter().all(|q| peers(&s, oa, halo).contains(q)));
+                    ghost_targets(&s, ob, xb.y, reach(rb, r_max, skin), &mut to);
+                    assert!(to.contains(&oa), "{xb} of {ob} is not a ghost on {oa}");
+                }
+            }
+            assert!(
+                crossing > 50,
+                "{crossing} pairs across slabs: the test shows nothing"
+            );
+        }
+    }
+
+    #[test]
+    fn periodic_slabs_reach_round_the_box() {
+        // [0, 0.1) [0.1, 0.5) [0.5, 0.9) [0.9, 1): the first and last touch across 0 ≡ 1.
+        let s = Slabs {
+            axis: 0,
+            cuts: vec![0.1, 0.5, 0.9],
+            period: Some(1.0),
+        };
+        assert_eq!(peers(&s, 0, 0.05), vec![1, 3]);
+        assert_eq!(peers(&s, 3, 0.05), vec![0, 2]);
+        // From slab 1, slab 3 is 0.4 away directly and 0.1 round the box (0.1 down to
+        // 0 ≡ 1).
+        assert_eq!(peers(&s, 1, 0.05), vec![0, 2]);
+        assert_eq!(peers(&s, 1, 0.1), vec![0, 2, 3]);
+        let mut to = Vec::new();
+        ghost_targets(&s, 0, 0.02, 0.05, &mut to);
+        assert_eq!(to, vec![3], "near 0: a ghost at the top of the box");
+        ghost_targets(&s, 0, 5.02, 0.05, &mut to);
+        assert_eq!(to, vec![3], "five boxes up, the same");
+        ghost_targets(&s, 3, 0.97, 0.05, &mut to);
+        assert_eq!(to, vec![0]);
+        ghost_targets(&s, 1, 0.3, 0.05, &mut to);
+        assert!(to.is_empty());
+        for reach in [0.0, 0.05, 0.2, 0.45, 2.0] {
+            for a in 0..4 {
+                for b in peers(&s, a, reach) {
+                    assert!(peers(&s, b, reach).contains(&a), "{a} {b} {reach}");
+                }
             }
         }
-        assert!(
-            crossing > 50,
-            "{crossing} pairs across slabs: the test shows nothing"
-        );
     }
 }

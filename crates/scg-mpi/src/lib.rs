@@ -10,8 +10,8 @@
 //! rank 0 writes frames gathered and sorted by id. Particle contacts are decomposed with
 //! ghost particles ([`ghosts`]): copies of the neighbouring slabs' particles within the
 //! contact reach plus the Verlet skin; such runs agree with one rank statistically, not
-//! bit for bit (the force sums run in row order, see [`ghosts`]). Contacts are refused
-//! with `SCG_MPI_DECOMP=ids` and in periodic boxes.
+//! bit for bit (the force sums run in row order, see [`ghosts`]). In a periodic box the
+//! slabs wrap round it along their axis. Contacts are refused with `SCG_MPI_DECOMP=ids`.
 
 pub mod decomp;
 pub mod ghosts;

@@ -58,6 +58,7 @@ struct FramePart {
 #[derive(Clone, Copy, Debug, Default)]
 struct Times {
     compute: Duration,
+    ghosts: Duration,
     migrate: Duration,
     record: Duration,
     rebalance: Duration,
@@ -143,7 +144,7 @@ impl Ranked<'_> {
         let Owners::Slabs(slabs) = &self.owners else {
             return Ok(());
         };
-        let axis = slabs.axis;
+        let (axis, period) = (slabs.axis, slabs.period);
         let mine: Vec<f64> = self
             .sim
             .frame_rows()
@@ -156,7 +157,7 @@ impl Ranked<'_> {
             .iter()
             .flat_map(|b| decode::<Vec<f64>>(b))
             .collect();
-        self.owners = Owners::Slabs(Slabs::balanced(axis, self.comm.size(), &all));
+        self.owners = Owners::Slabs(Slabs::balanced(axis, self.comm.size(), &all, period));
         self.rebalances += 1;
         self.migrate()
     }
@@ -225,18 +226,11 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
     // The recording stage is the driver's (gathered on rank 0), not the schedule's.
     let mut sim = scene.build(false);
     let by_id = std::env::var("SCG_MPI_DECOMP").as_deref() == Ok("ids");
-    if let Some(c) = sim.world.get_resource::<ContactState>()
-        && (by_id || c.params.periodic.is_some())
-    {
+    if by_id && sim.world.get_resource::<ContactState>().is_some() {
         if root {
             eprintln!(
-                "error: {}: particle contacts over MPI ranks need slabs in an open domain ({}): run with one rank or without SCG_MPI_DECOMP=ids",
+                "error: {}: particle contacts over MPI ranks need slabs (SCG_MPI_DECOMP=ids shares them by id): run with one rank or without SCG_MPI_DECOMP=ids",
                 scene.file,
-                if by_id {
-                    "SCG_MPI_DECOMP=ids shares them by id"
-                } else {
-                    "the contacts are periodic"
-                }
             );
         }
         return EXIT_BAD_INPUT;
@@ -270,10 +264,16 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         _ => longest_axis(rows.iter().map(|r| glam::DVec3::from_array(r.position))),
     };
     let coords: Vec<f64> = rows.iter().map(|r| r.position[axis]).collect();
+    // Periodic contacts: the slabs wrap round the box along their axis.
+    let period = sim
+        .world
+        .get_resource::<ContactState>()
+        .and_then(|c| c.params.periodic)
+        .map(|b| b.lengths[axis]);
     let owners = if by_id {
         Owners::Ids(comm.size())
     } else {
-        Owners::Slabs(Slabs::balanced(axis, comm.size(), &coords))
+        Owners::Slabs(Slabs::balanced(axis, comm.size(), &coords, period))
     };
     let me = comm.rank();
     drop(sim.extract_particles(|id, x| owners.owner(id, x) != me));
@@ -344,7 +344,6 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
     };
     // Ghost particles (contacts): exchanged before every step.
     let mut halo = crate::ghosts::Halo::new(&scene);
-    let mut ghost_time = Duration::ZERO;
     let mut interrupted = false;
     let mut last_rebalance = 0;
     let mut sink_failed = false;
@@ -352,7 +351,7 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         let first_new = r.sim.world.resource::<NextParticleId>().0;
         let t = Instant::now();
         halo.exchange(comm, &mut r.sim, &r.owners);
-        ghost_time += t.elapsed();
+        times.ghosts += t.elapsed();
         let t = Instant::now();
         let stepped = r.sim.step();
         times.compute += t.elapsed();
@@ -429,6 +428,7 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
     let ps: u64 = comm.all_gather_u64(&[r.sim.particle_steps()]).iter().sum();
     let per_rank = comm.all_gather_u64(&[
         times.compute.as_nanos() as u64,
+        times.ghosts.as_nanos() as u64,
         times.migrate.as_nanos() as u64,
         times.record.as_nanos() as u64,
         times.rebalance.as_nanos() as u64,
@@ -443,7 +443,7 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
             (c.list.builds, c.list.build_time.as_nanos() as u64)
         });
     let ghost_stats = comm.all_gather_u64(&[
-        ghost_time.as_nanos() as u64,
+        times.ghosts.as_nanos() as u64,
         halo.received,
         builds,
         build_time,
@@ -468,25 +468,27 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         }
         let share = crate::timing::time_shares(&per_rank);
         eprintln!(
-            "share of the step time (all ranks): compute {:.1} %, migration {:.1} %, recording (gather) {:.1} %, rebalance {:.1} %",
+            "share of the step time (all ranks): compute {:.1} %, ghost exchange {:.1} %, migration {:.1} %, recording (gather) {:.1} %, rebalance {:.1} %",
             100.0 * share[0],
             100.0 * share[1],
             100.0 * share[2],
-            100.0 * share[3]
+            100.0 * share[3],
+            100.0 * share[4]
         );
         eprintln!(
-            "time per rank (s): compute, migration, recording (gather), rebalance; particles migrated in, held at the end:"
+            "time per rank (s): compute, ghost exchange, migration, recording (gather), rebalance; particles migrated in, held at the end:"
         );
         for (k, c) in per_rank.chunks(crate::timing::FIELDS).enumerate() {
             let s = |ns: u64| ns as f64 * 1e-9;
             eprintln!(
-                "  rank {k:<4} {:>9.3} {:>9.3} {:>9.3} {:>9.3}   {:>9} {:>9}",
+                "  rank {k:<4} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3}   {:>9} {:>9}",
                 s(c[0]),
                 s(c[1]),
                 s(c[2]),
                 s(c[3]),
-                c[4],
-                c[5]
+                s(c[4]),
+                c[5],
+                c[6]
             );
         }
         if halo.exchanges > 0 {
