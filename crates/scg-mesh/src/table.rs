@@ -362,37 +362,52 @@ impl CellTable {
     }
 
     /// What cell `c`'s records tell of x (see [`Query`]).
-    #[inline]
+    #[inline(never)]
     fn query(&self, c: u32, x: DVec3) -> Query {
         let Some(rec) = self.cells.get(c as usize) else {
             return Query::Unknown;
         };
         let d = x - rec.cc;
-        let r = rec.face as usize..(rec.face + rec.n_faces) as usize;
         if rec.simple != 0 {
-            // convex, planar faces: inside when the exit ratio is ≤ 1, and then in the
-            // tetrahedron of the exit face
-            let (Some(faces), Some(next)) = (self.simple.get(r.clone()), self.simple_next.get(r))
-            else {
-                return Query::Unknown;
-            };
-            let Some(first) = faces.first() else {
-                return Query::Unknown;
-            };
-            let (mut best, mut best_ratio) = (0, first.q.dot(d));
-            for (k, f) in faces.iter().enumerate().skip(1) {
-                let r = f.q.dot(d);
-                if r > best_ratio {
-                    best_ratio = r;
-                    best = k;
-                }
-            }
-            if best_ratio > 1.0 + TOL {
-                return Query::Beyond(next[best]);
-            }
-            let g = &faces[best].g;
-            return Query::Inside(rec.uc + DVec3::new(g[0].dot(d), g[1].dot(d), g[2].dot(d)));
+            self.query_simple(rec, d)
+        } else {
+            self.query_general(rec, d)
         }
+    }
+
+    /// [`CellTable::query`] for a simple cell (convex, planar faces): inside when the
+    /// exit ratio is ≤ 1, and then in the tetrahedron of the exit face.
+    #[inline(always)]
+    fn query_simple(&self, rec: &CellRec, d: DVec3) -> Query {
+        let r = rec.face as usize..(rec.face + rec.n_faces) as usize;
+        let (Some(faces), Some(next)) = (self.simple.get(r.clone()), self.simple_next.get(r))
+        else {
+            return Query::Unknown;
+        };
+        let Some(first) = faces.first() else {
+            return Query::Unknown;
+        };
+        let (mut best, mut best_ratio) = (0, first.q.dot(d));
+        for (k, f) in faces.iter().enumerate().skip(1) {
+            let r = f.q.dot(d);
+            if r > best_ratio {
+                best_ratio = r;
+                best = k;
+            }
+        }
+        if best_ratio > 1.0 + TOL {
+            return Query::Beyond(next[best]);
+        }
+        let g = &faces[best].g;
+        Query::Inside(rec.uc + DVec3::new(g[0].dot(d), g[1].dot(d), g[2].dot(d)))
+    }
+
+    /// [`CellTable::query`] for any other cell: the exit face's tetrahedra, then (a warped
+    /// face, a non-convex cell) all the cell's. Kept out of line so that the simple path
+    /// stays small where it is inlined.
+    #[inline(never)]
+    fn query_general(&self, rec: &CellRec, d: DVec3) -> Query {
+        let r = rec.face as usize..(rec.face + rec.n_faces) as usize;
         let (Some(faces), Some(next)) = (self.faces.get(r.clone()), self.faces_next.get(r)) else {
             return Query::Unknown;
         };

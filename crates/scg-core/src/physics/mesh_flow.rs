@@ -347,17 +347,45 @@ pub fn land(
     x0: DVec3,
     h0: u32,
     h_from: u32,
+    x1: DVec3,
+    v1: DVec3,
+    e: f64,
+) -> Landing {
+    // The table first: x1 is in the cell of the mid-step point (most steps) or a few
+    // cells on.
+    let walked = flow.walk_table(h_from, x1);
+    if let TableWalk::Inside { cell, .. } = walked {
+        return Landing {
+            x: x1,
+            v: v1,
+            hint: cell,
+        };
+    }
+    land_boundary(flow, (x0, h0), h_from, walked, x1, v1, e)
+}
+
+/// [`land`] when the table did not find x1 from `h_from` (`walked`): the boundary, the
+/// locator. Out of line, so that the common case stays small where it is inlined.
+#[inline(never)]
+fn land_boundary(
+    flow: &MeshFlow,
+    (x0, h0): (DVec3, u32),
+    h_from: u32,
+    mut walked: TableWalk,
     mut x1: DVec3,
     mut v1: DVec3,
     e: f64,
 ) -> Landing {
     let mut from = h_from;
-    for _ in 0..MAX_REFLECTIONS {
-        // The table first: x1 is in the cell of the mid-step point (most steps) or a few
-        // cells on, or the walk meets a boundary face (a particle at a wall). Whether the
-        // point beyond that face is inside the mesh elsewhere (`Location::Crossed`) or not
-        // (`Left`) changes only the cell the next walk starts from, so it is not asked.
-        let (face, patch) = match flow.walk_table(from, x1) {
+    for k in 0..MAX_REFLECTIONS {
+        // The table's walk met a boundary face (a particle at a wall), or could not tell.
+        // Whether the point beyond that face is inside the mesh elsewhere
+        // (`Location::Crossed`) or not (`Left`) changes only the cell the next walk starts
+        // from, so it is not asked.
+        if k > 0 {
+            walked = flow.walk_table(from, x1);
+        }
+        let (face, patch) = match walked {
             TableWalk::Inside { cell, .. } => {
                 return Landing {
                     x: x1,
