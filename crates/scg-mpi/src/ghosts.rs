@@ -158,7 +158,7 @@ mod exchange {
     use scg_core::Simulation;
     use scg_core::checkpoint::ParticleRecord;
     use scg_core::stages::contacts::ContactState;
-    use scg_core::stages::contacts::ghosts::{Ghosts, table_rows};
+    use scg_core::stages::contacts::ghosts::{Ghosts, table_rows_where};
 
     use super::{Migrants, ghost_targets, peers, reach};
     use crate::comm::Comm;
@@ -198,10 +198,20 @@ mod exchange {
             else {
                 return;
             };
-            let rows = table_rows(&mut sim.world);
             let me = comm.rank();
-            let mut out = vec![Ghosts::default(); comm.size()];
+            // Only with the slabs a particle can reach: point to point.
+            let with = peers(slabs, me, reach(self.r_max, self.r_max, skin));
+            if with.is_empty() {
+                // one rank: nobody to exchange with
+                return;
+            }
             let mut to = Vec::new();
+            let r_max = self.r_max;
+            let rows = table_rows_where(&mut sim.world, |x, r| {
+                ghost_targets(slabs, me, x[slabs.axis], reach(r, r_max, skin), &mut to);
+                !to.is_empty()
+            });
+            let mut out = vec![Ghosts::default(); comm.size()];
             for k in 0..rows.len() {
                 // Reach of this particle: its radius, the largest of any other, the skin.
                 let halo = reach(rows.radius[k], self.r_max, skin);
@@ -210,8 +220,6 @@ mod exchange {
                     out[q].push_row(&rows, k);
                 }
             }
-            // Only with the slabs a particle can reach: point to point.
-            let with = peers(slabs, me, reach(self.r_max, self.r_max, skin));
             let send: Vec<Vec<u8>> = with.iter().map(|&q| encode(&out[q])).collect();
             let mut ghosts = Ghosts::default();
             for part in comm.exchange_with(&with, &send) {

@@ -102,6 +102,12 @@ impl Ghosts {
 /// The particle table's rows as ghost rows (what a driver picks the ghosts it sends
 /// from), in table order. Empty when the scene has no contacts (no angular velocity).
 pub fn table_rows(world: &mut World) -> Ghosts {
+    table_rows_where(world, |_, _| true)
+}
+
+/// The rows of the particle table whose position and radius (m) `keep` accepts, as ghost
+/// rows in table order: a driver's candidates without copying the whole table.
+pub fn table_rows_where(world: &mut World, mut keep: impl FnMut(DVec3, f64) -> bool) -> Ghosts {
     let mut q = world.query::<(
         &ParticleId,
         &GroupId,
@@ -113,6 +119,9 @@ pub fn table_rows(world: &mut World) -> Ghosts {
     )>();
     let mut g = Ghosts::default();
     for (id, group, d, m, x, v, w) in q.iter(world) {
+        if !keep(x.0, 0.5 * d.0) {
+            continue;
+        }
         g.ids.push(id.0);
         g.group.push(group.0);
         g.radius.push(0.5 * d.0);
