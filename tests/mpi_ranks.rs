@@ -102,14 +102,17 @@ fn migrated(report: &str) -> u64 {
         .sum()
 }
 
+/// The frames of the complete recording `<dir>/<stem>.mcap`.
+fn read_frames(dir: &Path, stem: &str) -> Vec<Frame> {
+    let rec = scg::record::read_mcap(&dir.join(format!("{stem}.mcap"))).unwrap();
+    assert!(rec.complete);
+    rec.frames
+}
+
 /// The case on 1 rank and on each of `ranks`: the recorded frames have the same bits.
 fn same_bits(case: &str, axis: &str, set: &[&str], ranks: &[usize]) {
     let dir = tempfile::tempdir().unwrap();
-    let read = |d: &Path| {
-        let rec = scg::record::read_mcap(&d.join(format!("{case}.mcap"))).unwrap();
-        assert!(rec.complete);
-        rec.frames
-    };
+    let read = |d: &Path| read_frames(d, case);
     let one = dir.path().join("1");
     run(1, axis, case, set, &one);
     let reference = read(&one);
@@ -261,11 +264,7 @@ fn contact_runs(
     ranks: &[usize],
 ) -> (Vec<(u64, usize, f64)>, Vec<Vec<(usize, f64, f64, f64)>>) {
     let dir = tempfile::tempdir().unwrap();
-    let read = |d: &Path| {
-        let rec = scg::record::read_mcap(&d.join(format!("{stem}.mcap"))).unwrap();
-        assert!(rec.complete);
-        rec.frames
-    };
+    let read = |d: &Path| read_frames(d, stem);
     let one = dir.path().join("1");
     run_file(1, axis, file, set, &one);
     let reference = read(&one);

@@ -384,17 +384,9 @@ impl CellTable {
         else {
             return Query::Unknown;
         };
-        let Some(first) = faces.first() else {
+        let Some((best, best_ratio)) = exit_face(faces, |f| f.q, d) else {
             return Query::Unknown;
         };
-        let (mut best, mut best_ratio) = (0, first.q.dot(d));
-        for (k, f) in faces.iter().enumerate().skip(1) {
-            let r = f.q.dot(d);
-            if r > best_ratio {
-                best_ratio = r;
-                best = k;
-            }
-        }
         if best_ratio > 1.0 + TOL {
             return Query::Beyond(next[best]);
         }
@@ -411,17 +403,9 @@ impl CellTable {
         let (Some(faces), Some(next)) = (self.faces.get(r.clone()), self.faces_next.get(r)) else {
             return Query::Unknown;
         };
-        let Some(first) = faces.first() else {
+        let Some((best, _)) = exit_face(faces, |f| f.q, d) else {
             return Query::Unknown;
         };
-        let (mut best, mut best_ratio) = (0, first.q.dot(d));
-        for (k, f) in faces.iter().enumerate().skip(1) {
-            let r = f.q.dot(d);
-            if r > best_ratio {
-                best_ratio = r;
-                best = k;
-            }
-        }
         let bf = &faces[best];
         let Some(tets) = self
             .tets
@@ -524,22 +508,27 @@ impl CellTable {
         else {
             return;
         };
-        let d = x - rec.cc;
-        let mut best = None;
-        let mut best_ratio = f64::NEG_INFINITY;
-        for f in faces {
-            let r = f.q.dot(d);
-            if r > best_ratio {
-                best_ratio = r;
-                best = Some(f);
-            }
-        }
-        if let Some(f) = best
-            && let Some(t) = self.tets.get(f.tet as usize)
+        if let Some((best, _)) = exit_face(faces, |f| f.q, x - rec.cc)
+            && let Some(t) = self.tets.get(faces[best].tet as usize)
         {
             prefetch_bytes(t, 3);
         }
     }
+}
+
+/// The face record the ray from the centre along `d` leaves through: the largest ratio
+/// `q·d` (the first of equals), and that ratio; `None` without faces.
+#[inline(always)]
+fn exit_face<F>(faces: &[F], q: impl Fn(&F) -> DVec3, d: DVec3) -> Option<(usize, f64)> {
+    let (mut best, mut best_ratio) = (0, q(faces.first()?).dot(d));
+    for (k, f) in faces.iter().enumerate().skip(1) {
+        let r = q(f).dot(d);
+        if r > best_ratio {
+            best_ratio = r;
+            best = k;
+        }
+    }
+    Some((best, best_ratio))
 }
 
 /// Ask Linux to back the (still untouched) capacity of `v` with transparent huge pages
