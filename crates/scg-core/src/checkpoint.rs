@@ -200,12 +200,19 @@ fn insert_record(w: &mut World, p: &ParticleRecord) -> Result<Entity, String> {
 impl Simulation {
     /// Remove the particles for which `leave(id, position)` is true and return their
     /// whole state, in table order (the particles migrating to another rank of a
-    /// decomposed run). Not for scenes with particle contacts, whose pair arrays refer to
-    /// table rows.
+    /// decomposed run). `leave` must depend on its arguments alone: it is asked twice
+    /// when somebody leaves. With particle contacts the neighbour stage rebuilds its list
+    /// for the changed table (the pair histories travel separately: scg-mpi).
     pub fn extract_particles(
         &mut self,
         mut leave: impl FnMut(u32, DVec3) -> bool,
     ) -> Vec<ParticleRecord> {
+        // Most calls take nobody (a decomposed run asks every step): ids and positions
+        // alone first, the whole record only when somebody leaves.
+        let mut ids = self.world.query::<(&ParticleId, &Position)>();
+        if !ids.iter(&self.world).any(|(id, x)| leave(id.0, x.0)) {
+            return Vec::new();
+        }
         let mut q = self.world.query::<(Entity, RecordQuery)>();
         let mut out = Vec::new();
         let mut gone = Vec::new();
