@@ -558,21 +558,14 @@ fn counts(ranks: usize, axis: &str, case: &str, set: &[&str], log: &Path) -> (St
     (std::fs::read_to_string(log).unwrap(), err)
 }
 
-#[test]
-fn no_particle_lost_or_duplicated_over_10k_cyclone_steps_on_4_ranks() {
-    // 10^4 steps of the cyclone (fed for 1 s, drained through the outlet and lost through
-    // the inlet), slabs along its axis and cut again as the particles descend: after
-    // every step the count and an id digest over all ranks equal one rank's.
+/// 10^4 steps of `case` on 1 and on 4 ranks (slabs along z, cut again as the counts
+/// drift): after every step the step, count and id digest over all ranks equal one
+/// rank's; the 4 ranks rebalanced and migrated. Returns the count after every step and
+/// the 4-rank report.
+fn same_counts_on_4_ranks(case: &str, set: &[&str]) -> (Vec<u64>, String) {
     let dir = tempfile::tempdir().unwrap();
-    let set = [
-        "duration=2.0",
-        "feeders.0.rate=100",
-        "feeders.1.rate=100",
-        "feeders.2.rate=100",
-        "feeders.3.rate=100",
-    ];
-    let (one, _) = counts(1, "z", "cyclone", &set, &dir.path().join("1.txt"));
-    let (four, report) = counts(4, "z", "cyclone", &set, &dir.path().join("4.txt"));
+    let (one, _) = counts(1, "z", case, set, &dir.path().join("1.txt"));
+    let (four, report) = counts(4, "z", case, set, &dir.path().join("4.txt"));
     let one: Vec<&str> = one.lines().collect();
     let four: Vec<&str> = four.lines().collect();
     assert_eq!(one.len(), 10_000);
@@ -580,18 +573,6 @@ fn no_particle_lost_or_duplicated_over_10k_cyclone_steps_on_4_ranks() {
     for (a, b) in four.iter().zip(&one) {
         assert_eq!(a, b, "step, count, id digest on 4 ranks vs 1");
     }
-    let peak = one
-        .iter()
-        .filter_map(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
-        .max()
-        .unwrap();
-    let last: u64 = one[one.len() - 1]
-        .split_whitespace()
-        .nth(1)
-        .unwrap()
-        .parse()
-        .unwrap();
-    assert!(peak > 300 && last < peak, "fed {peak}, left {last}");
     let rebalances: u64 = report
         .split("particle-steps/s, ")
         .nth(1)
@@ -599,38 +580,38 @@ fn no_particle_lost_or_duplicated_over_10k_cyclone_steps_on_4_ranks() {
         .unwrap_or(0);
     assert!(rebalances > 0, "no rebalance: {report}");
     assert!(migrated(&report) > 0, "{report}");
+    let per_step = one
+        .iter()
+        .map(|l| l.split_whitespace().nth(1).unwrap().parse().unwrap())
+        .collect();
+    (per_step, report)
+}
+
+#[test]
+fn no_particle_lost_or_duplicated_over_10k_cyclone_steps_on_4_ranks() {
+    // 10^4 steps of the cyclone (fed for 1 s, drained through the outlet and lost through
+    // the inlet).
+    let (n, _) = same_counts_on_4_ranks(
+        "cyclone",
+        &[
+            "duration=2.0",
+            "feeders.0.rate=100",
+            "feeders.1.rate=100",
+            "feeders.2.rate=100",
+            "feeders.3.rate=100",
+        ],
+    );
+    let peak = n.iter().copied().max().unwrap();
+    let last = n[n.len() - 1];
+    assert!(peak > 300 && last < peak, "fed {peak}, left {last}");
 }
 
 #[test]
 fn no_particle_lost_or_duplicated_over_10k_classifier_steps_with_contacts_on_4_ranks() {
     // 10^4 steps of the classifier with its particle and wall contacts (2 ms: fed from
-    // the top, nothing drains yet), slabs along its axis cut again as the particles
-    // descend, ghosts exchanged before every step: after every step the count and an
-    // id digest over all ranks equal one rank's.
-    let dir = tempfile::tempdir().unwrap();
-    let set = ["duration=0.002"];
-    let (one, _) = counts(1, "z", "classifier", &set, &dir.path().join("1.txt"));
-    let (four, report) = counts(4, "z", "classifier", &set, &dir.path().join("4.txt"));
-    let one: Vec<&str> = one.lines().collect();
-    let four: Vec<&str> = four.lines().collect();
-    assert_eq!(one.len(), 10_000);
-    assert_eq!(four.len(), one.len());
-    for (a, b) in four.iter().zip(&one) {
-        assert_eq!(a, b, "step, count, id digest on 4 ranks vs 1");
-    }
-    let last: u64 = one[one.len() - 1]
-        .split_whitespace()
-        .nth(1)
-        .unwrap()
-        .parse()
-        .unwrap();
+    // the top, nothing drains yet), ghosts exchanged before every step.
+    let (n, report) = same_counts_on_4_ranks("classifier", &["duration=0.002"]);
+    let last = n[n.len() - 1];
     assert!(last > 300, "fed {last}");
-    let rebalances: u64 = report
-        .split("particle-steps/s, ")
-        .nth(1)
-        .and_then(|s| s.split_whitespace().next()?.parse().ok())
-        .unwrap_or(0);
-    assert!(rebalances > 0, "no rebalance: {report}");
-    assert!(migrated(&report) > 0, "{report}");
     assert!(report.contains("ghost exchange"), "{report}");
 }

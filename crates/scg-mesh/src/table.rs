@@ -164,7 +164,7 @@ impl CellTable {
             })
             .sum();
         let bytes = nc * size_of::<CellRec>()
-            + n_faces * size_of::<FaceRec>()
+            + n_faces * (size_of::<FaceRec>() + size_of::<u32>())
             + n_tets * size_of::<TetRec>();
         if bytes > Self::MAX_BYTES || n_tets > u32::MAX as usize {
             return None;
