@@ -90,6 +90,7 @@ pub struct FluidCoupling {
 /// Stokes-drag factors precomputed once per particle for a fixed dt (exponential scheme),
 /// with τ from [`FluidCoupling::tau`]. Kept to the two numbers the drag-only kernel reads.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct StokesFactors {
     /// 1 − e^(−dt/τ), dimensionless.
     pub gain: f64,

@@ -412,8 +412,8 @@ fn stored_energy(sim: &mut Simulation) -> f64 {
     let pos: Vec<DVec3> = st.ids.iter().map(|id| now[id]).collect();
     let ee = e_eff();
     let mut u = 0.0;
-    for p in &st.pairs {
-        let (i, j) = (p.i as usize, p.j as usize);
+    for &[i, j] in &st.list.pairs {
+        let (i, j) = (i as usize, j as usize);
         let d = scg_core::physics::periodic::separation(pos[i], pos[j], st.list.periodic.as_ref());
         let delta = st.radius[i] + st.radius[j] - d.length();
         if delta > 0.0 {
@@ -792,8 +792,8 @@ fn tangential_history_survives_rebuilds_and_set_changes() {
                 .world
                 .resource::<ContactState>()
                 .pairs
+                .state
                 .iter()
-                .filter(|p| p.touching)
                 .map(|p| p.history.length())
                 .fold(0.0, f64::max);
             if h > 0.0 {
@@ -916,10 +916,8 @@ fn ghosts_and_migration_follow_the_whole_simulation() {
             h.step().unwrap();
             let st = h.world.resource::<ContactState>();
             let local = st.local_rows() as u32;
-            ghost_contacts += st
-                .pairs
-                .iter()
-                .filter(|p| p.touching && p.j >= local)
+            ghost_contacts += (st.list.pairs.iter().zip(&st.pairs.touching))
+                .filter(|&(&[_, j], &t)| t && j >= local)
                 .count();
         }
         let mut moving = Vec::new();

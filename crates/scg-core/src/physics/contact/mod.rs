@@ -1,5 +1,6 @@
 //! Contact mechanics: pure kernels (normal, tangential, the pair kernel) and the contact
 //! material.
+pub mod lanes;
 pub mod normal;
 pub mod pair;
 pub mod tangential;

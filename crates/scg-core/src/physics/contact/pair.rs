@@ -30,23 +30,149 @@ pub struct PairParams {
     pub mindlin_c: f64,
 }
 
-/// One candidate pair with its contact history and the constants of its contact law.
+/// What a candidate pair carries besides its two indices, its minimum-image shift and
+/// whether it touches (those are read every step for every pair and live in arrays of
+/// their own, [`PairArrays`]): read and written only while the pair touches.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PairState {
-    /// Particle indices (into the gathered arrays), i < j.
-    pub i: u32,
-    /// Second index.
-    pub j: u32,
-    /// In contact after this step's force evaluation.
-    pub touching: bool,
-    /// Whole periodic box lengths taken off x_j − x_i for the minimum image (zero in an
-    /// open domain), m. Fixed between list builds: positions are not wrapped and move less
-    /// than half the skin.
-    pub shift: DVec3,
     /// Tangential history displacement, m (zero while not touching).
     pub history: DVec3,
     /// R*, m*, √R* and √(m*·K) of the pair.
     pub hertz: HertzPair,
+}
+
+/// The candidate pairs' states, structure of arrays, aligned with the neighbour list's
+/// pairs (indices i < j into the gathered arrays). The overlap test of every pair reads
+/// the list's pairs, `shift` and `touching` (9–33 bytes a pair); the rest only for the
+/// pairs that touch.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PairArrays {
+    /// In contact after the last force evaluation.
+    pub touching: Vec<bool>,
+    /// Whole periodic box lengths taken off x_j − x_i for the minimum image, m (empty in
+    /// an open domain). Fixed between list builds: positions are not wrapped and move less
+    /// than half the skin.
+    pub shift: Vec<DVec3>,
+    /// History and law constants.
+    pub state: Vec<PairState>,
+}
+
+impl PairArrays {
+    /// Number of pairs.
+    pub fn len(&self) -> usize {
+        self.state.len()
+    }
+
+    /// True when there is no pair.
+    pub fn is_empty(&self) -> bool {
+        self.state.is_empty()
+    }
+
+    /// The shift of pair `k` (zero in an open domain).
+    #[inline(always)]
+    pub fn shift(&self, k: usize) -> DVec3 {
+        self.shift.get(k).copied().unwrap_or(DVec3::ZERO)
+    }
+
+    /// The pairs `range` as a mutable view; `ij` are the list's pairs (all of them).
+    pub fn view<'a>(
+        &'a mut self,
+        ij: &'a [[u32; 2]],
+        range: std::ops::Range<usize>,
+    ) -> PairsMut<'a> {
+        PairsMut {
+            ij: &ij[range.clone()],
+            touching: &mut self.touching[range.clone()],
+            shift: if self.shift.is_empty() {
+                &[]
+            } else {
+                &self.shift[range.clone()]
+            },
+            state: &mut self.state[range],
+        }
+    }
+}
+
+/// A run of [`PairArrays`] (one force slot's), mutable where the force stage writes.
+#[derive(Debug)]
+pub struct PairsMut<'a> {
+    /// Particle indices [i, j], i < j.
+    pub ij: &'a [[u32; 2]],
+    /// In contact after the last force evaluation.
+    pub touching: &'a mut [bool],
+    /// Minimum-image shifts, m (empty in an open domain).
+    pub shift: &'a [DVec3],
+    /// History and law constants.
+    pub state: &'a mut [PairState],
+}
+
+impl PairsMut<'_> {
+    /// The shift of pair `k` (zero in an open domain).
+    #[inline(always)]
+    pub fn shift(&self, k: usize) -> DVec3 {
+        if self.shift.is_empty() {
+            DVec3::ZERO
+        } else {
+            self.shift[k]
+        }
+    }
+
+    /// Number of pairs.
+    pub fn len(&self) -> usize {
+        self.ij.len()
+    }
+
+    /// True when there is no pair.
+    pub fn is_empty(&self) -> bool {
+        self.ij.is_empty()
+    }
+
+    /// The scalar kernel on pair `k`.
+    #[inline(always)]
+    pub fn kernel(
+        &mut self,
+        k: usize,
+        b: &Bodies,
+        par: &PairParams,
+        dt: f64,
+    ) -> Option<PairContact> {
+        let shift = self.shift(k);
+        pair_kernel(
+            self.ij[k],
+            shift,
+            &mut self.touching[k],
+            &mut self.state[k],
+            b,
+            par,
+            dt,
+        )
+    }
+
+    /// Split at pair `k`.
+    pub fn split_at(self, k: usize) -> (Self, Self) {
+        let (i0, i1) = self.ij.split_at(k);
+        let (t0, t1) = self.touching.split_at_mut(k);
+        let (h0, h1) = if self.shift.is_empty() {
+            (self.shift, self.shift)
+        } else {
+            self.shift.split_at(k)
+        };
+        let (s0, s1) = self.state.split_at_mut(k);
+        (
+            PairsMut {
+                ij: i0,
+                touching: t0,
+                shift: h0,
+                state: s0,
+            },
+            PairsMut {
+                ij: i1,
+                touching: t1,
+                shift: h1,
+                state: s1,
+            },
+        )
+    }
 }
 
 /// A pair in contact this step and what it does to its two particles.
@@ -80,23 +206,29 @@ pub struct Bodies<'a> {
     pub radius: &'a [f64],
 }
 
-/// The force, torques and new history of one pair (pure); `None` when it does not touch.
+/// The force, torques and new history of the pair `ij` = [i, j] with minimum-image
+/// `shift` (pure); `None` when it does not touch. `touching` is the pair's contact flag
+/// (in and out), `p` its history and constants.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 pub fn pair_kernel(
+    [pi, pj]: [u32; 2],
+    shift: DVec3,
+    touching: &mut bool,
     p: &mut PairState,
     b: &Bodies,
     par: &PairParams,
     dt: f64,
 ) -> Option<PairContact> {
-    let (i, j) = (p.i as usize, p.j as usize);
-    let d = b.pos[j] - b.pos[i] - p.shift;
+    let (i, j) = (pi as usize, pj as usize);
+    let d = b.pos[j] - b.pos[i] - shift;
     let (ri, rj) = (b.radius[i], b.radius[j]);
     let dist2 = d.length_squared();
     let reach = ri + rj;
-    let was = p.touching;
+    let was = *touching;
     if dist2 >= reach * reach || dist2 == 0.0 {
         if was {
-            p.touching = false;
+            *touching = false;
             p.history = DVec3::ZERO;
         }
         return None;
@@ -130,8 +262,8 @@ pub fn pair_kernel(
         }
     };
     let mut c = PairContact {
-        i: p.i,
-        j: p.j,
+        i: pi,
+        j: pj,
         started: !was,
         approach: vn_approach,
         force: -fn_ * n,
@@ -152,6 +284,6 @@ pub fn pair_kernel(
         c.torque_i += t;
         c.torque_j -= t;
     }
-    p.touching = true;
+    *touching = true;
     Some(c)
 }

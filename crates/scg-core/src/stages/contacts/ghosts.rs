@@ -172,9 +172,11 @@ impl ContactState {
     /// the histories such a particle brought here that no rebuild took up yet.
     pub fn histories_of(&self, leaving: impl Fn(u32) -> bool) -> Vec<PairHistory> {
         let mut out = Vec::new();
-        for p in self.pairs.iter().filter(|p| p.touching) {
-            let (Some(&a), Some(&b)) = (self.ids.get(p.i as usize), self.ids.get(p.j as usize))
-            else {
+        let touching = (self.list.pairs.iter().zip(&self.pairs.touching))
+            .zip(&self.pairs.state)
+            .filter(|((_, t), _)| **t);
+        for ((&[i, j], _), p) in touching {
+            let (Some(&a), Some(&b)) = (self.ids.get(i as usize), self.ids.get(j as usize)) else {
                 continue;
             };
             if leaving(a) {

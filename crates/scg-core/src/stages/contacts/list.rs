@@ -12,7 +12,7 @@ use super::ContactState;
 use super::slots::layout_slots;
 use crate::components::*;
 use crate::physics::contact::normal::effective;
-use crate::physics::contact::pair::PairState;
+use crate::physics::contact::pair::{PairArrays, PairState};
 use crate::physics::contact::tangential::HertzPair;
 use crate::physics::integrate::{angular_kick_factor, linear_kick_factor};
 use crate::stages::table::columns;
@@ -60,16 +60,18 @@ pub fn maintain_neighbour_list(
         if !st.list.needs_rebuild(&all_pos, drift) {
             return;
         }
+        let touching = touching_pairs(st);
         st.list.build(&all_pos, &st.radius);
         drop_ghost_pairs(st);
-        carry_history(st, &all_pos, None);
+        carry_history(st, &all_pos, touching, None);
         st.slots = layout_slots(&st.list.pairs, st.ids.len());
         return;
     }
+    let touching = touching_pairs(st);
     let old_ids = gather(st, ids, groups, ds, ms, clock.dt);
     st.list.build(&all_pos, &st.radius);
     drop_ghost_pairs(st);
-    carry_history(st, &all_pos, Some(&old_ids));
+    carry_history(st, &all_pos, touching, Some(&old_ids));
     st.slots = layout_slots(&st.list.pairs, st.ids.len());
 }
 
@@ -109,21 +111,38 @@ fn gather(
 }
 
 /// The pair state of list pair (i, j) before any contact (constants of the pair law).
-fn fresh_pair(st: &ContactState, pos: &[DVec3], i: u32, j: u32) -> PairState {
+fn fresh_pair(st: &ContactState, i: u32, j: u32) -> PairState {
     let (a, b) = (i as usize, j as usize);
     let par = &st.params;
     PairState {
-        i,
-        j,
-        shift: par
-            .periodic
-            .map_or(DVec3::ZERO, |pb| pb.image_shift(pos[b] - pos[a])),
         hertz: HertzPair::new(
             par.e_eff,
             effective(st.radius[a], st.radius[b]),
             effective(st.mass[a], st.mass[b]),
         ),
         ..Default::default()
+    }
+}
+
+/// The arrays of the list's pairs before any contact: no history, and the minimum-image
+/// shifts of positions `pos` in a periodic box (none in an open domain). `constants`:
+/// derive the pair law's constants (false: leave them zero, for arrays that are only
+/// read for their contact state).
+fn fresh_pairs(st: &ContactState, pos: &[DVec3], constants: bool) -> PairArrays {
+    let ij = &st.list.pairs;
+    PairArrays {
+        touching: vec![false; ij.len()],
+        shift: match st.params.periodic {
+            Some(pb) => (ij.iter())
+                .map(|&[i, j]| pb.image_shift(pos[j as usize] - pos[i as usize]))
+                .collect(),
+            None => Vec::new(),
+        },
+        state: if constants {
+            ij.iter().map(|&[i, j]| fresh_pair(st, i, j)).collect()
+        } else {
+            vec![PairState::default(); ij.len()]
+        },
     }
 }
 
@@ -138,15 +157,13 @@ impl ContactState {
             builds: self.list.builds,
             checks: self.list.checks,
             drift_bound,
-            pairs: self
-                .pairs
-                .iter()
-                .map(|p| crate::checkpoint::PairRecord {
-                    i: p.i,
-                    j: p.j,
-                    touching: p.touching,
-                    shift: p.shift,
-                    history: p.history,
+            pairs: (self.list.pairs.iter().enumerate())
+                .map(|(k, &[i, j])| crate::checkpoint::PairRecord {
+                    i,
+                    j,
+                    touching: self.pairs.touching[k],
+                    shift: self.pairs.shift(k),
+                    history: self.pairs.state[k].history,
                 })
                 .collect(),
             sparse: self.sparse,
@@ -204,28 +221,15 @@ impl ContactState {
             (self.group, self.radius, self.mass) = (Vec::new(), Vec::new(), Vec::new());
             (self.kick_v, self.kick_w) = (Vec::new(), Vec::new());
         }
-        let reference = &r.reference;
-        self.pairs = r
-            .pairs
-            .iter()
-            .map(|p| {
-                let base = if current {
-                    fresh_pair(self, reference, p.i, p.j)
-                } else {
-                    PairState {
-                        i: p.i,
-                        j: p.j,
-                        ..Default::default()
-                    }
-                };
-                PairState {
-                    touching: p.touching,
-                    shift: p.shift,
-                    history: p.history,
-                    ..base
-                }
-            })
-            .collect();
+        let mut pairs = fresh_pairs(self, &r.reference, current);
+        for (k, p) in r.pairs.iter().enumerate() {
+            pairs.touching[k] = p.touching;
+            if let Some(s) = pairs.shift.get_mut(k) {
+                *s = p.shift;
+            }
+            pairs.state[k].history = p.history;
+        }
+        self.pairs = pairs;
         self.slots = if current {
             layout_slots(&self.list.pairs, n)
         } else {
@@ -236,27 +240,37 @@ impl ContactState {
     }
 }
 
+/// (i, j, history) of the pairs in contact, before the list is rebuilt.
+fn touching_pairs(st: &ContactState) -> Vec<(u32, u32, DVec3)> {
+    (st.list
+        .pairs
+        .iter()
+        .zip(&st.pairs.touching)
+        .zip(&st.pairs.state))
+    .filter(|((_, t), _)| **t)
+    .map(|((&[i, j], _), p)| (i, j, p.history))
+    .collect()
+}
+
 /// New pair states for the rebuilt list, each touching pair keeping its history
 /// (`ids_before`: the ids the old pair indices refer to, when the set changed).
 ///
 /// Only the pairs in contact carry anything, and they are few: each is looked up in the
 /// new (sorted) list by binary search, after mapping its particles' ids to their new
 /// indices when the set changed; a pair one of whose particles left is dropped.
-fn carry_history(st: &mut ContactState, pos: &[DVec3], ids_before: Option<&[u32]>) {
-    let old = std::mem::take(&mut st.pairs);
-    let mut pairs: Vec<PairState> = st
-        .list
-        .pairs
-        .iter()
-        .map(|&[i, j]| fresh_pair(st, pos, i, j))
-        .collect();
-    let touching: Vec<&PairState> = old.iter().filter(|p| p.touching).collect();
+fn carry_history(
+    st: &mut ContactState,
+    pos: &[DVec3],
+    touching: Vec<(u32, u32, DVec3)>,
+    ids_before: Option<&[u32]>,
+) {
+    let mut pairs = fresh_pairs(st, pos, true);
     if !touching.is_empty() {
         // Old index → new index through the ids (identity while the set is unchanged).
         let remap: Option<std::collections::HashMap<u32, u32>> = ids_before.map(|before| {
             let wanted: std::collections::HashMap<u32, u32> = touching
                 .iter()
-                .flat_map(|p| [p.i, p.j])
+                .flat_map(|&(i, j, _)| [i, j])
                 .map(|k| (before[k as usize], k))
                 .collect();
             let mut out = std::collections::HashMap::with_capacity(wanted.len());
@@ -267,10 +281,10 @@ fn carry_history(st: &mut ContactState, pos: &[DVec3], ids_before: Option<&[u32]
             }
             out
         });
-        for p in touching {
+        for (i, j, history) in touching {
             let (a, b) = match &remap {
-                None => (p.i, p.j),
-                Some(m) => match (m.get(&p.i), m.get(&p.j)) {
+                None => (i, j),
+                Some(m) => match (m.get(&i), m.get(&j)) {
                     (Some(&a), Some(&b)) => (a, b),
                     _ => continue, // a particle left
                 },
@@ -278,13 +292,13 @@ fn carry_history(st: &mut ContactState, pos: &[DVec3], ids_before: Option<&[u32]
             // The history is stored as seen from the pair's first particle: flip it when
             // the pair's orientation changed.
             let (key, h) = if a < b {
-                ([a, b], p.history)
+                ([a, b], history)
             } else {
-                ([b, a], -p.history)
+                ([b, a], -history)
             };
             if let Ok(k) = st.list.pairs.binary_search(&key) {
-                pairs[k].history = h;
-                pairs[k].touching = true;
+                pairs.state[k].history = h;
+                pairs.touching[k] = true;
             }
         }
     }
@@ -308,10 +322,10 @@ fn carry_history(st: &mut ContactState, pos: &[DVec3], ids_before: Option<&[u32]
                 ([b, a], -h.history)
             };
             if let Ok(k) = st.list.pairs.binary_search(&key)
-                && !pairs[k].touching
+                && !pairs.touching[k]
             {
-                pairs[k].history = v;
-                pairs[k].touching = true;
+                pairs.state[k].history = v;
+                pairs.touching[k] = true;
             }
         }
     }

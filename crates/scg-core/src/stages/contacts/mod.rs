@@ -24,7 +24,7 @@ pub mod slots;
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 
-use crate::physics::contact::pair::{PairParams, PairState};
+use crate::physics::contact::pair::{PairArrays, PairParams};
 use crate::physics::contact::tangential::TangentialStiffness;
 use crate::physics::contact::{Material, NormalLaw, TangentialLaw};
 use crate::physics::neighbour::NeighbourList;
@@ -104,7 +104,7 @@ pub struct ContactState {
     /// Verlet list.
     pub list: NeighbourList,
     /// Pair states aligned with `list.pairs`.
-    pub pairs: Vec<PairState>,
+    pub pairs: PairArrays,
     /// Force accumulation slots over the pair list (laid out at each rebuild).
     slots: Vec<Slot>,
     /// Whether this step's slots record the particles they touch (few contacts) or
@@ -132,7 +132,7 @@ impl ContactState {
             mass: Vec::new(),
             kick_v: Vec::new(),
             kick_w: Vec::new(),
-            pairs: Vec::new(),
+            pairs: PairArrays::default(),
             slots: Vec::new(),
             sparse: false,
             marked: Vec::new(),

@@ -10,7 +10,9 @@ use glam::DVec3;
 
 use super::ContactState;
 use crate::components::*;
-use crate::physics::contact::pair::{Bodies, PairParams, PairState, pair_kernel};
+use crate::physics::contact::lanes::HertzMindlin;
+use crate::physics::contact::pair::{Bodies, PairContact, PairParams, PairsMut};
+use crate::physics::contact::tangential::{HertzPair, rolling_torque};
 use crate::stages::table::columns;
 use crate::state::{ContactResolution, SimClock, Tally};
 
@@ -20,6 +22,8 @@ pub(super) struct Kernel<'a> {
     pub bodies: Bodies<'a>,
     /// The pair law.
     pub par: PairParams,
+    /// The pair law's constants for the four-lane kernel (`None`: not its law).
+    pub lanes: Option<HertzMindlin>,
     /// Time step, s.
     pub dt: f64,
     /// Group of each particle (collision counts).
@@ -60,6 +64,8 @@ pub(super) struct Slot {
     pub(super) active: usize,
     /// Shortest duration of the contacts started this step, s (at their approach speed).
     shortest: f64,
+    /// Scratch of the four-lane path: this step's touching pairs, in pair order.
+    hits: Vec<u32>,
 }
 
 impl Slot {
@@ -90,68 +96,181 @@ impl Slot {
 
     /// Compute the slot's pairs and sum them; `sparse` records the particles written.
     ///
-    /// On x86-64 CPUs with AVX2 the same code is compiled a second time for them and
-    /// picked at run time (no fused multiply–add: Rust never contracts a·b + c, so both
-    /// versions give the same bits).
-    pub(super) fn run(&mut self, pairs: &mut [PairState], k: &Kernel, groups: usize, sparse: bool) {
+    /// On x86-64 CPUs with AVX2, and for the Hertz–Mindlin law, the touching pairs are
+    /// computed four at a time ([`crate::physics::contact::lanes`]), which gives the
+    /// scalar kernel's bits; other CPUs and laws run the scalar kernel.
+    pub(super) fn run(&mut self, pairs: PairsMut, k: &Kernel, groups: usize, sparse: bool) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if let Some(law) = &k.lanes
+            && std::arch::is_x86_feature_detected!("avx2")
+        {
             // SAFETY: the CPU supports AVX2, checked just above.
-            unsafe { self.run_avx2(pairs, k, groups, sparse) };
+            unsafe { self.run_avx2(pairs, k, law, groups, sparse) };
             return;
         }
         self.run_portable(pairs, k, groups, sparse);
     }
 
+    /// The four-lane path: first the touching pairs are listed (the pairs that stopped
+    /// touching lose their history), then they are computed four at a time and summed
+    /// in pair order, as the scalar path sums them.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn run_avx2(&mut self, pairs: &mut [PairState], k: &Kernel, groups: usize, sparse: bool) {
-        self.run_portable(pairs, k, groups, sparse);
+    fn run_avx2(
+        &mut self,
+        mut pairs: PairsMut,
+        k: &Kernel,
+        law: &HertzMindlin,
+        groups: usize,
+        sparse: bool,
+    ) {
+        use crate::physics::contact::lanes::hertz_mindlin_x4;
+        self.clear(groups);
+        let b = &k.bodies;
+        let mut hits = std::mem::take(&mut self.hits);
+        hits.resize(pairs.len(), 0);
+        let m = list_touching(&mut pairs, b, &mut hits);
+        let rolling = k.par.tangential.rolling;
+        for chunk in hits[..m].chunks(4) {
+            let live = chunk.len();
+            let idx: [u32; 4] = std::array::from_fn(|l| chunk[l.min(live - 1)]);
+            let was = idx.map(|a| pairs.touching[a as usize]);
+            // SAFETY: AVX2 is enabled here; the indices come from `pairs`, whose particle
+            // indices index the kernel's arrays.
+            let out = unsafe { hertz_mindlin_x4(&mut pairs, idx, live, b, law, k.dt) };
+            for l in 0..live {
+                let at = idx[l] as usize;
+                let [i, j] = pairs.ij[at];
+                let hertz = pairs.state[at].hertz;
+                let mut c = PairContact {
+                    i,
+                    j,
+                    started: !was[l],
+                    approach: out.approach(l),
+                    force: out.force(l),
+                    torque_i: out.torque_i(l),
+                    torque_j: out.torque_j(l),
+                };
+                if rolling > 0.0 {
+                    let t = rolling_torque(
+                        rolling,
+                        out.normal_force(l).abs(),
+                        hertz.r_eff,
+                        b.omega[i as usize] - b.omega[j as usize],
+                    );
+                    c.torque_i += t;
+                    c.torque_j -= t;
+                }
+                self.credit(&c, &hertz, k, sparse);
+            }
+        }
+        self.hits = hits;
+        self.dirty = !sparse;
     }
 
-    #[inline(always)]
-    fn run_portable(&mut self, pairs: &mut [PairState], k: &Kernel, groups: usize, sparse: bool) {
+    /// The scalar path, pair by pair.
+    fn run_portable(&mut self, mut pairs: PairsMut, k: &Kernel, groups: usize, sparse: bool) {
         self.clear(groups);
-        let base = self.base;
-        let group = k.group;
-        for p in pairs {
-            let Some(c) = pair_kernel(p, &k.bodies, &k.par, k.dt) else {
+        for at in 0..pairs.len() {
+            let Some(c) = pairs.kernel(at, &k.bodies, &k.par, k.dt) else {
                 continue;
             };
-            let (i, j) = (c.i as usize, c.j as usize);
-            let (li, lj) = (i - base, j - base);
-            let si = &mut self.sums[li];
-            si[0] += c.force;
-            si[1] += c.torque_i;
-            let sj = &mut self.sums[lj];
-            sj[0] -= c.force;
-            sj[1] += c.torque_j;
-            self.active += 1;
-            if sparse {
-                for (l, k) in [(li, i), (lj, j)] {
-                    if !self.marked[l] {
-                        self.marked[l] = true;
-                        self.touched.push(k as u32);
-                    }
-                }
-            }
-            if c.started {
-                let tc =
-                    k.par
-                        .law
-                        .contact_time(p.hertz.m_eff, p.hertz.r_eff, k.par.e_eff, c.approach);
-                self.shortest = self.shortest.min(tc);
-                for r in [i, j] {
-                    if r < k.local
-                        && let Some(n) = self.collisions.get_mut(group[r] as usize)
-                    {
-                        *n += 1;
-                    }
-                }
-            }
+            let hertz = pairs.state[at].hertz;
+            self.credit(&c, &hertz, k, sparse);
         }
         self.dirty = !sparse;
     }
+
+    /// Add one touching pair's force and torques to its particles' sums and count it.
+    #[inline(always)]
+    fn credit(&mut self, c: &PairContact, hertz: &HertzPair, k: &Kernel, sparse: bool) {
+        let (i, j) = (c.i as usize, c.j as usize);
+        let (li, lj) = (i - self.base, j - self.base);
+        let si = &mut self.sums[li];
+        si[0] += c.force;
+        si[1] += c.torque_i;
+        let sj = &mut self.sums[lj];
+        sj[0] -= c.force;
+        sj[1] += c.torque_j;
+        self.active += 1;
+        if sparse {
+            for (l, r) in [(li, i), (lj, j)] {
+                if !self.marked[l] {
+                    self.marked[l] = true;
+                    self.touched.push(r as u32);
+                }
+            }
+        }
+        if c.started {
+            let tc = k
+                .par
+                .law
+                .contact_time(hertz.m_eff, hertz.r_eff, k.par.e_eff, c.approach);
+            self.shortest = self.shortest.min(tc);
+            for r in [i, j] {
+                if r < k.local
+                    && let Some(n) = self.collisions.get_mut(k.group[r] as usize)
+                {
+                    *n += 1;
+                }
+            }
+        }
+    }
+}
+
+/// The first pass of the four-lane path: list the pairs `pairs` that touch in `hits` (in
+/// pair order; returns how many) and clear the pairs that stopped touching, four pairs at
+/// a time with the scalar kernel's test: !(|d|² ≥ (r_i + r_j)² or |d|² = 0).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn list_touching(pairs: &mut PairsMut, b: &Bodies, hits: &mut [u32]) -> usize {
+    use crate::simd::{F4, V4};
+    let n = pairs.len();
+    let n4 = n / 4 * 4;
+    let periodic = !pairs.shift.is_empty();
+    let mut m = 0;
+    let mut separated = |at: usize, touch: bool| {
+        if pairs.touching[at] && !touch {
+            pairs.touching[at] = false;
+            pairs.state[at].history = DVec3::ZERO;
+        }
+    };
+    for base in (0..n4).step_by(4) {
+        let ij: [[u32; 2]; 4] = std::array::from_fn(|l| pairs.ij[base + l]);
+        let (i, j) = (ij.map(|p| p[0] as usize), ij.map(|p| p[1] as usize));
+        let row = |k: usize| &b.pos[k] as *const DVec3 as *const f64;
+        // SAFETY: each pointer addresses a DVec3 (three f64); four shifts are 12 f64.
+        let mut d = unsafe { V4::gather(j.map(row)) - V4::gather(i.map(row)) };
+        if periodic {
+            let s = pairs.shift[base..base + 4].as_ptr() as *const f64;
+            d = d - unsafe { V4::load_aos(s) };
+        }
+        let dist2 = d.dot(d);
+        let reach = F4::from_lanes(i.map(|k| b.radius[k])) + F4::from_lanes(j.map(|k| b.radius[k]));
+        let touch = (dist2.not_ge(reach * reach).and(dist2.ne(F4::zero()))).bits();
+        for l in 0..4 {
+            hits[m] = (base + l) as u32;
+            m += ((touch >> l) & 1) as usize;
+        }
+        for l in 0..4 {
+            separated(base + l, touch & (1 << l) != 0);
+        }
+    }
+    for at in n4..n {
+        let [i, j] = pairs.ij[at];
+        let (i, j) = (i as usize, j as usize);
+        let mut d = b.pos[j] - b.pos[i];
+        if periodic {
+            d -= pairs.shift[at];
+        }
+        let dist2 = d.length_squared();
+        let reach = b.radius[i] + b.radius[j];
+        let touch = !(dist2 >= reach * reach || dist2 == 0.0);
+        hits[m] = at as u32;
+        m += usize::from(touch);
+        separated(at, touch);
+    }
+    m
 }
 
 /// Cut `pairs` (sorted by i, with i < j) into slots: as many as the pair count gives (at
@@ -274,24 +393,27 @@ pub fn particle_contact_forces(
     let sparse = st.sparse;
     let groups = tally.collisions.len();
     let group = &st.group;
-    let mut work: Vec<(&mut Slot, &mut [PairState])> = Vec::with_capacity(st.slots.len());
-    let mut rest: &mut [PairState] = &mut st.pairs;
+    let mut work: Vec<(&mut Slot, Option<PairsMut>)> = Vec::with_capacity(st.slots.len());
+    let mut rest = st.pairs.view(&st.list.pairs, 0..st.list.pairs.len());
     let mut at = 0;
     for slot in st.slots.iter_mut() {
-        let (mine, tail) = std::mem::take(&mut rest).split_at_mut(slot.pairs.end - at);
+        let (mine, tail) = rest.split_at(slot.pairs.end - at);
         at = slot.pairs.end;
         rest = tail;
-        work.push((slot, mine));
+        work.push((slot, Some(mine)));
     }
     let kernel = Kernel {
         bodies,
         par: st.params,
+        lanes: HertzMindlin::of(&st.params),
         dt,
         group,
         local: n,
     };
     crate::exec::team::for_each_item(&mut work, |_, (slot, pairs)| {
-        slot.run(pairs, &kernel, groups, sparse);
+        if let Some(pairs) = pairs.take() {
+            slot.run(pairs, &kernel, groups, sparse);
+        }
     });
     let mut active = 0;
     for slot in &st.slots {
@@ -309,12 +431,12 @@ mod tests {
     use super::*;
     use crate::physics::contact::Material;
     use crate::physics::contact::normal::effective;
-    use crate::physics::contact::tangential::HertzPair;
+    use crate::physics::contact::pair::{PairArrays, PairState};
     use crate::physics::contact::{NormalLaw, TangentialLaw};
     use rand::{Rng, SeedableRng};
 
-    /// The run-time-selected AVX2 build of the slot loop gives the same bits as the
-    /// portable one.
+    /// The four-lane AVX2 path of the slot loop (rolling resistance included) gives the
+    /// same sums, histories and contact flags, bit for bit, as the portable one.
     #[test]
     fn avx2_and_portable_slot_loops_agree_bit_for_bit() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
@@ -352,14 +474,14 @@ mod tests {
             mindlin_c: (6.0 * material.effective_shear_modulus() / material.effective_modulus())
                 .sqrt(),
         };
-        let mut pairs = Vec::new();
+        let mut list: Vec<[u32; 2]> = Vec::new();
+        let mut pairs = PairArrays::default();
         for i in 0..n {
             for j in i + 1..n {
                 if (pos[j] - pos[i]).length() < 1.1 * (radius[i] + radius[j]) {
-                    pairs.push(PairState {
-                        i: i as u32,
-                        j: j as u32,
-                        touching: rng.random(),
+                    list.push([i as u32, j as u32]);
+                    pairs.touching.push(rng.random());
+                    pairs.state.push(PairState {
                         history: (DVec3::new(rng.random(), rng.random(), rng.random()) - 0.5)
                             * 1e-6,
                         hertz: HertzPair::new(
@@ -367,12 +489,10 @@ mod tests {
                             effective(radius[i], radius[j]),
                             effective(mass[i], mass[j]),
                         ),
-                        ..Default::default()
                     });
                 }
             }
         }
-        let list: Vec<[u32; 2]> = pairs.iter().map(|p| [p.i, p.j]).collect();
         let group = vec![0; n];
         let kernel = Kernel {
             bodies: Bodies {
@@ -382,6 +502,7 @@ mod tests {
                 radius: &radius,
             },
             par,
+            lanes: HertzMindlin::of(&par),
             dt: 1e-6,
             group: &group,
             local: n,
@@ -390,21 +511,22 @@ mod tests {
             let mut slots = layout_slots(&list, n);
             let mut ps = pairs.clone();
             let slot = &mut slots[0];
-            let range = slot.pairs.clone();
+            let view = ps.view(&list, slot.pairs.clone());
             if avx {
                 #[cfg(target_arch = "x86_64")]
                 if std::arch::is_x86_feature_detected!("avx2") {
-                    unsafe { slot.run_avx2(&mut ps[range], &kernel, 1, true) };
+                    let law = kernel.lanes.unwrap();
+                    unsafe { slot.run_avx2(view, &kernel, &law, 1, true) };
                     return Some((slot.sums.clone(), ps));
                 }
                 return None;
             }
-            slot.run_portable(&mut ps[range], &kernel, 1, true);
+            slot.run_portable(view, &kernel, 1, true);
             Some((slot.sums.clone(), ps))
         };
         let portable = run(false).unwrap();
         assert!(portable.0.iter().any(|f| f[0] != DVec3::ZERO));
-        assert!(pairs.len() > 300, "{} pairs", pairs.len());
+        assert!(list.len() > 300, "{} pairs", list.len());
         if let Some(avx) = run(true) {
             let bits = |v: &[[DVec3; 2]]| -> Vec<u64> {
                 v.iter()
