@@ -5,8 +5,9 @@
 //!   table still holds the particles the arrays index and rebuilds the Verlet list when
 //!   needed, carrying each touching pair's history over by ids;
 //! * [`slots::particle_contact_forces`] (StepSet::Forces) computes each pair's force once
-//!   with [`crate::physics::contact::pair::pair_kernel`] and adds it to its two particles
-//!   (+F on i, −F exactly on j) in the slot of the pair;
+//!   with [`crate::physics::contact::pair::pair_kernel`] (or, on AVX2 CPUs, four pairs at
+//!   a time with [`crate::physics::contact::lanes`], the same bits) and adds it to its two
+//!   particles (+F on i, −F exactly on j) in the slot of the pair;
 //! * [`kicks::apply_contact_kicks`] (first of StepSet::Integration) adds the slots' sums
 //!   per particle in slot order and kicks v and ω.
 //!
