@@ -124,11 +124,10 @@ fn fresh_pair(st: &ContactState, i: u32, j: u32) -> PairState {
     }
 }
 
-/// The arrays of the list's pairs before any contact: no history, and the minimum-image
-/// shifts of positions `pos` in a periodic box (none in an open domain). `constants`:
-/// derive the pair law's constants (false: leave them zero, for arrays that are only
-/// read for their contact state).
-fn fresh_pairs(st: &ContactState, pos: &[DVec3], constants: bool) -> PairArrays {
+/// The arrays of the list's pairs before any contact: no history, the pair law's
+/// constants, and the minimum-image shifts of positions `pos` in a periodic box (none in
+/// an open domain).
+fn fresh_pairs(st: &ContactState, pos: &[DVec3]) -> PairArrays {
     let ij = &st.list.pairs;
     PairArrays {
         touching: vec![false; ij.len()],
@@ -138,11 +137,7 @@ fn fresh_pairs(st: &ContactState, pos: &[DVec3], constants: bool) -> PairArrays 
                 .collect(),
             None => Vec::new(),
         },
-        state: if constants {
-            ij.iter().map(|&[i, j]| fresh_pair(st, i, j)).collect()
-        } else {
-            vec![PairState::default(); ij.len()]
-        },
+        state: ij.iter().map(|&[i, j]| fresh_pair(st, i, j)).collect(),
     }
 }
 
@@ -221,15 +216,25 @@ impl ContactState {
             (self.group, self.radius, self.mass) = (Vec::new(), Vec::new(), Vec::new());
             (self.kick_v, self.kick_w) = (Vec::new(), Vec::new());
         }
-        let mut pairs = fresh_pairs(self, &r.reference, current);
-        for (k, p) in r.pairs.iter().enumerate() {
-            pairs.touching[k] = p.touching;
-            if let Some(s) = pairs.shift.get_mut(k) {
-                *s = p.shift;
-            }
-            pairs.state[k].history = p.history;
-        }
-        self.pairs = pairs;
+        // The saved contact state; the pair constants derived again when the rows are
+        // current (else the next neighbour stage rebuilds the list anyway).
+        self.pairs = PairArrays {
+            touching: r.pairs.iter().map(|p| p.touching).collect(),
+            shift: match self.params.periodic {
+                Some(_) => r.pairs.iter().map(|p| p.shift).collect(),
+                None => Vec::new(),
+            },
+            state: (r.pairs.iter())
+                .map(|p| PairState {
+                    history: p.history,
+                    hertz: if current {
+                        fresh_pair(self, p.i, p.j).hertz
+                    } else {
+                        Default::default()
+                    },
+                })
+                .collect(),
+        };
         self.slots = if current {
             layout_slots(&self.list.pairs, n)
         } else {
@@ -264,7 +269,7 @@ fn carry_history(
     touching: Vec<(u32, u32, DVec3)>,
     ids_before: Option<&[u32]>,
 ) {
-    let mut pairs = fresh_pairs(st, pos, true);
+    let mut pairs = fresh_pairs(st, pos);
     if !touching.is_empty() {
         // Old index → new index through the ids (identity while the set is unchanged).
         let remap: Option<std::collections::HashMap<u32, u32>> = ids_before.map(|before| {
