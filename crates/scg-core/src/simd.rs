@@ -84,17 +84,62 @@ impl F4 {
         F4(unsafe { _mm256_blendv_pd(self.0, a.0, m.0) })
     }
     #[inline(always)]
-    pub fn from_lanes(a: [f64; 4]) -> F4 {
+    pub fn from_array(a: [f64; 4]) -> F4 {
         // SAFETY: see the module's note; `a` holds four f64.
         F4(unsafe { _mm256_loadu_pd(a.as_ptr()) })
+    }
+
+    /// `!(self >= o)` per lane (true when either is NaN).
+    #[inline(always)]
+    pub fn not_ge(self, o: F4) -> M4 {
+        // SAFETY: see the module's note. Unordered, quiet.
+        M4(unsafe { _mm256_cmp_pd::<_CMP_NGE_UQ>(self.0, o.0) })
+    }
+
+    /// `self != o` per lane (true when either is NaN).
+    #[inline(always)]
+    pub fn ne(self, o: F4) -> M4 {
+        // SAFETY: see the module's note. Unordered, quiet.
+        M4(unsafe { _mm256_cmp_pd::<_CMP_NEQ_UQ>(self.0, o.0) })
+    }
+
+    /// Lane-wise maximum as `if b > a { a = b }` keeps it: a NaN in `b` is ignored.
+    #[inline(always)]
+    pub fn max_keep(self, b: F4) -> F4 {
+        // SAFETY: see the module's note. `max_pd(b, a)` returns its second operand, a,
+        // when either is NaN, and b when b > a.
+        F4(unsafe { _mm256_max_pd(b.0, self.0) })
+    }
+
+    /// The four lanes.
+    #[inline(always)]
+    pub fn to_array(self) -> [f64; 4] {
+        let mut out = [0.0; 4];
+        // SAFETY: see the module's note; `out` holds four f64.
+        unsafe { _mm256_storeu_pd(out.as_mut_ptr(), self.0) };
+        out
     }
 }
 
 impl M4 {
+    /// Both.
+    #[inline(always)]
+    pub fn and(self, o: M4) -> M4 {
+        // SAFETY: see the module's note.
+        M4(unsafe { _mm256_and_pd(self.0, o.0) })
+    }
+
+    /// Bit l set when lane l is true.
+    #[inline(always)]
+    pub fn bits(self) -> u32 {
+        // SAFETY: see the module's note.
+        unsafe { _mm256_movemask_pd(self.0) as u32 }
+    }
+
+    /// Any lane true.
     #[inline(always)]
     pub fn any(self) -> bool {
-        // SAFETY: see the module's note.
-        unsafe { _mm256_movemask_pd(self.0) != 0 }
+        self.bits() != 0
     }
 }
 
@@ -154,44 +199,15 @@ impl V4 {
     pub unsafe fn gather(p: [*const f64; 4]) -> V4 {
         // SAFETY: the caller's contract; the fourth lane of each load is masked off
         // (never read, so never beyond the vector).
-        unsafe {
-            let m = _mm256_set_epi64x(0, -1, -1, -1);
-            let r0 = _mm256_maskload_pd(p[0], m);
-            let r1 = _mm256_maskload_pd(p[1], m);
-            let r2 = _mm256_maskload_pd(p[2], m);
-            let r3 = _mm256_maskload_pd(p[3], m);
-            let t0 = _mm256_unpacklo_pd(r0, r1); // x0 x1 z0 z1
-            let t1 = _mm256_unpackhi_pd(r0, r1); // y0 y1 _ _
-            let t2 = _mm256_unpacklo_pd(r2, r3); // x2 x3 z2 z3
-            let t3 = _mm256_unpackhi_pd(r2, r3); // y2 y3 _ _
-            V4 {
-                x: F4(_mm256_permute2f128_pd::<0x20>(t0, t2)),
-                y: F4(_mm256_permute2f128_pd::<0x20>(t1, t3)),
-                z: F4(_mm256_permute2f128_pd::<0x31>(t0, t2)),
-            }
+        let r = p.map(|p| unsafe { F4(_mm256_maskload_pd(p, _mm256_set_epi64x(0, -1, -1, -1))) });
+        let [x, y, z, _] = rows(r[0], r[1], r[2], r[3]);
+        V4 {
+            x: F4(x),
+            y: F4(y),
+            z: F4(z),
         }
     }
-}
 
-/// The 4×4 transpose: lane l of the result holds the l-th lanes of a, b, c, d.
-#[inline(always)]
-pub fn rows(a: F4, b: F4, c: F4, d: F4) -> [__m256d; 4] {
-    // SAFETY: see the module's note.
-    unsafe {
-        let t0 = _mm256_unpacklo_pd(a.0, b.0); // a0 b0 a2 b2
-        let t1 = _mm256_unpackhi_pd(a.0, b.0); // a1 b1 a3 b3
-        let t2 = _mm256_unpacklo_pd(c.0, d.0); // c0 d0 c2 d2
-        let t3 = _mm256_unpackhi_pd(c.0, d.0); // c1 d1 c3 d3
-        [
-            _mm256_permute2f128_pd::<0x20>(t0, t2),
-            _mm256_permute2f128_pd::<0x20>(t1, t3),
-            _mm256_permute2f128_pd::<0x31>(t0, t2),
-            _mm256_permute2f128_pd::<0x31>(t1, t3),
-        ]
-    }
-}
-
-impl V4 {
     /// Four consecutive 3-vectors `p[0..12]` (x0 y0 z0 x1 …), transposed.
     ///
     /// # Safety
@@ -233,52 +249,21 @@ impl V4 {
     }
 }
 
-impl F4 {
-    /// `!(self >= o)` per lane (true when either is NaN).
-    #[inline(always)]
-    pub fn not_ge(self, o: F4) -> M4 {
-        // SAFETY: see the module's note. Unordered, quiet.
-        M4(unsafe { _mm256_cmp_pd::<_CMP_NGE_UQ>(self.0, o.0) })
-    }
-
-    /// `self != o` per lane (true when either is NaN).
-    #[inline(always)]
-    pub fn ne(self, o: F4) -> M4 {
-        // SAFETY: see the module's note. Unordered, quiet.
-        M4(unsafe { _mm256_cmp_pd::<_CMP_NEQ_UQ>(self.0, o.0) })
-    }
-
-    /// Lane-wise maximum as `if b > a { a = b }` keeps it: a NaN in `b` is ignored.
-    #[inline(always)]
-    pub fn max_keep(self, b: F4) -> F4 {
-        // SAFETY: see the module's note. `max_pd(b, a)` returns its second operand, a,
-        // when either is NaN, and b when b > a.
-        F4(unsafe { _mm256_max_pd(b.0, self.0) })
-    }
-
-    /// The four lanes.
-    #[inline(always)]
-    pub fn to_array(self) -> [f64; 4] {
-        let mut out = [0.0; 4];
-        // SAFETY: see the module's note; `out` holds four f64.
-        unsafe { _mm256_storeu_pd(out.as_mut_ptr(), self.0) };
-        out
-    }
-}
-
-impl M4 {
-    /// Both.
-    #[inline(always)]
-    pub fn and(self, o: M4) -> M4 {
-        // SAFETY: see the module's note.
-        M4(unsafe { _mm256_and_pd(self.0, o.0) })
-    }
-
-    /// Bit l set when lane l is true.
-    #[inline(always)]
-    pub fn bits(self) -> u32 {
-        // SAFETY: see the module's note.
-        unsafe { _mm256_movemask_pd(self.0) as u32 }
+/// The 4×4 transpose: lane l of the result holds the l-th lanes of a, b, c, d.
+#[inline(always)]
+pub fn rows(a: F4, b: F4, c: F4, d: F4) -> [__m256d; 4] {
+    // SAFETY: see the module's note.
+    unsafe {
+        let t0 = _mm256_unpacklo_pd(a.0, b.0); // a0 b0 a2 b2
+        let t1 = _mm256_unpackhi_pd(a.0, b.0); // a1 b1 a3 b3
+        let t2 = _mm256_unpacklo_pd(c.0, d.0); // c0 d0 c2 d2
+        let t3 = _mm256_unpackhi_pd(c.0, d.0); // c1 d1 c3 d3
+        [
+            _mm256_permute2f128_pd::<0x20>(t0, t2),
+            _mm256_permute2f128_pd::<0x20>(t1, t3),
+            _mm256_permute2f128_pd::<0x31>(t0, t2),
+            _mm256_permute2f128_pd::<0x31>(t1, t3),
+        ]
     }
 }
 

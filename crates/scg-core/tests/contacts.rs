@@ -916,8 +916,8 @@ fn ghosts_and_migration_follow_the_whole_simulation() {
             h.step().unwrap();
             let st = h.world.resource::<ContactState>();
             let local = st.local_rows() as u32;
-            ghost_contacts += (st.list.pairs.iter().zip(&st.pairs.touching))
-                .filter(|&(&[_, j], &t)| t && j >= local)
+            ghost_contacts += (st.pairs.in_contact(&st.list.pairs))
+                .filter(|([_, j], _)| *j >= local)
                 .count();
         }
         let mut moving = Vec::new();

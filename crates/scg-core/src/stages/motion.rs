@@ -288,6 +288,49 @@ impl PlanarZ {
     }
 }
 
+/// A flow the Stokes fast path runs in: its velocity at a point, and the drag-only loop
+/// over a piece of the particle table (the scalar [`drag_only_loop`] unless the flow has
+/// a faster one with the same bits).
+trait StokesFlow: Copy + Send + Sync {
+    /// Fluid velocity at `x`, m/s.
+    fn velocity_at(&self, x: DVec3) -> DVec3;
+
+    /// [`drag_only_loop`] in this flow.
+    fn drag_only<const TRACK: bool>(
+        self,
+        xs: &mut [Position],
+        vs: &mut [Velocity],
+        sfs: &[StokesFactors],
+        dt: f64,
+    ) -> (DVec3, f64) {
+        drag_only_loop::<TRACK, _>(xs, vs, sfs, dt, move |x| self.velocity_at(x))
+    }
+}
+
+impl<U: Fn(DVec3) -> DVec3 + Copy + Send + Sync> StokesFlow for U {
+    #[inline(always)]
+    fn velocity_at(&self, x: DVec3) -> DVec3 {
+        self(x)
+    }
+}
+
+impl StokesFlow for PlanarZ {
+    #[inline(always)]
+    fn velocity_at(&self, x: DVec3) -> DVec3 {
+        self.velocity(x)
+    }
+
+    fn drag_only<const TRACK: bool>(
+        self,
+        xs: &mut [Position],
+        vs: &mut [Velocity],
+        sfs: &[StokesFactors],
+        dt: f64,
+    ) -> (DVec3, f64) {
+        drag_only_planar::<TRACK>(xs, vs, sfs, dt, self)
+    }
+}
+
 /// [`drag_only_loop`] in a planar flow: four particles at a time where the CPU has AVX2
 /// (the same operations per particle, so the same bits; the running sum is only a
 /// finiteness test and may be added in another order), else the scalar loop.
@@ -403,27 +446,25 @@ pub fn integrate_stokes_exponential(
                 ],
                 b: [aff.b.x, aff.b.y],
             };
-            let u = move |x: DVec3| planar.velocity(x);
-            stokes_kernel(q, dt, &health, disp, u, Some(planar))
+            stokes_kernel(q, dt, &health, disp, planar)
         }
-        Some(aff) => stokes_kernel(q, dt, &health, disp, move |x| aff.velocity(x), None),
-        None => stokes_kernel(q, dt, &health, disp, move |x| flow.velocity(x), None),
+        Some(aff) => stokes_kernel(q, dt, &health, disp, move |x| aff.velocity(x)),
+        None => stokes_kernel(q, dt, &health, disp, move |x| flow.velocity(x)),
     }
 }
 
 /// The fast-path loop for a flow given as a function of position.
-fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
+fn stokes_kernel<U: StokesFlow>(
     mut q: MoveQuery<(&'static StokesFactors, &'static FluidCoupling)>,
     dt: f64,
     health: &Health,
     disp: Option<&StepDisplacement>,
     flow: U,
-    planar: Option<PlanarZ>,
 ) {
     let columns = move_columns(&mut q);
     let advance = move |p: Mover, (sf, fc): (&StokesFactors, &FluidCoupling)| {
         let vk = p.kicked(dt);
-        let u = flow(p.x + vk * (0.5 * dt));
+        let u = flow.velocity_at(p.x + vk * (0.5 * dt));
         exponential_drift(p.x, vk, u, p.a, fc.tau, sf.gain, sf.relax, dt)
     };
     let drag_only = columns
@@ -437,11 +478,9 @@ fn stokes_kernel<U: Fn(DVec3) -> DVec3 + Sync + Send + Copy>(
     // Drag only: the common case, kept free of per-particle branches.
     for_each_piece(columns, move |(xs, vs, (sfs, _), ..)| {
         // Any NaN or infinity makes the running sum non-finite: one test per piece.
-        let (sum, d2max) = match (planar, disp) {
-            (Some(p), Some(_)) => drag_only_planar::<true>(xs, vs, sfs, dt, p),
-            (Some(p), None) => drag_only_planar::<false>(xs, vs, sfs, dt, p),
-            (None, Some(_)) => drag_only_loop::<true, U>(xs, vs, sfs, dt, flow),
-            (None, None) => drag_only_loop::<false, U>(xs, vs, sfs, dt, flow),
+        let (sum, d2max) = match disp {
+            Some(_) => flow.drag_only::<true>(xs, vs, sfs, dt),
+            None => flow.drag_only::<false>(xs, vs, sfs, dt),
         };
         if !sum.is_finite() {
             health.raise();

@@ -16,37 +16,22 @@ use super::tangential::TangentialStiffness;
 #[cfg(target_arch = "x86_64")]
 pub use x86::{LaneOut, hertz_mindlin_x4};
 
-/// Constants of the Hertz–Mindlin law, as [`super::pair::pair_kernel`] uses them
-/// (the law the lanes compute: Hertz normal force, Mindlin tangential stiffness).
+/// The pair law the lanes compute, Hertz normal force with Mindlin tangential stiffness,
+/// and its normal damping coefficient γ (the other constants are the [`PairParams`]').
 #[derive(Clone, Copy, Debug)]
 pub struct HertzMindlin {
-    /// E*, Pa.
-    pub e_eff: f64,
-    /// G*, Pa.
-    pub g_eff: f64,
     /// Normal damping coefficient γ.
     pub gamma: f64,
-    /// Tangential damping factor.
-    pub damping: f64,
-    /// √(6·G*/E*).
-    pub mindlin_c: f64,
-    /// Static friction coefficient μ_s (0 = no tangential force).
-    pub friction: f64,
 }
 
 impl HertzMindlin {
-    /// The lanes' constants for the pair law `par`, or `None` when it is another law
-    /// (those run the scalar kernel).
+    /// The lanes' law for the pair law `par`, or `None` when it is another law (those
+    /// run the scalar kernel).
     pub fn of(par: &PairParams) -> Option<Self> {
         match (par.law, par.tangential.stiffness) {
-            (NormalLaw::Hertz { gamma }, TangentialStiffness::Mindlin) => Some(HertzMindlin {
-                e_eff: par.e_eff,
-                g_eff: par.g_eff,
-                gamma,
-                damping: par.tangential.damping,
-                mindlin_c: par.mindlin_c,
-                friction: par.tangential.friction,
-            }),
+            (NormalLaw::Hertz { gamma }, TangentialStiffness::Mindlin) => {
+                Some(HertzMindlin { gamma })
+            }
             _ => None,
         }
     }
@@ -60,7 +45,7 @@ mod x86 {
 
     use super::HertzMindlin;
     use crate::physics::contact::normal::OVERLAP_CAP;
-    use crate::physics::contact::pair::{Bodies, PairsMut};
+    use crate::physics::contact::pair::{Bodies, PairParams, PairsMut};
 
     /// What four pairs do to their particles, a row per pair (lane).
     #[derive(Clone, Copy, Debug, Default)]
@@ -71,11 +56,16 @@ mod x86 {
     }
 
     impl LaneOut {
+        /// The 3-vector at `rows[l][at..at + 3]`.
+        #[inline(always)]
+        fn vector(&self, l: usize, at: usize) -> glam::DVec3 {
+            let r = &self.rows[l];
+            glam::DVec3::new(r[at], r[at + 1], r[at + 2])
+        }
         /// Force on i of lane `l`, N (the force on j is exactly its opposite).
         #[inline(always)]
         pub fn force(&self, l: usize) -> glam::DVec3 {
-            let r = &self.rows[l];
-            glam::DVec3::new(r[0], r[1], r[2])
+            self.vector(l, 0)
         }
         /// Normal approach speed of lane `l`, m/s (positive when closing).
         #[inline(always)]
@@ -85,8 +75,7 @@ mod x86 {
         /// Torque on i of lane `l`, N·m.
         #[inline(always)]
         pub fn torque_i(&self, l: usize) -> glam::DVec3 {
-            let r = &self.rows[l];
-            glam::DVec3::new(r[4], r[5], r[6])
+            self.vector(l, 4)
         }
         /// Normal force magnitude of lane `l`, N (positive = repulsive).
         #[inline(always)]
@@ -96,8 +85,7 @@ mod x86 {
         /// Torque on j of lane `l`, N·m.
         #[inline(always)]
         pub fn torque_j(&self, l: usize) -> glam::DVec3 {
-            let r = &self.rows[l];
-            glam::DVec3::new(r[8], r[9], r[10])
+            self.vector(l, 8)
         }
     }
 
@@ -111,12 +99,14 @@ mod x86 {
     /// of those pairs must index `b`'s arrays.
     #[target_feature(enable = "avx2")]
     #[inline]
+    #[allow(clippy::too_many_arguments)]
     pub unsafe fn hertz_mindlin_x4(
         pairs: &mut PairsMut,
         idx: [u32; 4],
         live: usize,
         b: &Bodies,
-        law: &HertzMindlin,
+        par: &PairParams,
+        law: HertzMindlin,
         dt: f64,
     ) -> LaneOut {
         let at = idx.map(|k| k as usize);
@@ -143,11 +133,11 @@ mod x86 {
                 V4::gather(ps.map(|p| &p.history as *const _ as *const f64)),
             )
         };
-        let ri = F4::from_lanes(i.map(|k| b.radius[k]));
-        let rj = F4::from_lanes(j.map(|k| b.radius[k]));
-        let r_eff = F4::from_lanes(ps.map(|p| p.hertz.r_eff));
-        let sr = F4::from_lanes(ps.map(|p| p.hertz.sqrt_r));
-        let smk = F4::from_lanes(ps.map(|p| p.hertz.smk));
+        let ri = F4::from_array(i.map(|k| b.radius[k]));
+        let rj = F4::from_array(j.map(|k| b.radius[k]));
+        let r_eff = F4::from_array(ps.map(|p| p.hertz.r_eff));
+        let sr = F4::from_array(ps.map(|p| p.hertz.sqrt_r));
+        let smk = F4::from_array(ps.map(|p| p.hertz.smk));
 
         // Geometry.
         let d = (pj - pi) - shift;
@@ -160,7 +150,7 @@ mod x86 {
         let vn_approach = v_rel.dot(n);
 
         // Normal force, tangential stiffness and damping (`hertz_mindlin_pair`).
-        let k = F4::splat(4.0 / 3.0 * law.e_eff) * sr;
+        let k = F4::splat(4.0 / 3.0 * par.e_eff) * sr;
         let sd = delta.sqrt();
         let q = sd.sqrt();
         let cap = F4::splat(OVERLAP_CAP) * r_eff;
@@ -174,15 +164,16 @@ mod x86 {
         }
         let vn = -vn_approach;
         let fn_ = k * dc * sdc - F4::splat(law.gamma) * smk * qc * vn;
-        let kt = F4::splat(8.0 * law.g_eff) * sr * sd;
-        let eta = F4::splat(law.damping) * smk * F4::splat(law.mindlin_c) * q;
+        let kt = F4::splat(8.0 * par.g_eff) * sr * sd;
+        let eta = F4::splat(par.tangential.damping) * smk * F4::splat(par.mindlin_c) * q;
         let mut force = n.scale(-fn_);
         let (mut torque_i, mut torque_j) = (V4::zero(), V4::zero());
         let mut history = hist;
 
-        if law.friction > 0.0 {
+        let friction = par.tangential.friction;
+        if friction > 0.0 {
             let vt = v_rel - n.scale(vn_approach);
-            let limit = F4::splat(law.friction) * fn_.abs();
+            let limit = F4::splat(friction) * fn_.abs();
             // `rotate_history`.
             let l2 = hist.dot(hist);
             let p = hist - n.scale(hist.dot(n));
@@ -213,7 +204,7 @@ mod x86 {
 
         let h = rows(history.x, history.y, history.z, F4::zero());
         for (l, &k) in at.iter().enumerate().take(live) {
-            if law.friction > 0.0 {
+            if friction > 0.0 {
                 let to = &mut pairs.state[k].history as *mut glam::DVec3 as *mut f64;
                 // SAFETY: `to` addresses a DVec3, three f64: x and y, then z.
                 unsafe {
@@ -333,7 +324,8 @@ mod tests {
                 let idx: [u32; 4] = std::array::from_fn(|l| chunk[l.min(live - 1)]);
                 let mut lanes = arrays.view(&ij, all.clone());
                 // SAFETY: AVX2 checked above; the indices are in range.
-                let out = unsafe { hertz_mindlin_x4(&mut lanes, idx, live, &b, &lanes_law, 1e-5) };
+                let out =
+                    unsafe { hertz_mindlin_x4(&mut lanes, idx, live, &b, &par, lanes_law, 1e-5) };
                 for (l, &k) in chunk.iter().enumerate() {
                     let k = k as usize;
                     let c = scalar

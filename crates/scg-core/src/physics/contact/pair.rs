@@ -58,20 +58,20 @@ pub struct PairArrays {
 }
 
 impl PairArrays {
-    /// Number of pairs.
-    pub fn len(&self) -> usize {
-        self.state.len()
-    }
-
-    /// True when there is no pair.
-    pub fn is_empty(&self) -> bool {
-        self.state.is_empty()
-    }
-
     /// The shift of pair `k` (zero in an open domain).
     #[inline(always)]
     pub fn shift(&self, k: usize) -> DVec3 {
-        self.shift.get(k).copied().unwrap_or(DVec3::ZERO)
+        shift_of(&self.shift, k)
+    }
+
+    /// The pairs in contact, `([i, j], state)`, in list order; `ij` are the list's pairs.
+    pub fn in_contact<'a>(
+        &'a self,
+        ij: &'a [[u32; 2]],
+    ) -> impl Iterator<Item = ([u32; 2], &'a PairState)> + 'a {
+        (ij.iter().zip(&self.touching).zip(&self.state))
+            .filter(|((_, t), _)| **t)
+            .map(|((&p, _), s)| (p, s))
     }
 
     /// The pairs `range` as a mutable view; `ij` are the list's pairs (all of them).
@@ -106,15 +106,21 @@ pub struct PairsMut<'a> {
     pub state: &'a mut [PairState],
 }
 
+/// Shift `k` of `shift`, zero when there are none (an open domain).
+#[inline(always)]
+fn shift_of(shift: &[DVec3], k: usize) -> DVec3 {
+    if shift.is_empty() {
+        DVec3::ZERO
+    } else {
+        shift[k]
+    }
+}
+
 impl PairsMut<'_> {
     /// The shift of pair `k` (zero in an open domain).
     #[inline(always)]
     pub fn shift(&self, k: usize) -> DVec3 {
-        if self.shift.is_empty() {
-            DVec3::ZERO
-        } else {
-            self.shift[k]
-        }
+        shift_of(self.shift, k)
     }
 
     /// Number of pairs.
@@ -206,6 +212,30 @@ pub struct Bodies<'a> {
     pub radius: &'a [f64],
 }
 
+/// The contact test of a pair at squared distance `dist2` (m²) whose radii add up to
+/// `reach` (m): closer than the radii, and not at one point (two particles at the same
+/// centre have no normal). A NaN distance counts as touching, so that it reaches the
+/// state guard.
+#[inline(always)]
+pub fn within_reach(dist2: f64, reach: f64) -> bool {
+    !(dist2 >= reach * reach || dist2 == 0.0)
+}
+
+impl PairContact {
+    /// Add the rolling resistance ([`rolling_torque`], coefficient `mu_r`, 0 = off) for
+    /// the normal force `fn_` (N) and the pair's R* (m): its torque on i, and the
+    /// opposite on j.
+    #[inline(always)]
+    pub fn add_rolling(&mut self, mu_r: f64, fn_: f64, r_eff: f64, b: &Bodies) {
+        if mu_r > 0.0 {
+            let (i, j) = (self.i as usize, self.j as usize);
+            let t = rolling_torque(mu_r, fn_.abs(), r_eff, b.omega[i] - b.omega[j]);
+            self.torque_i += t;
+            self.torque_j -= t;
+        }
+    }
+}
+
 /// The force, torques and new history of the pair `ij` = [i, j] with minimum-image
 /// `shift` (pure); `None` when it does not touch. `touching` is the pair's contact flag
 /// (in and out), `p` its history and constants.
@@ -226,7 +256,7 @@ pub fn pair_kernel(
     let dist2 = d.length_squared();
     let reach = ri + rj;
     let was = *touching;
-    if dist2 >= reach * reach || dist2 == 0.0 {
+    if !within_reach(dist2, reach) {
         if was {
             *touching = false;
             p.history = DVec3::ZERO;
@@ -279,11 +309,7 @@ pub fn pair_kernel(
         c.torque_i = ri * nf;
         c.torque_j = rj * nf;
     }
-    if tl.rolling > 0.0 {
-        let t = rolling_torque(tl.rolling, fn_.abs(), pc.r_eff, b.omega[i] - b.omega[j]);
-        c.torque_i += t;
-        c.torque_j -= t;
-    }
+    c.add_rolling(tl.rolling, fn_, pc.r_eff, b);
     *touching = true;
     Some(c)
 }

@@ -172,10 +172,7 @@ impl ContactState {
     /// the histories such a particle brought here that no rebuild took up yet.
     pub fn histories_of(&self, leaving: impl Fn(u32) -> bool) -> Vec<PairHistory> {
         let mut out = Vec::new();
-        let touching = (self.list.pairs.iter().zip(&self.pairs.touching))
-            .zip(&self.pairs.state)
-            .filter(|((_, t), _)| **t);
-        for ((&[i, j], _), p) in touching {
+        for ([i, j], p) in self.pairs.in_contact(&self.list.pairs) {
             let (Some(&a), Some(&b)) = (self.ids.get(i as usize), self.ids.get(j as usize)) else {
                 continue;
             };

@@ -247,14 +247,9 @@ impl ContactState {
 
 /// (i, j, history) of the pairs in contact, before the list is rebuilt.
 fn touching_pairs(st: &ContactState) -> Vec<(u32, u32, DVec3)> {
-    (st.list
-        .pairs
-        .iter()
-        .zip(&st.pairs.touching)
-        .zip(&st.pairs.state))
-    .filter(|((_, t), _)| **t)
-    .map(|((&[i, j], _), p)| (i, j, p.history))
-    .collect()
+    (st.pairs.in_contact(&st.list.pairs))
+        .map(|([i, j], p)| (i, j, p.history))
+        .collect()
 }
 
 /// New pair states for the rebuilt list, each touching pair keeping its history

@@ -12,7 +12,7 @@ use super::ContactState;
 use crate::components::*;
 use crate::physics::contact::lanes::HertzMindlin;
 use crate::physics::contact::pair::{Bodies, PairContact, PairParams, PairsMut};
-use crate::physics::contact::tangential::{HertzPair, rolling_torque};
+use crate::physics::contact::tangential::HertzPair;
 use crate::stages::table::columns;
 use crate::state::{ContactResolution, SimClock, Tally};
 
@@ -99,9 +99,9 @@ impl Slot {
     /// On x86-64 CPUs with AVX2, and for the Hertz–Mindlin law, the touching pairs are
     /// computed four at a time ([`crate::physics::contact::lanes`]), which gives the
     /// scalar kernel's bits; other CPUs and laws run the scalar kernel.
-    pub(super) fn run(&mut self, pairs: PairsMut, k: &Kernel, groups: usize, sparse: bool) {
+    pub(super) fn run(&mut self, pairs: &mut PairsMut, k: &Kernel, groups: usize, sparse: bool) {
         #[cfg(target_arch = "x86_64")]
-        if let Some(law) = &k.lanes
+        if let Some(law) = k.lanes
             && std::arch::is_x86_feature_detected!("avx2")
         {
             // SAFETY: the CPU supports AVX2, checked just above.
@@ -118,9 +118,9 @@ impl Slot {
     #[target_feature(enable = "avx2")]
     fn run_avx2(
         &mut self,
-        mut pairs: PairsMut,
+        pairs: &mut PairsMut,
         k: &Kernel,
-        law: &HertzMindlin,
+        law: HertzMindlin,
         groups: usize,
         sparse: bool,
     ) {
@@ -129,7 +129,7 @@ impl Slot {
         let b = &k.bodies;
         let mut hits = std::mem::take(&mut self.hits);
         hits.resize(pairs.len(), 0);
-        let m = list_touching(&mut pairs, b, &mut hits);
+        let m = list_touching(pairs, b, &mut hits);
         let rolling = k.par.tangential.rolling;
         for chunk in hits[..m].chunks(4) {
             let live = chunk.len();
@@ -137,7 +137,7 @@ impl Slot {
             let was = idx.map(|a| pairs.touching[a as usize]);
             // SAFETY: AVX2 is enabled here; the indices come from `pairs`, whose particle
             // indices index the kernel's arrays.
-            let out = unsafe { hertz_mindlin_x4(&mut pairs, idx, live, b, law, k.dt) };
+            let out = unsafe { hertz_mindlin_x4(pairs, idx, live, b, &k.par, law, k.dt) };
             for l in 0..live {
                 let at = idx[l] as usize;
                 let [i, j] = pairs.ij[at];
@@ -151,16 +151,7 @@ impl Slot {
                     torque_i: out.torque_i(l),
                     torque_j: out.torque_j(l),
                 };
-                if rolling > 0.0 {
-                    let t = rolling_torque(
-                        rolling,
-                        out.normal_force(l).abs(),
-                        hertz.r_eff,
-                        b.omega[i as usize] - b.omega[j as usize],
-                    );
-                    c.torque_i += t;
-                    c.torque_j -= t;
-                }
+                c.add_rolling(rolling, out.normal_force(l), hertz.r_eff, b);
                 self.credit(&c, &hertz, k, sparse);
             }
         }
@@ -169,7 +160,7 @@ impl Slot {
     }
 
     /// The scalar path, pair by pair.
-    fn run_portable(&mut self, mut pairs: PairsMut, k: &Kernel, groups: usize, sparse: bool) {
+    fn run_portable(&mut self, pairs: &mut PairsMut, k: &Kernel, groups: usize, sparse: bool) {
         self.clear(groups);
         for at in 0..pairs.len() {
             let Some(c) = pairs.kernel(at, &k.bodies, &k.par, k.dt) else {
@@ -220,10 +211,12 @@ impl Slot {
 
 /// The first pass of the four-lane path: list the pairs `pairs` that touch in `hits` (in
 /// pair order; returns how many) and clear the pairs that stopped touching, four pairs at
-/// a time with the scalar kernel's test: !(|d|² ≥ (r_i + r_j)² or |d|² = 0).
+/// a time with the scalar kernel's test,
+/// [`crate::physics::contact::pair::within_reach`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn list_touching(pairs: &mut PairsMut, b: &Bodies, hits: &mut [u32]) -> usize {
+    use crate::physics::contact::pair::within_reach;
     use crate::simd::{F4, V4};
     let n = pairs.len();
     let n4 = n / 4 * 4;
@@ -246,7 +239,8 @@ fn list_touching(pairs: &mut PairsMut, b: &Bodies, hits: &mut [u32]) -> usize {
             d = d - unsafe { V4::load_aos(s) };
         }
         let dist2 = d.dot(d);
-        let reach = F4::from_lanes(i.map(|k| b.radius[k])) + F4::from_lanes(j.map(|k| b.radius[k]));
+        let reach = F4::from_array(i.map(|k| b.radius[k])) + F4::from_array(j.map(|k| b.radius[k]));
+        // `within_reach` on four lanes: !(|d|² ≥ reach²) and |d|² ≠ 0, NaN counting in.
         let touch = (dist2.not_ge(reach * reach).and(dist2.ne(F4::zero()))).bits();
         for l in 0..4 {
             hits[m] = (base + l) as u32;
@@ -265,7 +259,7 @@ fn list_touching(pairs: &mut PairsMut, b: &Bodies, hits: &mut [u32]) -> usize {
         }
         let dist2 = d.length_squared();
         let reach = b.radius[i] + b.radius[j];
-        let touch = !(dist2 >= reach * reach || dist2 == 0.0);
+        let touch = within_reach(dist2, reach);
         hits[m] = at as u32;
         m += usize::from(touch);
         separated(at, touch);
@@ -393,14 +387,14 @@ pub fn particle_contact_forces(
     let sparse = st.sparse;
     let groups = tally.collisions.len();
     let group = &st.group;
-    let mut work: Vec<(&mut Slot, Option<PairsMut>)> = Vec::with_capacity(st.slots.len());
+    let mut work: Vec<(&mut Slot, PairsMut)> = Vec::with_capacity(st.slots.len());
     let mut rest = st.pairs.view(&st.list.pairs, 0..st.list.pairs.len());
     let mut at = 0;
     for slot in st.slots.iter_mut() {
         let (mine, tail) = rest.split_at(slot.pairs.end - at);
         at = slot.pairs.end;
         rest = tail;
-        work.push((slot, Some(mine)));
+        work.push((slot, mine));
     }
     let kernel = Kernel {
         bodies,
@@ -411,9 +405,7 @@ pub fn particle_contact_forces(
         local: n,
     };
     crate::exec::team::for_each_item(&mut work, |_, (slot, pairs)| {
-        if let Some(pairs) = pairs.take() {
-            slot.run(pairs, &kernel, groups, sparse);
-        }
+        slot.run(pairs, &kernel, groups, sparse);
     });
     let mut active = 0;
     for slot in &st.slots {
@@ -511,17 +503,17 @@ mod tests {
             let mut slots = layout_slots(&list, n);
             let mut ps = pairs.clone();
             let slot = &mut slots[0];
-            let view = ps.view(&list, slot.pairs.clone());
+            let mut view = ps.view(&list, slot.pairs.clone());
             if avx {
                 #[cfg(target_arch = "x86_64")]
                 if std::arch::is_x86_feature_detected!("avx2") {
                     let law = kernel.lanes.unwrap();
-                    unsafe { slot.run_avx2(view, &kernel, &law, 1, true) };
+                    unsafe { slot.run_avx2(&mut view, &kernel, law, 1, true) };
                     return Some((slot.sums.clone(), ps));
                 }
                 return None;
             }
-            slot.run_portable(view, &kernel, 1, true);
+            slot.run_portable(&mut view, &kernel, 1, true);
             Some((slot.sums.clone(), ps))
         };
         let portable = run(false).unwrap();
