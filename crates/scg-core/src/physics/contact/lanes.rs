@@ -47,12 +47,15 @@ mod x86 {
     use crate::physics::contact::normal::OVERLAP_CAP;
     use crate::physics::contact::pair::{Bodies, PairParams, PairsMut};
 
-    /// What four pairs do to their particles, a row per pair (lane).
+    /// What four pairs do to their particles, a row per pair (lane), laid out as the
+    /// force slots' per-particle sums `[force, torque]` so a row adds to them whole.
     #[derive(Clone, Copy, Debug, Default)]
+    #[repr(C, align(32))]
     pub struct LaneOut {
-        /// Per lane: force on i (N), approach speed (m/s), torque on i (N·m), normal force
-        /// (N), torque on j (N·m), unused.
-        rows: [[f64; 12]; 4],
+        /// Per lane: force on i (N), torque on i (N·m), force on j (N, exactly the
+        /// opposite of i's), torque on j (N·m), approach speed (m/s), normal force (N),
+        /// two unused.
+        rows: [[f64; 16]; 4],
     }
 
     impl LaneOut {
@@ -67,25 +70,37 @@ mod x86 {
         pub fn force(&self, l: usize) -> glam::DVec3 {
             self.vector(l, 0)
         }
-        /// Normal approach speed of lane `l`, m/s (positive when closing).
-        #[inline(always)]
-        pub fn approach(&self, l: usize) -> f64 {
-            self.rows[l][3]
-        }
         /// Torque on i of lane `l`, N·m.
         #[inline(always)]
         pub fn torque_i(&self, l: usize) -> glam::DVec3 {
-            self.vector(l, 4)
-        }
-        /// Normal force magnitude of lane `l`, N (positive = repulsive).
-        #[inline(always)]
-        pub fn normal_force(&self, l: usize) -> f64 {
-            self.rows[l][7]
+            self.vector(l, 3)
         }
         /// Torque on j of lane `l`, N·m.
         #[inline(always)]
         pub fn torque_j(&self, l: usize) -> glam::DVec3 {
-            self.vector(l, 8)
+            self.vector(l, 9)
+        }
+        /// Normal approach speed of lane `l`, m/s (positive when closing).
+        #[inline(always)]
+        pub fn approach(&self, l: usize) -> f64 {
+            self.rows[l][12]
+        }
+        /// Normal force magnitude of lane `l`, N (positive = repulsive).
+        #[inline(always)]
+        pub fn normal_force(&self, l: usize) -> f64 {
+            self.rows[l][13]
+        }
+        /// Lane `l`'s force and torque on i, `[f, t]` as six f64 (the layout of a
+        /// slot's per-particle sum).
+        #[inline(always)]
+        pub fn on_i(&self, l: usize) -> &[f64; 6] {
+            self.rows[l][..6].try_into().expect("six")
+        }
+        /// Lane `l`'s force and torque on j, `[f, t]` as six f64. Adding it equals
+        /// subtracting the force on i: x − y and x + (−y) round alike in IEEE 754.
+        #[inline(always)]
+        pub fn on_j(&self, l: usize) -> &[f64; 6] {
+            self.rows[l][6..12].try_into().expect("six")
         }
     }
 
@@ -215,14 +230,16 @@ mod x86 {
             pairs.touching[k] = true;
         }
         let mut out = LaneOut::default();
+        let fj = -force;
         let parts = [
-            rows(force.x, force.y, force.z, vn_approach),
-            rows(torque_i.x, torque_i.y, torque_i.z, fn_),
-            rows(torque_j.x, torque_j.y, torque_j.z, F4::zero()),
+            rows(force.x, force.y, force.z, torque_i.x),
+            rows(torque_i.y, torque_i.z, fj.x, fj.y),
+            rows(fj.z, torque_j.x, torque_j.y, torque_j.z),
+            rows(vn_approach, fn_, F4::zero(), F4::zero()),
         ];
         for (l, row) in out.rows.iter_mut().enumerate() {
             for (p, part) in parts.iter().enumerate() {
-                // SAFETY: `row` holds 12 f64, so 4p..4p+4 is inside it.
+                // SAFETY: `row` holds 16 f64, so 4p..4p+4 is inside it.
                 unsafe { _mm256_storeu_pd(row.as_mut_ptr().add(4 * p), part[l]) };
             }
         }

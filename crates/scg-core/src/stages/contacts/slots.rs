@@ -39,6 +39,8 @@ const PAIRS_PER_SLOT: usize = 4096;
 /// neighbours (j) of its pairs, so more slots mean more entries to clear and sum each step
 /// (16 slots ran the 32 000-particle dense bed about 4 % slower).
 const MAX_SLOTS: usize = 8;
+/// Candidate pairs listed per block by the four-lane path.
+const LIST_BLOCK: usize = 256;
 
 /// One slot of the force accumulation: a fixed range of the pair list whose forces are
 /// summed, in pair order, into per-particle arrays covering particles `base..base+len`.
@@ -128,35 +130,82 @@ impl Slot {
         self.clear(groups);
         let b = &k.bodies;
         let mut hits = std::mem::take(&mut self.hits);
-        hits.resize(pairs.len(), 0);
-        let m = list_touching(pairs, b, &mut hits);
+        hits.resize(LIST_BLOCK + 4, 0);
         let rolling = k.par.tangential.rolling;
-        for chunk in hits[..m].chunks(4) {
-            let live = chunk.len();
-            let idx: [u32; 4] = std::array::from_fn(|l| chunk[l.min(live - 1)]);
-            let was = idx.map(|a| pairs.touching[a as usize]);
-            // SAFETY: AVX2 is enabled here; the indices come from `pairs`, whose particle
-            // indices index the kernel's arrays.
-            let out = unsafe { hertz_mindlin_x4(pairs, idx, live, b, &k.par, law, k.dt) };
-            for l in 0..live {
-                let at = idx[l] as usize;
-                let [i, j] = pairs.ij[at];
-                let hertz = pairs.state[at].hertz;
-                let mut c = PairContact {
-                    i,
-                    j,
-                    started: !was[l],
-                    approach: out.approach(l),
-                    force: out.force(l),
-                    torque_i: out.torque_i(l),
-                    torque_j: out.torque_j(l),
-                };
-                c.add_rolling(rolling, out.normal_force(l), hertz.r_eff, b);
-                self.credit(&c, &hertz, k, sparse);
+        // Without rolling resistance or bookkeeping (a dense step), lanes whose contact
+        // went on add their rows to the sums whole.
+        let whole = !sparse && !(rolling > 0.0);
+        // Listed and computed a block at a time, so that the particles the listing read
+        // are still in the first-level cache when their pairs are computed; the touching
+        // pairs carried over to the next block (fewer than four) keep the pair order.
+        let n = pairs.len();
+        let (mut pending, mut start) = (0, 0);
+        while start < n {
+            let end = (start + LIST_BLOCK).min(n);
+            pending = list_touching(pairs, start..end, b, &mut hits, pending);
+            let full = if end == n { pending } else { pending / 4 * 4 };
+            for chunk in hits[..full].chunks(4) {
+                let live = chunk.len();
+                let idx: [u32; 4] = std::array::from_fn(|l| chunk[l.min(live - 1)]);
+                let was = idx.map(|a| pairs.touching[a as usize]);
+                // SAFETY: AVX2 is enabled here; the indices come from `pairs`, whose particle
+                // indices index the kernel's arrays.
+                let out = unsafe { hertz_mindlin_x4(pairs, idx, live, b, &k.par, law, k.dt) };
+                for l in 0..live {
+                    let at = idx[l] as usize;
+                    let [i, j] = pairs.ij[at];
+                    if whole && was[l] {
+                        self.add_whole(i as usize, j as usize, &out, l);
+                        continue;
+                    }
+                    let hertz = pairs.state[at].hertz;
+                    let mut c = PairContact {
+                        i,
+                        j,
+                        started: !was[l],
+                        approach: out.approach(l),
+                        force: out.force(l),
+                        torque_i: out.torque_i(l),
+                        torque_j: out.torque_j(l),
+                    };
+                    c.add_rolling(rolling, out.normal_force(l), hertz.r_eff, b);
+                    self.credit(&c, &hertz, k, sparse);
+                }
             }
+            hits.copy_within(full..pending, 0);
+            pending -= full;
+            start = end;
         }
         self.hits = hits;
         self.dirty = !sparse;
+    }
+
+    /// [`Slot::credit`] for lane `l` of `out`, the pair (i, j) whose contact went on,
+    /// without rolling resistance or bookkeeping: its rows added to the sums whole, the
+    /// same additions component by component.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn add_whole(
+        &mut self,
+        i: usize,
+        j: usize,
+        out: &crate::physics::contact::lanes::LaneOut,
+        l: usize,
+    ) {
+        use core::arch::x86_64::*;
+        for (k, row) in [(i, out.on_i(l)), (j, out.on_j(l))] {
+            let s: &mut [DVec3; 2] = &mut self.sums[k - self.base];
+            let s = s as *mut [DVec3; 2] as *mut f64;
+            // SAFETY: `s` addresses six f64 (two `repr(C)` DVec3) and `row` six f64.
+            unsafe {
+                let a = _mm256_add_pd(_mm256_loadu_pd(s), _mm256_loadu_pd(row.as_ptr()));
+                let b = _mm_add_pd(_mm_loadu_pd(s.add(4)), _mm_loadu_pd(row.as_ptr().add(4)));
+                _mm256_storeu_pd(s, a);
+                _mm_storeu_pd(s.add(4), b);
+            }
+        }
+        self.active += 1;
     }
 
     /// The scalar path, pair by pair.
@@ -209,26 +258,32 @@ impl Slot {
     }
 }
 
-/// The first pass of the four-lane path: list the pairs `pairs` that touch in `hits` (in
-/// pair order; returns how many) and clear the pairs that stopped touching, four pairs at
-/// a time with the scalar kernel's test,
-/// [`crate::physics::contact::pair::within_reach`].
+/// The first pass of the four-lane path: list the pairs `range` of `pairs` that touch
+/// in `hits` from `hits[m]` on (in pair order; returns the new count) and clear the pairs
+/// that stopped touching, four pairs at a time with the scalar kernel's test,
+/// [`crate::physics::contact::pair::within_reach`]. `hits` must have room for
+/// `m + range.len()`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn list_touching(pairs: &mut PairsMut, b: &Bodies, hits: &mut [u32]) -> usize {
+fn list_touching(
+    pairs: &mut PairsMut,
+    range: std::ops::Range<usize>,
+    b: &Bodies,
+    hits: &mut [u32],
+    mut m: usize,
+) -> usize {
     use crate::physics::contact::pair::within_reach;
     use crate::simd::{F4, V4};
-    let n = pairs.len();
-    let n4 = n / 4 * 4;
+    let n = range.end;
+    let n4 = range.start + range.len() / 4 * 4;
     let periodic = !pairs.shift.is_empty();
-    let mut m = 0;
     let mut separated = |at: usize, touch: bool| {
         if pairs.touching[at] && !touch {
             pairs.touching[at] = false;
             pairs.state[at].history = DVec3::ZERO;
         }
     };
-    for base in (0..n4).step_by(4) {
+    for base in (range.start..n4).step_by(4) {
         let ij: [[u32; 2]; 4] = std::array::from_fn(|l| pairs.ij[base + l]);
         let (i, j) = (ij.map(|p| p[0] as usize), ij.map(|p| p[1] as usize));
         let row = |k: usize| &b.pos[k] as *const DVec3 as *const f64;
@@ -457,77 +512,81 @@ mod tests {
             friction: 0.4,
         };
         let law = NormalLaw::hertz(0.6);
-        let par = PairParams {
-            law,
-            tangential: TangentialLaw::new(law, 0.4, 0.05),
-            e_eff: material.effective_modulus(),
-            g_eff: material.effective_shear_modulus(),
-            periodic: None,
-            mindlin_c: (6.0 * material.effective_shear_modulus() / material.effective_modulus())
+        for (rolling, sparse) in [(0.05, true), (0.05, false), (0.0, true), (0.0, false)] {
+            let par = PairParams {
+                law,
+                tangential: TangentialLaw::new(law, 0.4, rolling),
+                e_eff: material.effective_modulus(),
+                g_eff: material.effective_shear_modulus(),
+                periodic: None,
+                mindlin_c: (6.0 * material.effective_shear_modulus()
+                    / material.effective_modulus())
                 .sqrt(),
-        };
-        let mut list: Vec<[u32; 2]> = Vec::new();
-        let mut pairs = PairArrays::default();
-        for i in 0..n {
-            for j in i + 1..n {
-                if (pos[j] - pos[i]).length() < 1.1 * (radius[i] + radius[j]) {
-                    list.push([i as u32, j as u32]);
-                    pairs.touching.push(rng.random());
-                    pairs.state.push(PairState {
-                        history: (DVec3::new(rng.random(), rng.random(), rng.random()) - 0.5)
-                            * 1e-6,
-                        hertz: HertzPair::new(
-                            par.e_eff,
-                            effective(radius[i], radius[j]),
-                            effective(mass[i], mass[j]),
-                        ),
-                    });
-                }
-            }
-        }
-        let group = vec![0; n];
-        let kernel = Kernel {
-            bodies: Bodies {
-                pos: &pos,
-                vel: &vel,
-                omega: &omega,
-                radius: &radius,
-            },
-            par,
-            lanes: HertzMindlin::of(&par),
-            dt: 1e-6,
-            group: &group,
-            local: n,
-        };
-        let run = |avx: bool| {
-            let mut slots = layout_slots(&list, n);
-            let mut ps = pairs.clone();
-            let slot = &mut slots[0];
-            let mut view = ps.view(&list, slot.pairs.clone());
-            if avx {
-                #[cfg(target_arch = "x86_64")]
-                if std::arch::is_x86_feature_detected!("avx2") {
-                    let law = kernel.lanes.unwrap();
-                    unsafe { slot.run_avx2(&mut view, &kernel, law, 1, true) };
-                    return Some((slot.sums.clone(), ps));
-                }
-                return None;
-            }
-            slot.run_portable(&mut view, &kernel, 1, true);
-            Some((slot.sums.clone(), ps))
-        };
-        let portable = run(false).unwrap();
-        assert!(portable.0.iter().any(|f| f[0] != DVec3::ZERO));
-        assert!(list.len() > 300, "{} pairs", list.len());
-        if let Some(avx) = run(true) {
-            let bits = |v: &[[DVec3; 2]]| -> Vec<u64> {
-                v.iter()
-                    .flatten()
-                    .flat_map(|x| x.to_array().map(f64::to_bits))
-                    .collect()
             };
-            assert_eq!(bits(&portable.0), bits(&avx.0));
-            assert_eq!(portable.1, avx.1);
+            let mut list: Vec<[u32; 2]> = Vec::new();
+            let mut pairs = PairArrays::default();
+            for i in 0..n {
+                for j in i + 1..n {
+                    if (pos[j] - pos[i]).length() < 1.1 * (radius[i] + radius[j]) {
+                        list.push([i as u32, j as u32]);
+                        pairs.touching.push(rng.random());
+                        pairs.state.push(PairState {
+                            history: (DVec3::new(rng.random(), rng.random(), rng.random()) - 0.5)
+                                * 1e-6,
+                            hertz: HertzPair::new(
+                                par.e_eff,
+                                effective(radius[i], radius[j]),
+                                effective(mass[i], mass[j]),
+                            ),
+                        });
+                    }
+                }
+            }
+            let group = vec![0; n];
+            let kernel = Kernel {
+                bodies: Bodies {
+                    pos: &pos,
+                    vel: &vel,
+                    omega: &omega,
+                    radius: &radius,
+                },
+                par,
+                lanes: HertzMindlin::of(&par),
+                dt: 1e-6,
+                group: &group,
+                local: n,
+            };
+            let run = |avx: bool| {
+                let mut slots = layout_slots(&list, n);
+                let mut ps = pairs.clone();
+                let slot = &mut slots[0];
+                let mut view = ps.view(&list, slot.pairs.clone());
+                if avx {
+                    #[cfg(target_arch = "x86_64")]
+                    if std::arch::is_x86_feature_detected!("avx2") {
+                        let law = kernel.lanes.unwrap();
+                        unsafe { slot.run_avx2(&mut view, &kernel, law, 1, sparse) };
+                        return Some((slot.sums.clone(), ps));
+                    }
+                    return None;
+                }
+                slot.run_portable(&mut view, &kernel, 1, sparse);
+                Some((slot.sums.clone(), ps))
+            };
+            let portable = run(false).unwrap();
+            assert!(portable.0.iter().any(|f| f[0] != DVec3::ZERO));
+            // more than two listing blocks, so that touching pairs are carried over
+            assert!(list.len() > 2 * LIST_BLOCK, "{} pairs", list.len());
+            if let Some(avx) = run(true) {
+                let bits = |v: &[[DVec3; 2]]| -> Vec<u64> {
+                    v.iter()
+                        .flatten()
+                        .flat_map(|x| x.to_array().map(f64::to_bits))
+                        .collect()
+                };
+                assert_eq!(bits(&portable.0), bits(&avx.0));
+                assert_eq!(portable.1, avx.1);
+            }
         }
     }
 }
