@@ -134,7 +134,7 @@ impl Slot {
         let rolling = k.par.tangential.rolling;
         // Without rolling resistance or bookkeeping (a dense step), lanes whose contact
         // went on add their rows to the sums whole.
-        let whole = !sparse && !(rolling > 0.0);
+        let whole = !sparse && rolling <= 0.0;
         // Listed and computed a block at a time, so that the particles the listing read
         // are still in the first-level cache when their pairs are computed; the touching
         // pairs carried over to the next block (fewer than four) keep the pair order.
