@@ -115,3 +115,33 @@ pub struct BodyAcceleration(pub DVec3);
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq, TransparentWrapper)]
 #[repr(transparent)]
 pub struct CellHint(pub u32);
+
+/// The fluid velocity at the particle's centre as the last step's landing on the mesh
+/// found it (mesh flows only): `u` (m/s) at the centre `at` (m). A step starting from
+/// `at` takes `u` instead of locating the centre again, which gives the same value bit
+/// for bit (the same cell records); `at` is NaN when unknown (a new, restored or migrated
+/// particle, a landing off the table), and then the step locates it.
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct FlowAtCentre {
+    /// The centre the value was found at, m (NaN: unknown).
+    pub at: DVec3,
+    /// The fluid velocity there, m/s.
+    pub u: DVec3,
+}
+
+impl FlowAtCentre {
+    /// Nothing known.
+    pub const UNKNOWN: FlowAtCentre = FlowAtCentre {
+        at: DVec3::NAN,
+        u: DVec3::NAN,
+    };
+
+    /// The value at `x` when it is known there (`x` bit for bit the centre it was found
+    /// at).
+    #[inline]
+    pub fn at(&self, x: DVec3) -> Option<DVec3> {
+        let same =
+            |a: DVec3, b: DVec3| a.to_array().map(f64::to_bits) == b.to_array().map(f64::to_bits);
+        same(self.at, x).then_some(self.u)
+    }
+}

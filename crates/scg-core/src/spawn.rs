@@ -89,11 +89,14 @@ impl SpawnRules {
     }
 }
 
-/// `spawner.spawn(bundle)`, with the [`CellHint`] `$hint` added when `mesh` (one bundle).
+/// `spawner.spawn(bundle)`, with the [`CellHint`] `$hint` and an unknown [`FlowAtCentre`]
+/// added when `mesh` (one bundle).
 macro_rules! spawn_opt {
     ($spawner:expr, $mesh:expr, $hint:expr, $bundle:expr) => {
         if $mesh {
-            $spawner.spawn(($bundle, CellHint($hint))).id()
+            $spawner
+                .spawn(($bundle, CellHint($hint), FlowAtCentre::UNKNOWN))
+                .id()
         } else {
             $spawner.spawn($bundle).id()
         }

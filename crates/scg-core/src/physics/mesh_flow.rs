@@ -326,6 +326,10 @@ pub struct Landing {
     pub x: DVec3,
     /// Final velocity, m/s.
     pub v: DVec3,
+    /// The fluid velocity at `x` when the landing found it on the table (m/s): what
+    /// [`MeshFlow::velocity`] gives for `x` from the cell `hint`, bit for bit (the same
+    /// records).
+    pub u: Option<DVec3>,
     /// Next hint: the cell, or [`hint::DRAINED`] / [`hint::LOST`].
     pub hint: u32,
 }
@@ -354,10 +358,11 @@ pub fn land(
     // The table first: x1 is in the cell of the mid-step point (most steps) or a few
     // cells on.
     let walked = flow.walk_table(h_from, x1);
-    if let TableWalk::Inside { cell, .. } = walked {
+    if let TableWalk::Inside { cell, value } = walked {
         return Landing {
             x: x1,
             v: v1,
+            u: Some(value),
             hint: cell,
         };
     }
@@ -386,10 +391,11 @@ fn land_boundary(
             walked = flow.walk_table(from, x1);
         }
         let (face, patch) = match walked {
-            TableWalk::Inside { cell, .. } => {
+            TableWalk::Inside { cell, value } => {
                 return Landing {
                     x: x1,
                     v: v1,
+                    u: Some(value),
                     hint: cell,
                 };
             }
@@ -402,6 +408,7 @@ fn land_boundary(
                     return Landing {
                         x: x1,
                         v: v1,
+                        u: None,
                         hint: h.cell,
                     };
                 }
@@ -417,6 +424,7 @@ fn land_boundary(
                     return Landing {
                         x: x1,
                         v: v1,
+                        u: None,
                         hint: hint::LOST,
                     };
                 }
@@ -431,6 +439,7 @@ fn land_boundary(
                 return Landing {
                     x: x1,
                     v: v1,
+                    u: None,
                     hint: hint::DRAINED,
                 };
             }
@@ -438,6 +447,7 @@ fn land_boundary(
                 return Landing {
                     x: x1,
                     v: v1,
+                    u: None,
                     hint: hint::LOST,
                 };
             }
@@ -446,6 +456,7 @@ fn land_boundary(
     Landing {
         x: x0,
         v: v1,
+        u: None,
         hint: h0,
     }
 }

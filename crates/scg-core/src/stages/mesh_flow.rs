@@ -105,7 +105,7 @@ type MeshMoveQuery<'w, 's> = Query<
         &'static Mass,
         Option<&'static Force>,
         Option<&'static BodyAcceleration>,
-        &'static mut CellHint,
+        (&'static mut CellHint, &'static mut FlowAtCentre),
     ),
 >;
 
@@ -136,14 +136,22 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
     let disp = d.disp.as_deref();
     let departures = &d.state.departures;
     departures.store(0, Ordering::Relaxed);
-    let Some((xs, vs, drag, ms, fs, gs, hs)) = columns_mut(&mut q) else {
+    let Some((xs, vs, drag, ms, fs, gs, (hs, us))) = columns_mut(&mut q) else {
         if let Some(dd) = disp {
             dd.mark_reported();
         }
         return;
     };
-    let columns = (bypass(xs), bypass(vs), drag, ms, fs, gs, bypass(hs));
-    for_each_piece_heavy(columns, |(xs, vs, (sfs, fcs), ms, fs, gs, hs)| {
+    let columns = (
+        bypass(xs),
+        bypass(vs),
+        drag,
+        ms,
+        fs,
+        gs,
+        (bypass(hs), bypass(us)),
+    );
+    for_each_piece_heavy(columns, |(xs, vs, (sfs, fcs), ms, fs, gs, (hs, us))| {
         let mut d2max = 0.0_f64;
         let mut gone = 0u64;
         for i in 0..xs.len() {
@@ -172,6 +180,8 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
                 }
             }
             let (m, fc, sf) = (ms[i].0, &fcs[i], &sfs[i]);
+            // The fluid velocity at the start, from the last landing when it found it.
+            let u_start = |h: u32, x: DVec3| us[i].at(x).unwrap_or_else(|| flow.velocity(h, x).0);
             let force = fs.map(|f| f[i].0);
             let a = gs.map_or(DVec3::ZERO, |g| g[i].0);
             let v0 = vs[i].0;
@@ -186,7 +196,7 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
                         viscosity: 1.0,
                     });
                     let (mut xi, mut vi, mut h) = (x0, v0, h0);
-                    let (u0, _) = flow.velocity(h, xi);
+                    let u0 = u_start(h, xi);
                     let tau0 = effective_tau(law, fc, &fl, (u0 - vi).length());
                     let n = explicit_substeps(tau0, dt);
                     let step = dt / n as f64;
@@ -214,8 +224,8 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
                                 density: 0.0,
                                 viscosity: 1.0,
                             });
-                            let (us, _) = flow.velocity(h0, x0);
-                            let tau = effective_tau(law, fc, &fl, (us - vk).length());
+                            let u0 = u_start(h0, x0);
+                            let tau = effective_tau(law, fc, &fl, (u0 - vk).length());
                             let (gain, relax) = exponential_factors(tau, dt);
                             exponential_drift(x0, vk, u, a, tau, gain, relax, dt)
                         }
@@ -227,6 +237,7 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
                 health.raise();
                 xs[i].0 = x1;
                 vs[i].0 = v1;
+                us[i] = FlowAtCentre::UNKNOWN;
                 continue;
             }
             let l = land(flow, x0, h0, h_end, x1, v1, e);
@@ -240,6 +251,10 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
             xs[i].0 = l.x;
             vs[i].0 = l.v;
             hs[i].0 = l.hint;
+            us[i] = match l.u {
+                Some(u) => FlowAtCentre { at: l.x, u },
+                None => FlowAtCentre::UNKNOWN,
+            };
         }
         if gone > 0 {
             departures.fetch_add(gone, Ordering::Relaxed);
@@ -308,6 +323,7 @@ pub fn sort_by_cell(world: &mut World) {
         world.register_component::<WallHistory>(),
         world.register_component::<BodyAcceleration>(),
         world.register_component::<CellHint>(),
+        world.register_component::<FlowAtCentre>(),
     ];
     let layouts = world
         .archetypes()
@@ -356,6 +372,7 @@ pub fn sort_by_cell(world: &mut World) {
     permute::<WallHistory>(world, &perm);
     permute::<BodyAcceleration>(world, &perm);
     permute::<CellHint>(world, &perm);
+    permute::<FlowAtCentre>(world, &perm);
 }
 
 /// Row i of the particles' `T` column takes the value of row `perm[i]` (no effect when
