@@ -75,6 +75,44 @@ fn replay_verify_passes_and_catches_one_altered_value() {
     );
 }
 
+/// A scene whose CFD case is a path relative to the scene file (cases/cyclone.toml's
+/// `cyclone/coarse`), recorded from the repository and re-run by `replay --verify` from
+/// another working folder: the recording stores the scene's folder.
+#[test]
+fn replay_verify_resolves_relative_paths_from_the_scenes_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = scg()
+        .args(["run", "cases/cyclone.toml", "--out"])
+        .arg(dir.path())
+        .args(["--set", "duration=0.06", "--set", "feed_scale=0.25"])
+        .current_dir(common::repo(""))
+        .output()
+        .unwrap();
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    let mcap = dir.path().join("cyclone.mcap");
+    let rec = read_mcap(&mcap).unwrap();
+    let cases = std::fs::canonicalize(common::repo("cases")).unwrap();
+    assert_eq!(Path::new(&rec.meta.scene_dir), cases);
+    assert!(rec.frames.iter().any(|f| !f.id.is_empty()));
+    let out = scg()
+        .arg("replay")
+        .arg(&mcap)
+        .arg("--verify")
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && text.contains("bit-identical"),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 #[test]
 fn one_and_two_threads_record_identical_data() {
     let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());

@@ -113,6 +113,10 @@ pub struct RunMeta {
     pub groups: Vec<GroupMeta>,
     /// The scene file's text, stored so a recording can be re-run.
     pub scene_toml: String,
+    /// The absolute folder the scene's relative paths (a CFD case, STL walls) are
+    /// resolved from, so a recording re-runs from any working folder; empty when unknown
+    /// (recordings made before it was stored).
+    pub scene_dir: String,
     /// Geometry to draw once, as static line strips.
     pub outlines: Vec<Outline>,
     /// The boundary patches of a flow mesh (empty without one), drawn once.

@@ -131,6 +131,9 @@ pub const META_GROUPS: &str = "groups";
 pub const META_WARNINGS: &str = "warnings";
 /// Metadata key: JSON array of `{name, strips}` (strips: arrays of `[x, y, z]`, m).
 pub const META_OUTLINES: &str = "outlines";
+/// Metadata key: the folder the scene's relative paths are resolved from (absolute;
+/// optional, absent in older recordings).
+pub const META_SCENE_DIR: &str = "scene_dir";
 
 /// Colour (sRGB and alpha, 0–255) a boundary patch is drawn in, by role: walls grey and
 /// most translucent, outlets green, inlets blue, lost patches red.

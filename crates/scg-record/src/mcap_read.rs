@@ -14,9 +14,9 @@ use scg_core::frame::{Frame, GroupMeta, Outline, PatchSurface, RunMeta};
 
 use crate::layout::{
     FORMAT_VERSION, FieldType, GroupJson, META_CASE, META_DT, META_FORMAT, META_GROUPS,
-    META_OUTLINES, META_RECORD_EVERY, META_SCG_VERSION, META_SEED, META_WARNINGS, METADATA_NAME,
-    OutlineJson, POINT_FIELDS, SCENE_ATTACHMENT, StatsIn, TOPIC_PARTICLES, TOPIC_PATCHES,
-    TOPIC_STATS,
+    META_OUTLINES, META_RECORD_EVERY, META_SCENE_DIR, META_SCG_VERSION, META_SEED, META_WARNINGS,
+    METADATA_NAME, OutlineJson, POINT_FIELDS, SCENE_ATTACHMENT, StatsIn, TOPIC_PARTICLES,
+    TOPIC_PATCHES, TOPIC_STATS,
 };
 use crate::{RecordError, Recording};
 
@@ -269,6 +269,7 @@ fn parse_meta(entries: &BTreeMap<String, String>) -> Result<RunMeta, String> {
             .map_err(|e| bad(META_RECORD_EVERY, &e))?,
         groups: groups.into_iter().map(GroupMeta::from).collect(),
         scene_toml: String::new(),
+        scene_dir: entries.get(META_SCENE_DIR).cloned().unwrap_or_default(),
         outlines: outlines.into_iter().map(Outline::from).collect(),
         patches: Vec::new(),
         warnings,

@@ -21,10 +21,10 @@ use scg_core::frame::{Frame, FrameSink, RunMeta};
 
 use crate::layout::{
     FORMAT_VERSION, FRAME_ID, FieldType, GroupJson, META_CASE, META_DT, META_FORMAT, META_GROUPS,
-    META_OUTLINES, META_RECORD_EVERY, META_SCG_VERSION, META_SEED, META_WARNINGS, METADATA_NAME,
-    OrderedValues, OutlineJson, POINT_FIELDS, POINT_STRIDE, SCENE_ATTACHMENT, SCENE_MEDIA_TYPE,
-    STATS_JSON_SCHEMA, STATS_SCHEMA_NAME, StatsOut, TOPIC_PARTICLES, TOPIC_PATCHES, TOPIC_STATS,
-    patch_color,
+    META_OUTLINES, META_RECORD_EVERY, META_SCENE_DIR, META_SCG_VERSION, META_SEED, META_WARNINGS,
+    METADATA_NAME, OrderedValues, OutlineJson, POINT_FIELDS, POINT_STRIDE, SCENE_ATTACHMENT,
+    SCENE_MEDIA_TYPE, STATS_JSON_SCHEMA, STATS_SCHEMA_NAME, StatsOut, TOPIC_PARTICLES,
+    TOPIC_PATCHES, TOPIC_STATS, patch_color,
 };
 use crate::{RecordError, check_frame, commit_partial, partial_path};
 
@@ -133,6 +133,7 @@ fn meta_entries(meta: &RunMeta) -> Result<BTreeMap<String, String>, RecordError>
         (META_GROUPS.to_owned(), to_json(&groups)?),
         (META_WARNINGS.to_owned(), to_json(&meta.warnings)?),
         (META_OUTLINES.to_owned(), to_json(&outlines)?),
+        (META_SCENE_DIR.to_owned(), meta.scene_dir.clone()),
     ]))
 }
 

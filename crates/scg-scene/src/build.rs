@@ -151,6 +151,19 @@ impl Scene {
         sim
     }
 
+    /// The absolute folder of the scene's relative paths ([`Scene::base_dir`]; the working
+    /// folder when it is empty), as recordings store it; empty when it cannot be resolved.
+    pub fn scene_dir(&self) -> String {
+        let base = if self.base_dir.as_os_str().is_empty() {
+            std::path::Path::new(".")
+        } else {
+            self.base_dir.as_path()
+        };
+        std::fs::canonicalize(base)
+            .map(|p| p.display().to_string())
+            .unwrap_or_default()
+    }
+
     /// The description recorders store.
     pub fn run_meta(&self, warnings: Vec<String>) -> RunMeta {
         let size = self.extent();
@@ -172,6 +185,7 @@ impl Scene {
                 })
                 .collect(),
             scene_toml: self.source.clone(),
+            scene_dir: self.scene_dir(),
             outlines: self
                 .walls
                 .iter()

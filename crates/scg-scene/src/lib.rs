@@ -25,4 +25,4 @@ pub use model::{
     DtChoice, Feeder, Group, Outlet, PatchWalls, Placement, Region, Scene, SceneMeshFlow,
 };
 pub use overrides::apply_overrides;
-pub use validate::{DEFAULT_SCENE, load, parse};
+pub use validate::{DEFAULT_SCENE, load, parse, parse_in};

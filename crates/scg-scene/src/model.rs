@@ -82,6 +82,8 @@ pub struct Scene {
     pub name: String,
     /// Where it came from (path, `<embedded>`…).
     pub file: String,
+    /// The folder its relative paths (a CFD case, STL walls) were resolved from.
+    pub base_dir: std::path::PathBuf,
     /// The TOML text (after `--set` overrides).
     pub source: String,
     /// Free text.

@@ -40,10 +40,24 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Scene, SceneError> {
     parse(&text, &file, &stem, overrides)
 }
 
-/// Parse and validate scene text. `file` names it in errors, `stem` is the default name.
+/// Parse and validate scene text. `file` names it in errors, and its folder is the one
+/// relative paths (a CFD case, STL walls) are resolved from; `stem` is the default name.
 pub fn parse(
     text: &str,
     file: &str,
+    stem: &str,
+    overrides: &[String],
+) -> Result<Scene, SceneError> {
+    let base = Path::new(file).parent().unwrap_or(Path::new(""));
+    parse_in(text, file, base, stem, overrides)
+}
+
+/// [`parse`] with relative paths resolved from `base` (e.g. the folder a recording's
+/// scene came from).
+pub fn parse_in(
+    text: &str,
+    file: &str,
+    base: &Path,
     stem: &str,
     overrides: &[String],
 ) -> Result<Scene, SceneError> {
@@ -57,7 +71,11 @@ pub fn parse(
             message: e.message().trim().to_string(),
         }
     })?;
-    let cx = Ctx { file, text: &text };
+    let cx = Ctx {
+        file,
+        base,
+        text: &text,
+    };
     validate(raw, &cx, stem)
 }
 
@@ -182,6 +200,7 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
     let mut scene = Scene {
         name: raw.name.clone().unwrap_or_else(|| stem.to_string()),
         file: cx.file.to_string(),
+        base_dir: cx.base.to_path_buf(),
         source: cx.text.to_string(),
         description: raw.description.clone().unwrap_or_default(),
         duration,
@@ -252,6 +271,8 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
 /// Where errors point: the file's name and its text (after `--set`).
 struct Ctx<'a> {
     file: &'a str,
+    /// The folder relative paths are resolved from.
+    base: &'a Path,
     text: &'a str,
 }
 

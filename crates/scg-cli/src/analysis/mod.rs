@@ -36,8 +36,17 @@ use scg_scene::Scene;
 /// With `dt = "auto"` the step is chosen by a rule that may change between versions: the
 /// scene then takes the recording's own dt, so it re-runs as recorded.
 pub fn recording_scene(rec: &Recording) -> std::result::Result<Scene, String> {
-    let mut scene = scg_scene::parse(&rec.meta.scene_toml, "<recording>", &rec.meta.case, &[])
-        .map_err(|e| format!("the recording's scene: {e}"))?;
+    // Relative paths resolve from the folder the scene came from (stored since it was;
+    // older recordings: the working folder).
+    let base = std::path::Path::new(&rec.meta.scene_dir);
+    let mut scene = scg_scene::parse_in(
+        &rec.meta.scene_toml,
+        "<recording>",
+        base,
+        &rec.meta.case,
+        &[],
+    )
+    .map_err(|e| format!("the recording's scene: {e}"))?;
     if rec.meta.dt > 0.0 {
         scene.dt = rec.meta.dt;
     }

@@ -41,6 +41,7 @@ pub fn meta() -> RunMeta {
             },
         ],
         scene_toml: "# synthetic scene\n[domain]\nsize = [0.1, 0.2, 0.3]\nname = \"ü\"\n".into(),
+        scene_dir: "/data/flüid cases".into(),
         outlines: vec![
             Outline {
                 name: "vessel".into(),

@@ -176,10 +176,7 @@ pub(super) fn flow_field(f: &RawFlow, cx: &Ctx) -> Result<FlowField, SceneError>
 /// (x' = translate + scale·x, m), patch roles from `[flow.patches]`; `None` for the
 /// analytic kinds. Errors name the key and carry the mesh reader's message (file, entry).
 pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, SceneError> {
-    let base = std::path::Path::new(cx.file)
-        .parent()
-        .unwrap_or(std::path::Path::new(""))
-        .to_path_buf();
+    let base = cx.base;
     let field = f.field.clone().unwrap_or_else(|| "U".to_string());
     if field.is_empty() {
         return Err(cx.err("flow.field", "must name a field"));
@@ -392,10 +389,7 @@ fn mesh(w: &RawWall, i: usize, cx: &Ctx) -> Result<TriMesh, SceneError> {
     let scale = cx.positive(&k("scale"), w.scale.unwrap_or(1.0))?;
     let translate = cx.vec3(&k("translate"), w.translate.unwrap_or([0.0; 3]))?;
     let rot = cx.vec3(&k("rotate"), w.rotate.unwrap_or([0.0; 3]))?;
-    let path = std::path::Path::new(cx.file)
-        .parent()
-        .unwrap_or(std::path::Path::new(""))
-        .join(&file);
+    let path = cx.base.join(&file);
     let shown = path.display();
     let soup = crate::stl::read(&path).map_err(|e| cx.err(&k("file"), format!("{shown}: {e}")))?;
     let (vertices, triangles) = weld(&soup);
