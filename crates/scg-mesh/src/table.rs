@@ -511,7 +511,9 @@ impl CellTable {
         if let Some((best, _)) = exit_face(faces, |f| f.q, x - rec.cc)
             && let Some(t) = self.tets.get(faces[best].tet as usize)
         {
-            prefetch_bytes(t, 3);
+            // every tetrahedron of the exit face's fan: the scan may end in any of them
+            let bytes = faces[best].n_tets as usize * size_of::<TetRec>();
+            prefetch_bytes(t, bytes.div_ceil(64));
         }
     }
 }
@@ -560,7 +562,7 @@ fn prefetch_bytes<T>(x: &T, lines: usize) {
     #[cfg(target_arch = "x86_64")]
     {
         let p = (x as *const T).cast::<i8>();
-        for k in 0..lines.min(8) {
+        for k in 0..lines.min(12) {
             // SAFETY: a prefetch is a hint that never faults, whatever the address.
             unsafe {
                 core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>(
