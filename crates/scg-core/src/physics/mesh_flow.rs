@@ -211,8 +211,24 @@ impl MeshFlow {
     /// mesh the value is extrapolated from the hint's cell ([`Interpolator::velocity`]).
     #[inline]
     pub fn velocity(&self, hint: u32, x: DVec3) -> (DVec3, u32) {
-        if let TableWalk::Inside { cell, value } = self.walk_table(hint, x) {
-            return (value, cell);
+        match self.walk_table(hint, x) {
+            TableWalk::Inside { cell, value } => return (value, cell),
+            // The ray toward x leaves the mesh through a boundary face (a particle at a
+            // wall, its mid-step point beyond it): the locator's walk, on the same faces,
+            // would end there too, and only asks whether x is inside the mesh elsewhere (a
+            // concave boundary, a thin wall). Ask that directly.
+            TableWalk::Boundary { .. } => {
+                return match self.loc.find(x) {
+                    Some(h) => {
+                        let u = self
+                            .velocity_in(h.cell, x)
+                            .unwrap_or_else(|| self.interp.at(&h));
+                        (u, h.cell)
+                    }
+                    None => (self.interp.velocity(hint, x), hint),
+                };
+            }
+            TableWalk::Unknown => {}
         }
         match self.loc.track(hint, x) {
             Location::Inside(h) | Location::Crossed { hit: h, .. } => {
@@ -465,6 +481,7 @@ fn land_boundary(
 mod tests {
     use super::*;
     use scg_mesh::build::{BoxMesh, CellShape, PatchNaming};
+    use scg_mesh::{Location, MeshGeometry};
 
     fn box_flow(u: DVec3, roles: &[(&str, PatchRole)]) -> MeshFlow {
         let m = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [4, 4, 4])
@@ -507,6 +524,66 @@ mod tests {
         for (m, g) in &weak {
             assert!(m.upgrade().is_none() && g.upgrade().is_none());
         }
+    }
+
+    /// `MeshFlow::velocity` gives, bit for bit, what walking with the locator from the
+    /// hint gives (the way it was computed before it asked `find` directly when the table
+    /// meets a boundary), on a perturbed box with a hole: points inside, beyond the hole's
+    /// walls inside the mesh (a concave boundary: found elsewhere) and outside.
+    #[test]
+    fn velocity_at_a_boundary_equals_the_locators_walk() {
+        use rand::{Rng, SeedableRng};
+        let m = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [6, 6, 6])
+            .shape(CellShape::Hex)
+            .perturbed(0.15, 3)
+            .with_hole(DVec3::splat(0.3), DVec3::splat(0.7))
+            .build()
+            .unwrap();
+        let g = MeshGeometry::new(&m).unwrap();
+        let field = CellField {
+            cells: g
+                .cell_centres
+                .iter()
+                .map(|c| DVec3::new(c.y * c.z, (3.0 * c.x).sin(), c.x * c.x))
+                .collect(),
+            patches: vec![None; m.patches.len()],
+        };
+        let roles = vec![PatchRole::Wall; m.patches.len()];
+        let flow = MeshFlow::new(m, &field, Interpolation::CellPoint, roles).unwrap();
+        let reference = |hint: u32, x: DVec3| -> (DVec3, u32) {
+            if let TableWalk::Inside { cell, value } = flow.walk_table(hint, x) {
+                return (value, cell);
+            }
+            match flow.loc.track(hint, x) {
+                Location::Inside(h) | Location::Crossed { hit: h, .. } => {
+                    let u = flow
+                        .velocity_in(h.cell, x)
+                        .unwrap_or_else(|| flow.interp.at(&h));
+                    (u, h.cell)
+                }
+                Location::Left { .. } | Location::Outside => (flow.interp.velocity(hint, x), hint),
+            }
+        };
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let n_cells = flow.mesh().n_cells as u32;
+        let (mut crossed, mut left) = (0, 0);
+        for _ in 0..20_000 {
+            let hint = rng.random_range(0..n_cells);
+            let c = flow.geometry().cell_centres[hint as usize];
+            let x = c + (DVec3::new(rng.random(), rng.random(), rng.random()) - 0.5) * 0.6;
+            let got = flow.velocity(hint, x);
+            let want = reference(hint, x);
+            let bits = |(u, c): (DVec3, u32)| (u.to_array().map(f64::to_bits), c);
+            assert_eq!(bits(got), bits(want), "hint {hint}, x {x}");
+            if let TableWalk::Boundary { .. } = flow.walk_table(hint, x) {
+                match flow.loc.find(x) {
+                    Some(_) => crossed += 1,
+                    None => left += 1,
+                }
+            }
+        }
+        println!("beyond a boundary: {crossed} inside the mesh elsewhere, {left} outside");
+        assert!(crossed > 50 && left > 50, "{crossed} / {left}");
     }
 
     #[test]
