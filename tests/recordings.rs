@@ -14,19 +14,30 @@ fn scg() -> Command {
     Command::new(env!("CARGO_BIN_EXE_scg"))
 }
 
-fn run_vortex(out: &Path, threads: &str, duration: &str) {
-    let st = scg()
-        .env("SCG_THREADS", threads)
-        .args(["run", "cases/vortex.toml", "--out"])
+/// `scg run SCENE --out OUT --set …` from the repository on `threads` threads.
+fn run_case(scene: &str, out: &Path, threads: &str, sets: &[&str]) {
+    let mut cmd = scg();
+    cmd.env("SCG_THREADS", threads)
+        .args(["run", scene, "--out"])
         .arg(out)
-        .args(["--set", &format!("duration={duration}")])
-        .current_dir(common::repo(""))
-        .output()
-        .unwrap();
+        .current_dir(common::repo(""));
+    for s in sets {
+        cmd.args(["--set", s]);
+    }
+    let st = cmd.output().unwrap();
     assert!(
         st.status.success(),
         "{}",
         String::from_utf8_lossy(&st.stderr)
+    );
+}
+
+fn run_vortex(out: &Path, threads: &str, duration: &str) {
+    run_case(
+        "cases/vortex.toml",
+        out,
+        threads,
+        &[&format!("duration={duration}")],
     );
 }
 
@@ -81,17 +92,11 @@ fn replay_verify_passes_and_catches_one_altered_value() {
 #[test]
 fn replay_verify_resolves_relative_paths_from_the_scenes_folder() {
     let dir = tempfile::tempdir().unwrap();
-    let st = scg()
-        .args(["run", "cases/cyclone.toml", "--out"])
-        .arg(dir.path())
-        .args(["--set", "duration=0.06", "--set", "feed_scale=0.25"])
-        .current_dir(common::repo(""))
-        .output()
-        .unwrap();
-    assert!(
-        st.status.success(),
-        "{}",
-        String::from_utf8_lossy(&st.stderr)
+    run_case(
+        "cases/cyclone.toml",
+        dir.path(),
+        "2",
+        &["duration=0.06", "feed_scale=0.25"],
     );
     let mcap = dir.path().join("cyclone.mcap");
     let rec = read_mcap(&mcap).unwrap();
