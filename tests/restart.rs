@@ -191,6 +191,47 @@ fn restart_after_sigkill_matches_the_uninterrupted_run() {
     );
 }
 
+/// A checkpoint of a scene with relative paths (cases/cyclone.toml's CFD case), written
+/// from the repository, restarts from another working folder: it keeps the scene file's
+/// absolute path.
+#[test]
+fn restart_from_another_folder_finds_the_scenes_relative_paths() {
+    let dir = tempfile::tempdir().unwrap();
+    let ckpt = dir.path().join("c.ckpt");
+    let ckpt_s = ckpt.display().to_string();
+    let sets = ["--set", "duration=0.02", "--set", "feed_scale=0.25"];
+    let out = scg(
+        &[
+            &["run", "cases/cyclone.toml", "--no-record"][..],
+            &sets,
+            &["--checkpoint-every", "0.02", "--checkpoint", &ckpt_s],
+        ]
+        .concat(),
+        Path::new(env!("CARGO_MANIFEST_DIR")),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let c = read_checkpoint(&ckpt).unwrap();
+    assert!(Path::new(&c.scene_file).is_absolute(), "{}", c.scene_file);
+    let out = scg(
+        &[
+            "run",
+            "--restart",
+            "c.ckpt",
+            "--no-record",
+            "--set",
+            "duration=0.04",
+        ],
+        dir.path(),
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("restarting `cyclone`"), "{err}");
+}
+
 #[test]
 fn damaged_checkpoints_are_bad_input() {
     let dir = tempfile::tempdir().unwrap();

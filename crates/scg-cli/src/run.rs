@@ -269,7 +269,11 @@ pub fn run(args: RunArgs) -> i32 {
         if checkpoint_every.is_some() {
             let mut c = sim.checkpoint();
             c.scene.clone_from(&scene.source);
-            c.scene_file.clone_from(&scene.file);
+            // Absolute, so that a restart from another working folder finds the scene's
+            // relative paths (a CFD case, STL walls).
+            c.scene_file = std::fs::canonicalize(&scene.file)
+                .map(|p| p.display().to_string())
+                .unwrap_or_else(|_| scene.file.clone());
             saved = scg_record::checkpoint::write_checkpoint(&checkpoint_path, &c);
             if saved.is_err() {
                 break;

@@ -93,7 +93,8 @@ pub type ResolutionRecord = [(Option<f64>, u64, u64); 2];
 pub struct Checkpoint {
     /// The scene's TOML text (after overrides), so a restart needs nothing else.
     pub scene: String,
-    /// Where the scene came from.
+    /// Where the scene came from (`scg run` writes the file's absolute path: its folder
+    /// resolves the scene's relative paths on a restart).
     pub scene_file: String,
     /// Steps done.
     pub step: u64,
