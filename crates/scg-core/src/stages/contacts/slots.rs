@@ -40,7 +40,7 @@ const PAIRS_PER_SLOT: usize = 4096;
 /// (16 slots ran the 32 000-particle dense bed about 4 % slower).
 const MAX_SLOTS: usize = 8;
 /// Candidate pairs listed per block by the four-lane path.
-const LIST_BLOCK: usize = 256;
+const LIST_BLOCK: usize = 64;
 
 /// One slot of the force accumulation: a fixed range of the pair list whose forces are
 /// summed, in pair order, into per-particle arrays covering particles `base..base+len`.
