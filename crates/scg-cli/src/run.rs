@@ -199,6 +199,8 @@ pub fn run(args: RunArgs) -> i32 {
         eprintln!("error: {e}");
         return EXIT_BAD_INPUT;
     }
+    // Checkpoints name the scene file absolutely (resolved once).
+    let scene_file = scene.absolute_file();
     let mut paths = Vec::new();
     if record {
         let meta = scene.run_meta(report.messages());
@@ -269,11 +271,7 @@ pub fn run(args: RunArgs) -> i32 {
         if checkpoint_every.is_some() {
             let mut c = sim.checkpoint();
             c.scene.clone_from(&scene.source);
-            // Absolute, so that a restart from another working folder finds the scene's
-            // relative paths (a CFD case, STL walls).
-            c.scene_file = std::fs::canonicalize(&scene.file)
-                .map(|p| p.display().to_string())
-                .unwrap_or_else(|_| scene.file.clone());
+            c.scene_file.clone_from(&scene_file);
             saved = scg_record::checkpoint::write_checkpoint(&checkpoint_path, &c);
             if saved.is_err() {
                 break;

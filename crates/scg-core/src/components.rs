@@ -120,7 +120,8 @@ pub struct CellHint(pub u32);
 /// found it (mesh flows only): `u` (m/s) at the centre `at` (m). A step starting from
 /// `at` takes `u` instead of locating the centre again, which gives the same value bit
 /// for bit (the same cell records); `at` is NaN when unknown (a new, restored or migrated
-/// particle, a landing off the table), and then the step locates it.
+/// particle, a landing off the table), and then the step locates it. Kept only where the
+/// step reads it (the explicit scheme, Reynolds-dependent drag); unknown otherwise.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
 pub struct FlowAtCentre {
     /// The centre the value was found at, m (NaN: unknown).

@@ -164,6 +164,15 @@ impl Scene {
             .unwrap_or_default()
     }
 
+    /// The scene file's absolute path, as checkpoints store it (its folder resolves the
+    /// relative paths on a restart from any working folder); [`Scene::file`] as is when it
+    /// names no file (the embedded scene).
+    pub fn absolute_file(&self) -> String {
+        std::fs::canonicalize(&self.file)
+            .map(|p| p.display().to_string())
+            .unwrap_or_else(|_| self.file.clone())
+    }
+
     /// The description recorders store.
     pub fn run_meta(&self, warnings: Vec<String>) -> RunMeta {
         let size = self.extent();

@@ -211,33 +211,26 @@ impl MeshFlow {
     /// mesh the value is extrapolated from the hint's cell ([`Interpolator::velocity`]).
     #[inline]
     pub fn velocity(&self, hint: u32, x: DVec3) -> (DVec3, u32) {
-        match self.walk_table(hint, x) {
+        let hit = match self.walk_table(hint, x) {
             TableWalk::Inside { cell, value } => return (value, cell),
             // The ray toward x leaves the mesh through a boundary face (a particle at a
             // wall, its mid-step point beyond it): the locator's walk, on the same faces,
             // would end there too, and only asks whether x is inside the mesh elsewhere (a
             // concave boundary, a thin wall). Ask that directly.
-            TableWalk::Boundary { .. } => {
-                return match self.loc.find(x) {
-                    Some(h) => {
-                        let u = self
-                            .velocity_in(h.cell, x)
-                            .unwrap_or_else(|| self.interp.at(&h));
-                        (u, h.cell)
-                    }
-                    None => (self.interp.velocity(hint, x), hint),
-                };
-            }
-            TableWalk::Unknown => {}
-        }
-        match self.loc.track(hint, x) {
-            Location::Inside(h) | Location::Crossed { hit: h, .. } => {
+            TableWalk::Boundary { .. } => self.loc.find(x),
+            TableWalk::Unknown => match self.loc.track(hint, x) {
+                Location::Inside(h) | Location::Crossed { hit: h, .. } => Some(h),
+                Location::Left { .. } | Location::Outside => None,
+            },
+        };
+        match hit {
+            Some(h) => {
                 let u = self
                     .velocity_in(h.cell, x)
                     .unwrap_or_else(|| self.interp.at(&h));
                 (u, h.cell)
             }
-            Location::Left { .. } | Location::Outside => (self.interp.velocity(hint, x), hint),
+            None => (self.interp.velocity(hint, x), hint),
         }
     }
 

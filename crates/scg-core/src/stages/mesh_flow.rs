@@ -128,6 +128,13 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
     let dt = d.clock.dt;
     let law = d.motion.drag;
     let integrator = d.motion.integrator;
+    // Only the explicit scheme and the Reynolds-dependent laws read the fluid velocity
+    // at the start: the others leave `FlowAtCentre` unknown rather than write it.
+    let keep_start = match (law, integrator) {
+        (Some(_), Integrator::Explicit) => true,
+        (None | Some(DragLaw::Stokes), _) => false,
+        (Some(_), _) => true,
+    };
     let fluid = d.fluid.as_deref().copied();
     let flow: &MeshFlow = &d.state.spec.flow;
     let e = d.state.spec.restitution;
@@ -237,7 +244,9 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
                 health.raise();
                 xs[i].0 = x1;
                 vs[i].0 = v1;
-                us[i] = FlowAtCentre::UNKNOWN;
+                if keep_start {
+                    us[i] = FlowAtCentre::UNKNOWN;
+                }
                 continue;
             }
             let l = land(flow, x0, h0, h_end, x1, v1, e);
@@ -251,10 +260,12 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
             xs[i].0 = l.x;
             vs[i].0 = l.v;
             hs[i].0 = l.hint;
-            us[i] = match l.u {
-                Some(u) => FlowAtCentre { at: l.x, u },
-                None => FlowAtCentre::UNKNOWN,
-            };
+            if keep_start {
+                us[i] = match l.u {
+                    Some(u) => FlowAtCentre { at: l.x, u },
+                    None => FlowAtCentre::UNKNOWN,
+                };
+            }
         }
         if gone > 0 {
             departures.fetch_add(gone, Ordering::Relaxed);
