@@ -128,13 +128,7 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
     let dt = d.clock.dt;
     let law = d.motion.drag;
     let integrator = d.motion.integrator;
-    // Only the explicit scheme and the Reynolds-dependent laws read the fluid velocity
-    // at the start: the others leave `FlowAtCentre` unknown rather than write it.
-    let keep_start = match (law, integrator) {
-        (Some(_), Integrator::Explicit) => true,
-        (None | Some(DragLaw::Stokes), _) => false,
-        (Some(_), _) => true,
-    };
+    let keep_start = keeps_start(&d.motion);
     let fluid = d.fluid.as_deref().copied();
     let flow: &MeshFlow = &d.state.spec.flow;
     let e = d.state.spec.restitution;
@@ -279,6 +273,17 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
     }
 }
 
+/// True when a step reads the fluid velocity at its start (the explicit scheme, the
+/// Reynolds-dependent laws), so that [`FlowAtCentre`] is kept; the other schemes leave it
+/// unknown rather than write (and reorder) it.
+fn keeps_start(m: &Motion) -> bool {
+    match (m.drag, m.integrator) {
+        (Some(_), Integrator::Explicit) => true,
+        (None | Some(DragLaw::Stokes), _) => false,
+        (Some(_), _) => true,
+    }
+}
+
 /// Default steps between two reorderings of the particle table by mesh cell
 /// ([`sort_by_cell`]; scene key `flow.sort_every`).
 pub const SORT_EVERY: u64 = 100;
@@ -383,7 +388,9 @@ pub fn sort_by_cell(world: &mut World) {
     permute::<WallHistory>(world, &perm);
     permute::<BodyAcceleration>(world, &perm);
     permute::<CellHint>(world, &perm);
-    permute::<FlowAtCentre>(world, &perm);
+    if keeps_start(world.resource::<Motion>()) {
+        permute::<FlowAtCentre>(world, &perm);
+    }
 }
 
 /// Row i of the particles' `T` column takes the value of row `perm[i]` (no effect when
