@@ -493,7 +493,7 @@ impl CellTable {
     /// Ask the processor to load the tetrahedron records [`CellTable::velocity_in`] reads
     /// for x in cell `c` (the cell and face records should be in cache). No effect on
     /// results.
-    #[inline]
+    #[inline(always)]
     pub fn prefetch_at(&self, c: u32, x: DVec3) {
         let Some(rec) = self.cells.get(c as usize) else {
             return;

@@ -248,7 +248,7 @@ impl MeshFlow {
     /// in cache to be addressed); without a table, the cell centre and face list, when
     /// `deep` also the faces' centres and areas. Calling it a few particles ahead hides
     /// memory latency on large meshes; no effect on results.
-    #[inline]
+    #[inline(always)]
     pub fn prefetch(&self, c: u32, deep: bool) {
         if let Some(t) = &self.table {
             t.prefetch(c, deep);
@@ -279,7 +279,7 @@ impl MeshFlow {
     /// Ask the processor to load the [`CellTable`] records a query for x in cell `c` reads
     /// last (the tetrahedron; the cell and face records should be in cache by then: call
     /// [`MeshFlow::prefetch`] earlier). No effect on results.
-    #[inline]
+    #[inline(always)]
     pub fn prefetch_at(&self, c: u32, x: DVec3) {
         if let Some(t) = &self.table {
             t.prefetch_at(c, x);

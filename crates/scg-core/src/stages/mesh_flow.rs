@@ -125,15 +125,6 @@ pub struct MeshInputs<'w> {
 /// start of the step), or the sub-stepped explicit scheme, with the wall kick and body
 /// acceleration as in [`crate::stages::motion`]; without a drag law, ballistic.
 pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
-    let dt = d.clock.dt;
-    let law = d.motion.drag;
-    let integrator = d.motion.integrator;
-    let keep_start = keeps_start(&d.motion);
-    let fluid = d.fluid.as_deref().copied();
-    let flow: &MeshFlow = &d.state.spec.flow;
-    let e = d.state.spec.restitution;
-    let n_cells = flow.mesh().n_cells as u32;
-    let health = &*d.health;
     let disp = d.disp.as_deref();
     let departures = &d.state.departures;
     departures.store(0, Ordering::Relaxed);
@@ -152,7 +143,79 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
         gs,
         (bypass(hs), bypass(us)),
     );
-    for_each_piece_heavy(columns, |(xs, vs, (sfs, fcs), ms, fs, gs, (hs, us))| {
+    let flow: &MeshFlow = &d.state.spec.flow;
+    let step = MeshStep {
+        dt: d.clock.dt,
+        law: d.motion.drag,
+        integrator: d.motion.integrator,
+        fluid: d.fluid.as_deref().copied(),
+        flow,
+        e: d.state.spec.restitution,
+        n_cells: flow.mesh().n_cells as u32,
+        health: &d.health,
+    };
+    // The schemes that never read the start's fluid velocity run a loop without it.
+    let keep_start = keeps_start(&d.motion);
+    for_each_piece_heavy(columns, |piece| {
+        let (d2max, gone) = if keep_start {
+            step.advance::<true>(piece)
+        } else {
+            step.advance::<false>(piece)
+        };
+        if gone > 0 {
+            departures.fetch_add(gone, Ordering::Relaxed);
+        }
+        if let Some(dd) = disp {
+            dd.record(d2max);
+        }
+    });
+    if let Some(dd) = disp {
+        dd.mark_reported();
+    }
+}
+
+/// A piece of the particle table as the mesh integration reads it.
+type MeshPiece<'a> = (
+    &'a mut [Position],
+    &'a mut [Velocity],
+    (&'a [StokesFactors], &'a [FluidCoupling]),
+    &'a [Mass],
+    Option<&'a [Force]>,
+    Option<&'a [BodyAcceleration]>,
+    (&'a mut [CellHint], &'a mut [FlowAtCentre]),
+);
+
+/// One step of the mesh integration: what every particle's step reads besides its own
+/// state.
+struct MeshStep<'a> {
+    dt: f64,
+    law: Option<DragLaw>,
+    integrator: Integrator,
+    fluid: Option<Fluid>,
+    flow: &'a MeshFlow,
+    e: f64,
+    n_cells: u32,
+    health: &'a Health,
+}
+
+impl MeshStep<'_> {
+    /// Advance the particles of a piece; the largest squared displacement and the number
+    /// of particles that left the mesh. `KEEP`: the scheme reads the fluid velocity at the
+    /// start of the step ([`keeps_start`]), so it is read from and written to
+    /// [`FlowAtCentre`]; otherwise that column is left alone.
+    #[inline(always)]
+    fn advance<const KEEP: bool>(&self, piece: MeshPiece) -> (f64, u64) {
+        let (xs, vs, (sfs, fcs), ms, fs, gs, (hs, us)) = piece;
+        let MeshStep {
+            dt,
+            law,
+            integrator,
+            fluid,
+            flow,
+            e,
+            n_cells,
+            health,
+        } = *self;
         let mut d2max = 0.0_f64;
         let mut gone = 0u64;
         for i in 0..xs.len() {
@@ -182,7 +245,10 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
             }
             let (m, fc, sf) = (ms[i].0, &fcs[i], &sfs[i]);
             // The fluid velocity at the start, from the last landing when it found it.
-            let u_start = |h: u32, x: DVec3| us[i].at(x).unwrap_or_else(|| flow.velocity(h, x).0);
+            let u_start = |h: u32, x: DVec3| {
+                let known = if KEEP { us[i].at(x) } else { None };
+                known.unwrap_or_else(|| flow.velocity(h, x).0)
+            };
             let force = fs.map(|f| f[i].0);
             let a = gs.map_or(DVec3::ZERO, |g| g[i].0);
             let v0 = vs[i].0;
@@ -238,7 +304,7 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
                 health.raise();
                 xs[i].0 = x1;
                 vs[i].0 = v1;
-                if keep_start {
+                if KEEP {
                     us[i] = FlowAtCentre::UNKNOWN;
                 }
                 continue;
@@ -254,22 +320,14 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
             xs[i].0 = l.x;
             vs[i].0 = l.v;
             hs[i].0 = l.hint;
-            if keep_start {
+            if KEEP {
                 us[i] = match l.u {
                     Some(u) => FlowAtCentre { at: l.x, u },
                     None => FlowAtCentre::UNKNOWN,
                 };
             }
         }
-        if gone > 0 {
-            departures.fetch_add(gone, Ordering::Relaxed);
-        }
-        if let Some(dd) = disp {
-            dd.record(d2max);
-        }
-    });
-    if let Some(dd) = disp {
-        dd.mark_reported();
+        (d2max, gone)
     }
 }
 
