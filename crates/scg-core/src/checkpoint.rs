@@ -350,6 +350,11 @@ impl Simulation {
         if let Some(d) = w.get_resource::<StepDisplacement>() {
             d.restore(c.displacement);
         }
+        // The wall candidates are listed again at the first step (the restored neighbour
+        // list's build count may equal the one they were listed at).
+        if let Some(mut wc) = w.get_resource_mut::<crate::stages::walls::WallCandidates>() {
+            *wc = Default::default();
+        }
         if let (Some([d, l]), Some(mut log)) = (&c.outlet, w.get_resource_mut::<OutletLog>()) {
             log.drained.clone_from(d);
             log.lost.clone_from(l);

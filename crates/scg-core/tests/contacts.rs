@@ -628,8 +628,8 @@ fn particles_split_over_two_tables_are_refused() {
     assert!(msg.contains("more than one storage table"), "{msg}");
 }
 
-/// Child side of the thread test: prints a digest of the final state of the dilute box
-/// and of the dense packing.
+/// Child side of the thread test: prints a digest of the final state of the dilute box,
+/// of the dense packing and of the walled packing (wall candidates cut into pieces).
 #[test]
 #[ignore]
 fn child_state_digest() {
@@ -637,7 +637,16 @@ fn child_state_digest() {
         return;
     }
     scg_core::exec::configure(scg_core::exec::ExecSettings::from_env());
-    for (name, bits) in [("box", run_box_bits(300)), ("dense", run_dense_bits(60))] {
+    let walled = {
+        let (mut sim, _) = walled_packing();
+        sim.run(400, |_| true).unwrap();
+        state_bits(&mut sim)
+    };
+    for (name, bits) in [
+        ("box", run_box_bits(300)),
+        ("dense", run_dense_bits(60)),
+        ("walled", walled),
+    ] {
         let mut h: u64 = 0xcbf29ce484222325;
         for b in bits {
             h = (h ^ b).wrapping_mul(0x100000001b3);
@@ -670,7 +679,7 @@ fn one_and_two_threads_give_identical_results() {
             .lines()
             .filter_map(|l| l.find("STATE_DIGEST_").map(|k| l[k..].to_string()))
             .collect();
-        assert_eq!(found.len(), 2, "digests from child: {s}");
+        assert_eq!(found.len(), 3, "digests from child: {s}");
         found
     };
     // Two threads twice: with the default threshold, and with every per-particle pass
@@ -685,14 +694,16 @@ fn one_and_two_threads_give_identical_results() {
     // Same physics, same bits: the digests pin the contact stages. They held unchanged
     // (box 11c6cbcb6723b63e, dense 6827178b20903004) through the new core layout; they
     // changed once since, on purpose, when the Tsuji damping became its exact closed form
-    // (γ moved in the 6th digit). x86-64 only: other targets may round libm functions
+    // (γ moved in the 6th digit). The walled packing's digest was added with the wall
+    // candidates (its full-scan twin: `wall_candidates_give_the_full_scans_bits`). x86-64 only: other targets may round libm functions
     // differently.
     #[cfg(target_arch = "x86_64")]
     assert_eq!(
         a,
         [
             "STATE_DIGEST_box=436ab1b4e5eea940",
-            "STATE_DIGEST_dense=098ae4bc77de8c81"
+            "STATE_DIGEST_dense=098ae4bc77de8c81",
+            "STATE_DIGEST_walled=998b151c99be45a0"
         ]
     );
 }
@@ -958,4 +969,126 @@ fn ghosts_and_migration_follow_the_whole_simulation() {
     assert!(c_whole > 50);
     assert_eq!(c_whole, c_split);
     assert!(worst < 1e-9 * D, "{worst:.3e} m");
+}
+
+/// A cylinder with a floor and a triangle-mesh lid, packed loosely with spheres moving
+/// at random under tilted gravity (contacts on, friction, so wall torques too).
+fn walled_packing() -> (Simulation, usize) {
+    use scg_core::physics::trimesh::TriMesh;
+    let rc = 6.0 * D;
+    let a = 1.05 * D;
+    let layers = 6;
+    let top = 0.52 * D + (layers - 1) as f64 * a + 0.56 * D;
+    let l = 7.0 * D;
+    let lid = TriMesh::new(
+        vec![
+            DVec3::new(-l, -l, top),
+            DVec3::new(l, -l, top),
+            DVec3::new(l, l, top),
+            DVec3::new(-l, l, top),
+        ],
+        vec![[0, 1, 2], [0, 2, 3]],
+    )
+    .unwrap();
+    let walls = WallSet {
+        walls: vec![
+            Wall {
+                name: "floor".into(),
+                shape: WallShape::Plane {
+                    point: DVec3::ZERO,
+                    normal: DVec3::Z,
+                },
+            },
+            Wall {
+                name: "vessel".into(),
+                shape: WallShape::CylinderInside {
+                    center: DVec3::ZERO,
+                    axis: DVec3::Z,
+                    radius: rc,
+                    extent: None,
+                },
+            },
+            Wall {
+                name: "lid".into(),
+                shape: WallShape::Mesh(std::sync::Arc::new(lid)),
+            },
+        ],
+        law: NormalLaw::hertz(0.7),
+        material: material(0.7, 0.4),
+    };
+    let dt = hertz_contact_time(0.5 * sphere_mass(D, RHO), 0.25 * D, e_eff(), 1.0) / 30.0;
+    let mut cfg = config(dt, Some(contact_cfg(0.7, 0.4, None)), Some(walls));
+    cfg.gravity = Some(DVec3::new(300.0, 0.0, -1000.0));
+    let mut sim = Simulation::new(cfg);
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let mut n = 0;
+    for k in 0..layers {
+        for i in -6..=6 {
+            for j in -6..=6 {
+                let x = DVec3::new(i as f64 * a, j as f64 * a, 0.52 * D + k as f64 * a);
+                if x.truncate().length() > rc - 0.52 * D {
+                    continue;
+                }
+                let v = DVec3::new(
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                );
+                sim.spawn(&spec(x, v, D));
+                n += 1;
+            }
+        }
+    }
+    (sim, n)
+}
+
+/// Between neighbour-list builds the wall stage visits only the particles that may touch
+/// a wall (`WallCandidates`): the run gives the bits of one that visits every particle at
+/// every step, while skipping most particles at most steps.
+#[test]
+fn wall_candidates_give_the_full_scans_bits() {
+    use scg_core::stages::walls::WallCandidates;
+    let steps = 1500;
+    let (mut full, n) = walled_packing();
+    for _ in 0..steps {
+        full.step().unwrap();
+        // Forget the candidates: the next wall stage visits every particle.
+        *full.world.resource_mut::<WallCandidates>() = WallCandidates::default();
+    }
+    let (mut listed, _) = walled_packing();
+    let (mut skipping_steps, mut rows_seen, mut touched) = (0, 0, 0);
+    for _ in 0..steps {
+        let builds = listed.world.resource::<ContactState>().list.builds;
+        listed.step().unwrap();
+        let st = listed.world.resource::<ContactState>();
+        let rows = listed
+            .world
+            .resource::<WallCandidates>()
+            .current(&st.list)
+            .map(<[u32]>::len);
+        if st.list.builds == builds {
+            skipping_steps += 1;
+            rows_seen = rows_seen.max(rows.unwrap());
+        }
+        let mut q = listed.world.query::<&Torque>();
+        touched = touched.max(q.iter(&listed.world).filter(|t| t.0 != DVec3::ZERO).count());
+    }
+    let builds = listed.world.resource::<ContactState>().list.builds;
+    eprintln!(
+        "{n} particles, {steps} steps: {builds} list builds, {skipping_steps} steps on the \
+         candidates (at most {rows_seen} rows), at most {touched} particles with a wall torque"
+    );
+    assert!(
+        builds >= 5,
+        "{builds} builds: the run should cross several rebuilds"
+    );
+    assert!(
+        skipping_steps > steps / 2,
+        "{skipping_steps} steps on the candidates"
+    );
+    assert!(
+        rows_seen < n / 2 && touched > 10,
+        "{rows_seen} candidate rows, {touched} touching"
+    );
+    assert_eq!(state_bits(&mut listed), state_bits(&mut full));
 }

@@ -78,6 +78,30 @@ impl Split for () {
     }
 }
 
+/// The table rows a piece covers (global row numbers): cut like a column, so that a
+/// piece of columns knows where it starts.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Rows(pub std::ops::Range<usize>);
+
+impl Rows {
+    /// The members of `sorted` (ascending row numbers) inside this piece.
+    pub fn within<'a>(&self, sorted: &'a [u32]) -> &'a [u32] {
+        let lo = sorted.partition_point(|&k| (k as usize) < self.0.start);
+        let hi = sorted.partition_point(|&k| (k as usize) < self.0.end);
+        &sorted[lo..hi]
+    }
+}
+
+impl Split for Rows {
+    fn rows(&self) -> usize {
+        self.0.len()
+    }
+    fn split_at(self, k: usize) -> (Self, Self) {
+        let mid = self.0.start + k;
+        (Rows(self.0.start..mid), Rows(mid..self.0.end))
+    }
+}
+
 macro_rules! split_tuple {
     ($($t:ident $v:ident $a:ident $b:ident),+) => {
         impl<$($t: Split),+> Split for ($($t,)+) {
@@ -184,4 +208,23 @@ pub fn par_max_zip<A: Sync, B: Sync>(
         *m = max(&a[lo..hi], &b[lo..hi]);
     });
     out.into_iter().fold(0.0_f64, f64::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Row ranges cut like columns, and each piece finds exactly its members of a sorted
+    /// row list.
+    #[test]
+    fn rows_split_like_columns_and_pick_their_members() {
+        let (a, b) = Rows(10..30).split_at(7);
+        assert_eq!((a.clone(), b.clone()), (Rows(10..17), Rows(17..30)));
+        let (col_a, col_b) = (&[0u8; 20][..]).split_at(7);
+        assert_eq!((a.rows(), b.rows()), (col_a.len(), col_b.len()));
+        let sorted = [3, 10, 16, 17, 29, 30, 31];
+        assert_eq!(a.within(&sorted), &[10, 16]);
+        assert_eq!(b.within(&sorted), &[17, 29]);
+        assert!(Rows(0..3).within(&sorted).is_empty());
+    }
 }

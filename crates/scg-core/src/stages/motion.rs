@@ -11,9 +11,11 @@
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 
+use super::contacts::ContactState;
 use super::table::{bypass, columns_mut};
+use super::walls::WallCandidates;
 use crate::components::*;
-use crate::exec::par::{Split, for_each_piece};
+use crate::exec::par::{Rows, Split, for_each_piece};
 use crate::physics::drag::{DragLaw, particle_reynolds};
 use crate::physics::flow::{FlowField, Fluid};
 use crate::physics::integrate::{
@@ -77,18 +79,34 @@ fn drag_effect_name(law: DragLaw) -> &'static str {
 /// sphere's I = m·d²/10.
 pub fn integrate_rotation(
     clock: Res<SimClock>,
+    contacts: Option<Res<ContactState>>,
+    candidates: Option<Res<WallCandidates>>,
     mut q: Query<(&mut AngularVelocity, &Torque, &Mass, &Diameter)>,
 ) {
     let dt = clock.dt;
     let Some((ws, ts, ms, ds)) = columns_mut(&mut q) else {
         return;
     };
-    for_each_piece((bypass(ws), ts, ms, ds), |(ws, ts, ms, ds)| {
-        for i in 0..ws.len() {
+    // Only the wall stage's candidates can have a torque when it listed them.
+    let current = match (&contacts, &candidates) {
+        (Some(c), Some(w)) => w.current(&c.list),
+        _ => None,
+    };
+    let rows = Rows(0..ws.len());
+    for_each_piece((bypass(ws), ts, ms, ds, rows), |(ws, ts, ms, ds, rows)| {
+        let n = ws.len();
+        let mut visit = |i: usize| {
             // Most particles touch no wall: skip the division for a zero torque.
             if ts[i].0 != DVec3::ZERO {
                 ws[i].0 = angular_kick(ws[i].0, ts[i].0, ms[i].0, ds[i].0, dt);
             }
+        };
+        match current {
+            Some(c) => rows
+                .within(c)
+                .iter()
+                .for_each(|&k| visit(k as usize - rows.0.start)),
+            None => (0..n).for_each(visit),
         }
     });
 }

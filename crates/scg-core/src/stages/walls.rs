@@ -15,11 +15,13 @@
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 
+use super::contacts::ContactState;
 use super::table::{bypass, columns_mut};
 use crate::components::*;
-use crate::exec::par::for_each_piece;
+use crate::exec::par::{Rows, for_each_piece};
 use crate::physics::contact::tangential::{rolling_torque, tangential_force};
 use crate::physics::contact::{Material, NormalLaw, TangentialLaw};
+use crate::physics::neighbour::NeighbourList;
 use crate::physics::trimesh::{MeshContact, MeshScratch};
 use crate::physics::wall_shape::{WallShape, WallTouch};
 use crate::state::{ContactResolution, SimClock};
@@ -75,8 +77,65 @@ impl WallTangential {
     }
 }
 
+/// The rows that may touch a wall until the particle contacts' neighbour list is next
+/// rebuilt (resource): a wall list riding on the Verlet list, as LIGGGHTS keeps one for
+/// its mesh walls.
+///
+/// Between two builds of the neighbour list no particle moves more than half its skin
+/// (the list's rebuild rule), and the walls do not move. So a particle whose sphere,
+/// grown by half the skin, was surely clear of every wall when the list was built, and
+/// whose wall history was empty, touches no wall until the next build: its wall force,
+/// torque and history stay zero and empty, and the wall stage passes it by. At the first
+/// wall stage after each build (or a change of the particle table, which rebuilds the
+/// list) every particle is visited, as without contacts, and the candidates are listed
+/// again. Scenes without particle contacts visit every particle every step.
+#[derive(Resource, Debug, Default)]
+pub struct WallCandidates {
+    /// The neighbour list's build count when the rows were listed (`None`: not yet).
+    built_at: Option<u64>,
+    /// Rows of the particle table that may touch a wall, ascending.
+    rows: Vec<u32>,
+}
+
+impl WallCandidates {
+    /// The candidate rows, when they were listed since the last build of `list`.
+    pub fn current(&self, list: &NeighbourList) -> Option<&[u32]> {
+        (self.built_at == Some(list.builds)).then_some(&self.rows[..])
+    }
+
+    /// List the candidates after a wall stage that visited every particle: the rows
+    /// with a wall history (`busy`) or whose sphere grown by half the skin of `list` is
+    /// not surely clear of every wall.
+    fn refresh(
+        &mut self,
+        list: &NeighbourList,
+        walls: &WallSet,
+        xs: &[Position],
+        ds: &[Diameter],
+        busy: impl Fn(usize) -> bool,
+    ) {
+        let half = 0.5 * list.skin;
+        self.rows.clear();
+        for i in 0..xs.len() {
+            // A relative 1e-6 on top: the rounding of positions and of the clearance
+            // test never decides.
+            let reach = (0.5 * ds[i].0 + half) * (1.0 + 1e-6);
+            if busy(i)
+                || !walls
+                    .walls
+                    .iter()
+                    .all(|w| w.shape.surely_clear(xs[i].0, reach))
+            {
+                self.rows.push(i as u32);
+            }
+        }
+        self.built_at = Some(list.builds);
+    }
+}
+
 /// Add the wall systems: normal forces only, or with the tangential law when given.
 pub fn plugin(world: &mut World, b: &mut StepBuilder, tangential: Option<WallTangential>) {
+    world.insert_resource(WallCandidates::default());
     match tangential {
         Some(t) if t.law.active() => {
             world.insert_resource(t);
@@ -101,6 +160,8 @@ pub fn wall_normal_forces(
     walls: Res<WallSet>,
     clock: Res<SimClock>,
     resolution: Res<ContactResolution>,
+    contacts: Option<Res<ContactState>>,
+    mut candidates: ResMut<WallCandidates>,
     mut q: Query<(&Position, &Velocity, &Diameter, &Mass, &mut Force)>,
 ) {
     let walls = &*walls;
@@ -111,9 +172,12 @@ pub fn wall_normal_forces(
         return;
     };
     let keys = history_keys(&walls.walls);
-    for_each_piece((xs, vs, ds, ms, bypass(fs)), |(xs, vs, ds, ms, fs)| {
+    let list = contacts.as_deref().map(|c| &c.list);
+    let current = list.and_then(|l| candidates.current(l));
+    let columns = (xs, vs, ds, ms, bypass(fs), Rows(0..xs.len()));
+    for_each_piece(columns, |(xs, vs, ds, ms, fs, rows)| {
         let (mut scratch, mut found) = (MeshScratch::default(), Vec::new());
-        for i in 0..xs.len() {
+        let mut visit = |i: usize| {
             let (x, v, r, m) = (xs[i].0, vs[i].0, 0.5 * ds[i].0, ms[i].0);
             let mut sum = DVec3::ZERO;
             for_each_touch(walls, &keys, x, r, &mut scratch, &mut found, |t, _| {
@@ -129,8 +193,21 @@ pub fn wall_normal_forces(
             // The walls are the only writer of Force: set, not accumulate (no clearing
             // pass).
             fs[i].0 = sum;
+        };
+        match current {
+            // The others' forces are zero since the last visit of every particle.
+            Some(c) => rows
+                .within(c)
+                .iter()
+                .for_each(|&k| visit(k as usize - rows.0.start)),
+            None => (0..xs.len()).for_each(visit),
         }
     });
+    if current.is_none()
+        && let Some(l) = list
+    {
+        candidates.refresh(l, walls, xs, ds, |_| false);
+    }
 }
 
 /// Every touch of the sphere at `x` (m) of radius `r` (m) with the walls, with its history
@@ -208,6 +285,8 @@ pub fn wall_contact_forces(
     tangential: Res<WallTangential>,
     clock: Res<SimClock>,
     resolution: Res<ContactResolution>,
+    contacts: Option<Res<ContactState>>,
+    mut candidates: ResMut<WallCandidates>,
     mut q: WallQuery,
 ) {
     let walls = &*walls;
@@ -274,17 +353,25 @@ pub fn wall_contact_forces(
     // The walls are the only writer of Force and Torque: they are set, not accumulated
     // (no clearing pass). A particle whose history is empty touched no wall last step (a
     // touch always leaves an entry), so its force and torque are zero: when it is clear of
-    // every wall now it is not written at all.
+    // every wall now it is not written at all. Between builds of the neighbour list only
+    // the candidates are visited ([`WallCandidates`]).
     let Some((xs, vs, ws, ds, ms, fs, ts, hs)) = columns_mut(&mut q) else {
         return;
     };
-    let columns = (xs, vs, ws, ds, ms, bypass(fs), bypass(ts), bypass(hs));
-    for_each_piece(columns, |(xs, vs, ws, ds, ms, fs, ts, hs)| {
+    let list = contacts.as_deref().map(|c| &c.list);
+    let current = list.and_then(|l| candidates.current(l));
+    let hs = bypass(hs);
+    let columns = (
+        (xs, vs, ws, ds, ms),
+        (bypass(fs), bypass(ts), &mut *hs),
+        Rows(0..xs.len()),
+    );
+    for_each_piece(columns, |((xs, vs, ws, ds, ms), (fs, ts, hs), rows)| {
         let (mut scratch, mut found) = (MeshScratch::default(), Vec::new());
-        for i in 0..xs.len() {
+        let mut visit = |i: usize| {
             let r = 0.5 * ds[i].0;
             if hs[i].0.is_empty() && walls.walls.iter().all(|w| w.shape.surely_clear(xs[i].0, r)) {
-                continue;
+                return;
             }
             let (f, t) = one(
                 xs[i].0,
@@ -298,6 +385,18 @@ pub fn wall_contact_forces(
             );
             fs[i].0 = f;
             ts[i].0 = t;
+        };
+        match current {
+            Some(c) => rows
+                .within(c)
+                .iter()
+                .for_each(|&k| visit(k as usize - rows.0.start)),
+            None => (0..xs.len()).for_each(visit),
         }
     });
+    if current.is_none()
+        && let Some(l) = list
+    {
+        candidates.refresh(l, walls, xs, ds, |i| !hs[i].0.is_empty());
+    }
 }
