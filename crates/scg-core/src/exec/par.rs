@@ -90,6 +90,17 @@ impl Rows {
         let hi = sorted.partition_point(|&k| (k as usize) < self.0.end);
         &sorted[lo..hi]
     }
+
+    /// Call `f` with the piece-local index of each row of this piece that `only` lists
+    /// (ascending row numbers), or of every row when `only` is `None`.
+    pub fn visit(&self, only: Option<&[u32]>, mut f: impl FnMut(usize)) {
+        match only {
+            Some(listed) => {
+                (self.within(listed).iter()).for_each(|&k| f(k as usize - self.0.start))
+            }
+            None => (0..self.0.len()).for_each(f),
+        }
+    }
 }
 
 impl Split for Rows {
@@ -226,5 +237,12 @@ mod tests {
         assert_eq!(a.within(&sorted), &[10, 16]);
         assert_eq!(b.within(&sorted), &[17, 29]);
         assert!(Rows(0..3).within(&sorted).is_empty());
+        let seen = |only: Option<&[u32]>| {
+            let mut v = Vec::new();
+            b.visit(only, |i| v.push(i));
+            v
+        };
+        assert_eq!(seen(Some(&sorted)), [0, 12]);
+        assert_eq!(seen(None), (0..13).collect::<Vec<_>>());
     }
 }

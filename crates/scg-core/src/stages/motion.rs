@@ -94,20 +94,13 @@ pub fn integrate_rotation(
     };
     let rows = Rows(0..ws.len());
     for_each_piece((bypass(ws), ts, ms, ds, rows), |(ws, ts, ms, ds, rows)| {
-        let n = ws.len();
-        let mut visit = |i: usize| {
+        let visit = |i: usize| {
             // Most particles touch no wall: skip the division for a zero torque.
             if ts[i].0 != DVec3::ZERO {
                 ws[i].0 = angular_kick(ws[i].0, ts[i].0, ms[i].0, ds[i].0, dt);
             }
         };
-        match current {
-            Some(c) => rows
-                .within(c)
-                .iter()
-                .for_each(|&k| visit(k as usize - rows.0.start)),
-            None => (0..n).for_each(visit),
-        }
+        rows.visit(current, visit);
     });
 }
 

@@ -177,7 +177,7 @@ pub fn wall_normal_forces(
     let columns = (xs, vs, ds, ms, bypass(fs), Rows(0..xs.len()));
     for_each_piece(columns, |(xs, vs, ds, ms, fs, rows)| {
         let (mut scratch, mut found) = (MeshScratch::default(), Vec::new());
-        let mut visit = |i: usize| {
+        let visit = |i: usize| {
             let (x, v, r, m) = (xs[i].0, vs[i].0, 0.5 * ds[i].0, ms[i].0);
             let mut sum = DVec3::ZERO;
             for_each_touch(walls, &keys, x, r, &mut scratch, &mut found, |t, _| {
@@ -194,14 +194,9 @@ pub fn wall_normal_forces(
             // pass).
             fs[i].0 = sum;
         };
-        match current {
-            // The others' forces are zero since the last visit of every particle.
-            Some(c) => rows
-                .within(c)
-                .iter()
-                .for_each(|&k| visit(k as usize - rows.0.start)),
-            None => (0..xs.len()).for_each(visit),
-        }
+        // With candidates, the others' forces are zero since the last visit of every
+        // particle.
+        rows.visit(current, visit);
     });
     if current.is_none()
         && let Some(l) = list
@@ -368,7 +363,7 @@ pub fn wall_contact_forces(
     );
     for_each_piece(columns, |((xs, vs, ws, ds, ms), (fs, ts, hs), rows)| {
         let (mut scratch, mut found) = (MeshScratch::default(), Vec::new());
-        let mut visit = |i: usize| {
+        let visit = |i: usize| {
             let r = 0.5 * ds[i].0;
             if hs[i].0.is_empty() && walls.walls.iter().all(|w| w.shape.surely_clear(xs[i].0, r)) {
                 return;
@@ -386,13 +381,7 @@ pub fn wall_contact_forces(
             fs[i].0 = f;
             ts[i].0 = t;
         };
-        match current {
-            Some(c) => rows
-                .within(c)
-                .iter()
-                .for_each(|&k| visit(k as usize - rows.0.start)),
-            None => (0..xs.len()).for_each(visit),
-        }
+        rows.visit(current, visit);
     });
     if current.is_none()
         && let Some(l) = list
