@@ -30,11 +30,7 @@ fn vortex() -> Vortex {
 
 /// `f` sampled at the cell centres of `mesh`.
 fn sample(mesh: &PolyMesh, f: impl Fn(DVec3) -> DVec3) -> CellField {
-    let g = MeshGeometry::new(mesh).unwrap();
-    CellField {
-        cells: g.cell_centres.iter().map(|&c| f(c)).collect(),
-        patches: vec![None; mesh.patches.len()],
-    }
+    CellField::at_cell_centres(mesh, &MeshGeometry::new(mesh).unwrap(), f)
 }
 
 /// Half-width of the vortex box, m (the particle starts at r = 0.3 mm).

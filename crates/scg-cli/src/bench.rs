@@ -75,14 +75,7 @@ pub fn mesh_scene(n: u64, cells: u64) -> Result<scg_scene::Scene, String> {
         omega: 31.4,
         inflow_ratio: 0.1,
     };
-    let field = scg_mesh::CellField {
-        cells: geom
-            .cell_centres
-            .iter()
-            .map(|&c| vortex.velocity(c))
-            .collect(),
-        patches: vec![None; mesh.patches.len()],
-    };
+    let field = scg_mesh::CellField::at_cell_centres(&mesh, &geom, |c| vortex.velocity(c));
     let roles = vec![PatchRole::Wall; mesh.patches.len()];
     let flow = MeshFlow::new(mesh, &field, scg_mesh::Interpolation::CellPoint, roles)
         .map_err(|e| e.to_string())?;

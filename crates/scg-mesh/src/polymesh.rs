@@ -160,3 +160,18 @@ pub struct CellField {
     /// Per patch (same order as [`PolyMesh::patches`]): one value per patch face, if given.
     pub patches: Vec<Option<Vec<DVec3>>>,
 }
+
+impl CellField {
+    /// `f` at the cell centres of `mesh` (`geometry` its geometry), with no patch values
+    /// (the boundary takes the owner cells' values, as zeroGradient).
+    pub fn at_cell_centres(
+        mesh: &PolyMesh,
+        geometry: &crate::MeshGeometry,
+        f: impl Fn(DVec3) -> DVec3,
+    ) -> CellField {
+        CellField {
+            cells: geometry.cell_centres.iter().map(|&c| f(c)).collect(),
+            patches: vec![None; mesh.patches.len()],
+        }
+    }
+}

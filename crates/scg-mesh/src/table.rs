@@ -592,14 +592,9 @@ mod tests {
             .build()
             .unwrap();
         let g = MeshGeometry::new(&m).unwrap();
-        let field = CellField {
-            cells: g
-                .cell_centres
-                .iter()
-                .map(|c| DVec3::new(c.y * c.z, (3.0 * c.x).sin(), c.x * c.x))
-                .collect(),
-            patches: vec![None; m.patches.len()],
-        };
+        let field = CellField::at_cell_centres(&m, &g, |c| {
+            DVec3::new(c.y * c.z, (3.0 * c.x).sin(), c.x * c.x)
+        });
         (m, g, field)
     }
 

@@ -533,14 +533,9 @@ mod tests {
             .build()
             .unwrap();
         let g = MeshGeometry::new(&m).unwrap();
-        let field = CellField {
-            cells: g
-                .cell_centres
-                .iter()
-                .map(|c| DVec3::new(c.y * c.z, (3.0 * c.x).sin(), c.x * c.x))
-                .collect(),
-            patches: vec![None; m.patches.len()],
-        };
+        let field = CellField::at_cell_centres(&m, &g, |c| {
+            DVec3::new(c.y * c.z, (3.0 * c.x).sin(), c.x * c.x)
+        });
         let roles = vec![PatchRole::Wall; m.patches.len()];
         let flow = MeshFlow::new(m, &field, Interpolation::CellPoint, roles).unwrap();
         let reference = |hint: u32, x: DVec3| -> (DVec3, u32) {
