@@ -1,21 +1,27 @@
 //! Bad input never hurts: random and mutated scene files and random `--set` arguments go
 //! through `scg_scene::parse`, `check::check` and `Scene::build` (plus two steps): no
-//! panic, no hang, and every rejection is a `SceneError` that names a key or a line.
+//! panic, no hang, no case holding more than 2 GB ([`MEMORY_CAP`]), and every rejection is
+//! a `SceneError` that names a key or a line.
 //!
 //! The number of cases comes from `PROPTEST_CASES` (default 2 000, a few seconds). CI runs
-//! `PROPTEST_CASES=100000 cargo test --release --test fuzz_scenes` (see `.ci/run`).
+//! `PROPTEST_CASES=100000 cargo test --release --test fuzz_scenes` (see `.ci/run`). Each
+//! run prints its seed; `PROPTEST_RNG_SEED=<seed>` replays it.
 //! A few handpicked command lines exercise the `scg` binary itself.
 
 mod common;
 
+use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
+use std::io::Write;
 use std::process::Command;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use proptest::prelude::*;
-use proptest::test_runner::{Config, TestCaseError, TestRunner};
+use proptest::test_runner::{Config, RngSeed, TestCaseError, TestRunner};
 
-use scg::scene::{Placement, SceneError, check, error, parse};
+use scg::scene::{SceneError, check, error, parse};
 
 /// Scenes the mutations start from: every case file plus small inline scenes that reach
 /// the other tables (contacts, regions, planes, gravity, linear contacts).
@@ -324,15 +330,15 @@ fn set_arg() -> impl Strategy<Value = String> {
     ]
 }
 
-/// Particles a scene starts with (skip building huge ones).
-fn initial_count(s: &scg::scene::Scene) -> usize {
-    s.groups
-        .iter()
-        .map(|g| match &g.placement {
-            Placement::Explicit { positions, .. } => positions.len(),
-            Placement::Random { count, .. } => *count,
-        })
-        .sum()
+/// Steps each case runs (or its whole run, if shorter).
+const STEPS: u64 = 2;
+
+/// Particles a case holds over its steps: at the start and fed (skip building huge ones).
+fn case_particles(s: &scg::scene::Scene) -> u64 {
+    let steps = STEPS.min(s.steps());
+    s.feeders.iter().fold(s.initial_count(), |n, f| {
+        n.saturating_add(s.fed_after(f, steps))
+    })
 }
 
 fn check_error(e: &SceneError, text: &str, sets: &[String]) -> Result<(), TestCaseError> {
@@ -367,9 +373,9 @@ fn one_case(text: &str, sets: &[String]) -> Result<(), TestCaseError> {
             let r = check::check(&scene);
             let _ = check::render(&scene, &r);
             let _ = scene.run_meta(r.messages());
-            if initial_count(&scene) <= 2_000 {
+            if case_particles(&scene) <= 5_000 {
                 let mut sim = scene.build(false);
-                for _ in 0..2 {
+                for _ in 0..STEPS.min(scene.steps()) {
                     if sim.step().is_err() {
                         break;
                     }
@@ -378,6 +384,114 @@ fn one_case(text: &str, sets: &[String]) -> Result<(), TestCaseError> {
         }
     }
     Ok(())
+}
+
+/// The runner's seed: `PROPTEST_RNG_SEED` if set, else a fresh one. It is written to the
+/// process's stderr before the run, outside the test harness's capture, so that a case
+/// which kills the process (the OOM killer) can still be replayed with
+/// `PROPTEST_RNG_SEED=<seed> PROPTEST_CASES=<n> cargo test --release --test fuzz_scenes`.
+fn rng_seed(test: &str) -> u64 {
+    let seed = std::env::var("PROPTEST_RNG_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| {
+            use std::hash::{BuildHasher, RandomState};
+            RandomState::new().hash_one(Instant::now())
+        });
+    let _ = writeln!(
+        std::io::stderr(),
+        "{test}: PROPTEST_RNG_SEED={seed} PROPTEST_CASES={}",
+        cases()
+    );
+    seed
+}
+
+// ── memory: no case may hold more than `MEMORY_CAP` ─────────────────────────────────────
+
+/// The most a case may hold at once (bytes, every thread's allocations together). The
+/// largest legitimate case (2 000 particles, the CFD seed's mesh and locator) holds tens
+/// of MB; a case that asks for more than this is a scene whose size validation let
+/// through.
+const MEMORY_CAP: usize = 2 << 30;
+
+/// The system allocator, counting the bytes held. An allocation that would take the
+/// total past [`MEMORY_CAP`] while a case runs writes the case to stderr and aborts: a
+/// runaway case is named, not left to the OOM killer.
+struct Capped;
+
+static HELD: AtomicUsize = AtomicUsize::new(0);
+/// [`MEMORY_CAP`], or `SCG_FUZZ_MEMORY_CAP` (bytes) to hunt smaller runaways.
+static CAP: AtomicUsize = AtomicUsize::new(MEMORY_CAP);
+static CAPPED: AtomicBool = AtomicBool::new(false);
+static CASE: Mutex<String> = Mutex::new(String::new());
+
+unsafe impl GlobalAlloc for Capped {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let held = HELD.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
+        if held > CAP.load(Ordering::Relaxed) && CAPPED.load(Ordering::Relaxed) {
+            over_cap(layout.size());
+        }
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        HELD.fetch_sub(layout.size(), Ordering::Relaxed);
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        let held = HELD.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
+        if held > CAP.load(Ordering::Relaxed) && CAPPED.load(Ordering::Relaxed) {
+            over_cap(layout.size());
+        }
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        if new_size > layout.size() {
+            let grow = new_size - layout.size();
+            let held = HELD.fetch_add(grow, Ordering::Relaxed) + grow;
+            if held > CAP.load(Ordering::Relaxed) && CAPPED.load(Ordering::Relaxed) {
+                over_cap(grow);
+            }
+        } else {
+            HELD.fetch_sub(layout.size() - new_size, Ordering::Relaxed);
+        }
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Capped = Capped;
+
+/// Name the case and stop (no allocation here: the case text was written beforehand).
+#[cold]
+fn over_cap(asked: usize) -> ! {
+    CAPPED.store(false, Ordering::Relaxed);
+    let mut err = std::io::stderr().lock();
+    let _ = writeln!(
+        err,
+        "\nfuzz_scenes: a case asked for {asked} bytes with more than {} held; the case:",
+        CAP.load(Ordering::Relaxed)
+    );
+    if let Ok(case) = CASE.try_lock() {
+        let _ = err.write_all(case.as_bytes());
+    }
+    let _ = writeln!(err);
+    std::process::abort()
+}
+
+/// Run `f` as one case, `describe` being what names it if it breaks the memory cap.
+fn capped<T>(describe: impl FnOnce() -> String, f: impl FnOnce() -> T) -> T {
+    if let Some(cap) = std::env::var("SCG_FUZZ_MEMORY_CAP")
+        .ok()
+        .and_then(|s| s.parse().ok())
+    {
+        CAP.store(cap, Ordering::Relaxed);
+    }
+    let text = describe();
+    *CASE.lock().unwrap_or_else(|e| e.into_inner()) = text;
+    CAPPED.store(true, Ordering::Relaxed);
+    let out = f();
+    CAPPED.store(false, Ordering::Relaxed);
+    out
 }
 
 fn cases() -> u32 {
@@ -394,6 +508,7 @@ fn mutated_scenes_never_hurt() {
         cases: cases(),
         failure_persistence: None,
         max_shrink_iters: 2_000,
+        rng_seed: RngSeed::Fixed(rng_seed("mutated_scenes_never_hurt")),
         ..Config::default()
     });
     let strategy = (
@@ -410,7 +525,10 @@ fn mutated_scenes_never_hurt() {
                 text = apply(&text, o);
             }
             let t = Instant::now();
-            let r = one_case(&text, &sets);
+            let r = capped(
+                || format!("--set {sets:?}, text:\n{text}"),
+                || one_case(&text, &sets),
+            );
             let dt = t.elapsed();
             slowest.set(slowest.get().max(dt));
             // No hang: the slowest legitimate case (an uncached contact-damping solve
@@ -432,12 +550,18 @@ fn random_text_never_hurts() {
     let mut runner = TestRunner::new(Config {
         cases: (cases() / 10).max(100),
         failure_persistence: None,
+        rng_seed: RngSeed::Fixed(rng_seed("random_text_never_hurts")),
         ..Config::default()
     });
     runner
         .run(
             &("(?s).{0,200}", proptest::collection::vec(set_arg(), 0..2)),
-            |(text, sets)| one_case(&text, &sets),
+            |(text, sets)| {
+                capped(
+                    || format!("--set {sets:?}, text:\n{text}"),
+                    || one_case(&text, &sets),
+                )
+            },
         )
         .unwrap();
 }
@@ -521,7 +645,7 @@ fn seeds_parse_and_run() {
     for (i, text) in seeds().iter().enumerate() {
         let scene =
             parse(text, "fuzz.toml", "fuzz", &[]).unwrap_or_else(|e| panic!("seed {i}: {e}"));
-        if initial_count(&scene) <= 2_000 {
+        if case_particles(&scene) <= 5_000 {
             let mut sim = scene.build(false);
             for _ in 0..3 {
                 sim.step().unwrap_or_else(|e| panic!("seed {i}: {e}"));

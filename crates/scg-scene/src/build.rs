@@ -28,6 +28,23 @@ impl Scene {
         (self.duration / self.dt).round().max(1.0) as u64
     }
 
+    /// Particles the scene holds at the start (every group's listed positions or count).
+    pub fn initial_count(&self) -> u64 {
+        self.groups
+            .iter()
+            .map(|g| match &g.placement {
+                Placement::Explicit { positions, .. } => positions.len() as u64,
+                Placement::Random { count, .. } => *count as u64,
+            })
+            .sum()
+    }
+
+    /// Particles feeder `f` has fed after `steps` steps (exact, as the feeder counts them;
+    /// a feeder with a release interval releases at most this many).
+    pub fn fed_after(&self, f: &Feeder, steps: u64) -> u64 {
+        scg_core::stages::feeder::fed_by(f.rate, f.window.0, f.window.1, steps as f64 * self.dt)
+    }
+
     /// Steps per `interval` seconds at the current `dt` (rounded to the nearest step, at
     /// least 1): how often a feeder releases and the outlet checks.
     pub fn interval_steps(&self, interval: f64) -> u64 {

@@ -15,7 +15,7 @@ use scg_core::physics::integrate::Integrator;
 
 use crate::check;
 use crate::error::{self, SceneError};
-use crate::model::{DtChoice, Group, Scene};
+use crate::model::{DtChoice, Group, Placement, Scene};
 use crate::overrides::apply_overrides;
 use crate::raw::{RawDt, RawScene};
 use particles::{feeder, group};
@@ -84,6 +84,44 @@ impl Scene {
     pub fn embedded(overrides: &[String]) -> Result<Scene, SceneError> {
         parse(DEFAULT_SCENE, "<embedded vortex.toml>", "vortex", overrides)
     }
+}
+
+/// The most particles a scene may hold over its run: its groups at the start plus all
+/// its feeders feed (at roughly 350–500 bytes each, 5·10^7 fill a 24 GB machine).
+pub const MAX_PARTICLES: u64 = 50_000_000;
+
+/// Rejects a scene whose groups and feeders together would hold more than
+/// [`MAX_PARTICLES`] over its run (at `dt`, up to the last step), naming the key of the
+/// largest contributor.
+fn particle_budget(scene: &Scene, cx: &Ctx) -> Result<(), SceneError> {
+    let steps = scene.steps();
+    let mut total = scene.initial_count();
+    let mut largest = (0, String::new());
+    for (i, g) in scene.groups.iter().enumerate() {
+        if let Placement::Random { count, .. } = g.placement
+            && count as u64 > largest.0
+        {
+            largest = (count as u64, format!("groups[{i}].count"));
+        }
+    }
+    for (i, f) in scene.feeders.iter().enumerate() {
+        let fed = scene.fed_after(f, steps);
+        total = total.saturating_add(fed);
+        if fed > largest.0 {
+            largest = (fed, format!("feeders[{i}].rate"));
+        }
+    }
+    if total > MAX_PARTICLES {
+        return Err(cx.err(
+            &largest.1,
+            format!(
+                "the scene would hold {total} particles over its run (this key: {}), more than \
+                 scg's limit of {MAX_PARTICLES}",
+                largest.0
+            ),
+        ));
+    }
+    Ok(())
 }
 
 fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
@@ -183,7 +221,7 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
     let feed_scale = cx.non_negative("feed_scale", raw.feed_scale.unwrap_or(1.0))?;
     let mut feeders = Vec::new();
     for (i, f) in raw.feeders.iter().enumerate() {
-        let mut fd = feeder(f, i, &groups, duration, mesh_flow.as_ref(), cx)?;
+        let mut fd = feeder(f, i, &groups, mesh_flow.as_ref(), cx)?;
         if fd.swirl != 0.0 && flow.vortex().is_none() {
             return Err(cx.err(
                 &format!("feeders[{i}].swirl"),
@@ -260,6 +298,7 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
     if steps > 10_000_000_000 {
         return Err(cx.err("dt", format!("{steps} steps is more than scg will run")));
     }
+    particle_budget(&scene, cx)?;
     scene.record_every = match raw.record_every {
         None => (steps / 200).max(1),
         Some(n) if n >= 1 => n as u64,
@@ -358,6 +397,44 @@ mod tests {
                 "{e}"
             );
         }
+    }
+
+    /// The particle limit counts every group and every feeder together, over the steps
+    /// the run takes: feeders of 3 and 4·10^7 per second over 1 s are too many, over half a second they are not, and the
+    /// error names the largest contributor's key and line.
+    #[test]
+    fn particle_limit_counts_groups_and_feeders_together() {
+        let scene = |rate2: f64| {
+            format!(
+                "duration = 1.0\ndt = 0.25\n[[groups]]\nname = \"a\"\ndiameter = 1e-3\n\
+                 density = 1e3\ncount = 1000\nregion = {{ kind = \"box\", min = [0.0, 0.0, 0.0], \
+                 max = [1.0, 1.0, 1.0] }}\n\
+                 [[feeders]]\ngroup = \"a\"\nrate = 3e7\n\
+                 region = {{ kind = \"box\", min = [0.0, 0.0, 0.0], max = [1.0, 1.0, 1.0] }}\n\
+                 [[feeders]]\ngroup = \"a\"\nrate = {rate2:e}\n\
+                 region = {{ kind = \"box\", min = [0.0, 0.0, 0.0], max = [1.0, 1.0, 1.0] }}\n"
+            )
+        };
+        let s = parse(&scene(1.0), "s.toml", "s", &[]).unwrap();
+        // Four steps of 0.25 s: the run ends at 1 s.
+        assert_eq!(s.fed_after(&s.feeders[0], s.steps()), 30_000_000);
+        assert_eq!(s.initial_count(), 1000);
+        let e = parse(&scene(4e7), "s.toml", "s", &[]).unwrap_err();
+        assert_eq!(e.key.as_deref(), Some("feeders[1].rate"), "{e}");
+        assert_eq!(e.line, Some(15), "{e}");
+        assert!(e.message.contains("70001000 particles"), "{e}");
+        // The same feeders over a shorter run fit.
+        parse(&scene(1.9e7), "s.toml", "s", &[]).unwrap();
+        parse(&scene(4e7), "s.toml", "s", &["duration=0.5".into()]).unwrap();
+        // A group's count counts too.
+        let e = parse(
+            &scene(1.0),
+            "s.toml",
+            "s",
+            &["groups.0.count=40000000".into()],
+        )
+        .unwrap_err();
+        assert_eq!(e.key.as_deref(), Some("groups[0].count"), "{e}");
     }
 
     #[test]

@@ -165,13 +165,13 @@ fn region(r: &RawRegion, key: &str, cx: &Ctx) -> Result<Region, SceneError> {
     }
 }
 
-/// `feeders[i]`, feeding one of `groups` over a run of `duration` s (from a patch of
-/// `mesh`, the scene's mesh flow, when it names one).
+/// `feeders[i]`, feeding one of `groups` (from a patch of `mesh`, the scene's mesh flow,
+/// when it names one). How many it feeds over the run is checked with the whole scene's
+/// particles, once `dt` is known.
 pub(super) fn feeder(
     f: &RawFeeder,
     i: usize,
     groups: &[Group],
-    duration: f64,
     mesh: Option<&SceneMeshFlow>,
     cx: &Ctx,
 ) -> Result<Feeder, SceneError> {
@@ -194,15 +194,6 @@ pub(super) fn feeder(
         }
         (None, None) => return Err(cx.err(&k("rate"), "a feeder needs `rate` or `volume_rate`")),
     };
-    if rate * duration > 5.0e7 {
-        return Err(cx.err(
-            &k("rate"),
-            format!(
-                "{:.3e} particles over the run is more than scg will feed",
-                rate * duration
-            ),
-        ));
-    }
     let start = cx.non_negative(&k("start"), f.start.unwrap_or(0.0))?;
     let stop = cx.finite(&k("stop"), f.stop.unwrap_or(f64::MAX))?;
     if stop < start {
