@@ -147,11 +147,18 @@ impl ContactState {
         slot_sum(&self.slots, k)
     }
 
-    /// One line on the neighbour list for run reports: builds (and their time), exact
-    /// displacement checks, candidate pairs and pairs in contact.
+    /// One line on the neighbour list for run reports: builds (their time and the last
+    /// one's grid), exact displacement checks, candidate pairs and pairs in contact.
     pub fn summary(&self) -> String {
+        use crate::physics::neighbour::GridKind;
+        let grid = match self.list.grid {
+            GridKind::None => "",
+            GridKind::Dense => ", the last on a dense grid",
+            GridKind::Coarse => ", the last on a coarse grid",
+            GridKind::Hashed => ", the last on hashed cells",
+        };
         format!(
-            "{} builds ({:.3} s), {} exact displacement checks, {} candidate pairs in {} force slots, {} in contact",
+            "{} builds ({:.3} s{grid}), {} exact displacement checks, {} candidate pairs in {} force slots, {} in contact",
             self.list.builds,
             self.list.build_time.as_secs_f64(),
             self.list.checks,
