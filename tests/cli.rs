@@ -131,3 +131,41 @@ fn summary_json_accounts_for_every_particle_fed() {
     let wall = s["wall_s"].as_f64().unwrap();
     assert!((rate * wall - ps as f64).abs() < 1e-6 * ps as f64);
 }
+
+/// `scg bench neighbours` builds both clouds on the grids meant for them and ends with its
+/// rate; it takes no `--scene-out`.
+#[test]
+fn neighbours_benchmark_names_its_grids() {
+    let out = scg()
+        .args([
+            "bench",
+            "neighbours",
+            "--particles",
+            "20000",
+            "--steps",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(
+        lines[0].starts_with("spread: 20000") && lines[0].contains("Coarse grid"),
+        "{text}"
+    );
+    assert!(
+        lines[1].starts_with("packed: 20000") && lines[1].contains("Dense grid"),
+        "{text}"
+    );
+    let rate: f64 = lines[2]
+        .strip_prefix("particle-builds/s: ")
+        .and_then(|r| r.parse().ok())
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(rate > 0.0, "{text}");
+    let out = scg()
+        .args(["bench", "neighbours", "--scene-out", "x.toml"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}

@@ -172,6 +172,77 @@ ExecutionTime = 0.30 s  ClockTime = 0 s
         self.assertEqual(lg["cpu"], [0.28, 0.30])
         self.assertEqual(lg["added"], {"d2": 2, "d5": 1})
 
+    def test_parallel_speed_and_parcels_per_rank(self):
+        """Particle-steps over steps 2..N per wall second of the decomposed run, the parcels
+        each processor held at the end, and an error when one held none."""
+        log = "".join(f"    Current number of parcels = {n}\nExecutionTime = {0.1 * k:.2f} s\n"
+                      for k, n in enumerate([0, 4, 6, 6]))
+        d = tempfile.mkdtemp()
+        try:
+            with open(os.path.join(d, "log.foam"), "w") as f:
+                f.write(log)
+            with open(os.path.join(d, "log.foam.wall"), "w") as f:
+                f.write("1.0\n1.5\n2.0\n2.5\n")
+
+            def held(proc, n):
+                p = os.path.join(d, f"processor{proc}", "0.0006", "lagrangian", vs.CLOUD)
+                os.makedirs(p, exist_ok=True)
+                with open(os.path.join(p, "d"), "w") as f:
+                    f.write(f"FoamFile\n{{\n}}\n\n{n}\n(\n" + "2e-06\n" * n + ")\n")
+            held(0, 4)
+            held(1, 2)
+            os.makedirs(os.path.join(d, "processor1", "0"))
+            out = os.path.join(d, "np2.json")
+            r = vs.parallel(out, [d], "simple (2 1 1)")
+            self.assertEqual(r["particle_steps"], 16)
+            self.assertAlmostEqual(r["wall_s"], 1.5)
+            self.assertAlmostEqual(r["particle_steps_per_s"], 16 / 1.5)
+            self.assertEqual((r["ranks"], r["parcels_per_rank_at_end"]), (2, [[4, 2]]))
+            self.assertEqual(json.load(open(out))["decomposition"], "simple (2 1 1)")
+            held(1, 0)
+            with self.assertRaises(SystemExit) as e:
+                vs.parallel(out, [d], "simple (2 1 1)")
+            self.assertIn("held no parcel", str(e.exception))
+        finally:
+            shutil.rmtree(d)
+
+    def test_table_ratios_per_core_and_on_the_machine(self):
+        """Per core: scg on 1 thread against OpenFOAM's 1 process; on the machine: scg on 2
+        threads against the faster of OpenFOAM's decomposed run and its serial runs at once."""
+        import contextlib
+        import io
+        d = tempfile.mkdtemp()
+        try:
+            def put(name, obj):
+                p = os.path.join(d, name)
+                with open(p, "w") as f:
+                    json.dump(obj, f)
+                return p
+            cls = {"group": "d1", "diameter": 1e-6, "fed": 10, "escaped": 2, "held": 8, "lost": 0,
+                   "efficiency": 0.8, "residence_times": [1.0, 2.0]}
+            fo = put("grade.json", {"classes": [cls], "d50": None, "particle_steps": 100,
+                                    "cpu_s": 1.0, "wall_s": 1.0, "particle_steps_per_s": 1.0e6})
+            grp = {"group": "d1", "diameter": 1e-6, "fed": 10, "drained": 3, "held": 7, "lost": 0}
+            s1 = put("s1.json", {"groups": [grp], "threads": 1, "particle_steps": 100, "wall_s": 1.0,
+                                 "particle_steps_per_s": 2.0e6})
+            s2 = put("s2.json", {"groups": [grp], "threads": 2, "particle_steps": 100, "wall_s": 1.0,
+                                 "particle_steps_per_s": 3.6e6})
+            fp = put("np2.json", {"ranks": 2, "decomposition": "simple (2 1 1)", "particle_steps": 100,
+                                  "wall_s": 1.0, "particle_steps_per_s": 0.8e6,
+                                  "parcels_per_rank_at_end": [[5, 3]]})
+            fc = put("twice.json", {"processes": 2, "particle_steps_per_s": 1.8e6,
+                                    "runs": [{"wall_s": 1.0}, {"wall_s": 1.1}]})
+            out = io.StringIO()
+            with contextlib.redirect_stdout(out):
+                vs.table(fo, s1, s2, fp, fc)
+            lines = out.getvalue().splitlines()
+            self.assertIn("speed ratio per core (scg 1 thread / OpenFOAM 1 process, CPU): 2.00", lines)
+            self.assertEqual(lines[-1], "speed ratio, the machine's 2 cores (scg 2 threads / OpenFOAM's "
+                                        "faster use of them, serial runs at once): 2.00")
+            self.assertTrue(any("-10.00" in ln for ln in lines), lines)
+        finally:
+            shutil.rmtree(d)
+
     def test_d50_interpolates_in_log_d(self):
         cls = [{"diameter": 2e-6, "efficiency": 0.2}, {"diameter": 8e-6, "efficiency": 0.8},
                {"diameter": 20e-6, "efficiency": 1.0}]

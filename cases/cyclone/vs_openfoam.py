@@ -8,8 +8,15 @@ bench/foam.py's helpers (dictionary header, timed run, list reader) are imported
       the runs). The scene's flow field (flow.case, flow.time, flow.field) is the frozen U.
   python3 vs_openfoam.py grade DIR OUT.json
       reads each run's log and patchPostProcessing output and writes grade.json
-  python3 vs_openfoam.py table GRADE.json SCG1.json SCG2.json
-      the side-by-side table (scg's `run --summary-json` on 1 and 2 threads)
+  python3 vs_openfoam.py parallel OUT.json DECOMPOSITION DIR...
+      the speed of the decomposed runs DIR... (mpirun -np N ... -parallel): particle-steps
+      per wall second, parcels per processor at the end (an error if one held none)
+  python3 vs_openfoam.py concurrent OUT.json DIR...
+      the summed speed of serial runs started together (one per core)
+  python3 vs_openfoam.py table GRADE.json SCG1.json SCG2.json [PARALLEL.json [CONCURRENT.json]]
+      the side-by-side table (scg's `run --summary-json` on 1 and 2 threads; OpenFOAM on
+      1 process, on N ranks and as serial runs at once when given) and the speed ratios:
+      per core, and on the machine's cores (against OpenFOAM's faster use of them)
 
 Exit status 2 (message naming the file and key) when the scene cannot be mapped.
 """
@@ -526,6 +533,69 @@ def grade(out, dest):
     return g
 
 
+def parallel(dest, dirs, decomposition):
+    """The speed of the decomposed runs in `dirs` (mpirun -np N ... -parallel): their
+    particle-steps and wall time over steps 2..N (as `grade`), and the parcels each
+    processor held at the end (from processor*/<last time>/lagrangian). Exits with an
+    error when a processor held none: one core would have idled."""
+    ps = wall = 0.0
+    ranks, per_rank = 0, []
+    for d in dirs:
+        lg = parse_log(os.path.join(d, "log.foam"))
+        if len(lg["wall"]) < 2 or len(lg["wall"]) != len(lg["cpu"]):
+            sys.exit(f"{d}/log.foam: {len(lg['cpu'])} ExecutionTime lines, {len(lg['wall'])} timed")
+        ps += sum(lg["parcels"][1:])
+        wall += lg["wall"][-1] - lg["wall"][0]
+        procs = sorted((x for x in os.listdir(d) if re.fullmatch(r"processor\d+", x)),
+                       key=lambda x: int(x[9:]))
+        if not procs:
+            sys.exit(f"{d}: no processor folders (not a decomposed case)")
+        ranks = max(ranks, len(procs))
+        held = []
+        for pr in procs:
+            times = [x for x in os.listdir(os.path.join(d, pr))
+                     if re.fullmatch(r"[0-9.eE+-]+", x) and float(x) > 0]
+            n = 0
+            if times:
+                dfile = os.path.join(d, pr, max(times, key=float), "lagrangian", CLOUD, "d")
+                if os.path.isfile(dfile):
+                    n = len(foam.foam_list(dfile, float))
+            held.append(n)
+        if min(held) == 0:
+            sys.exit(f"{d}: a processor held no parcel at the end ({held}): one core idled")
+        per_rank.append(held)
+    out = {
+        "code": "openfoam", "ranks": ranks, "decomposition": decomposition,
+        "particle_steps": int(ps), "wall_s": wall,
+        "particle_steps_per_s": ps / wall if wall > 0 else None,
+        "parcels_per_rank_at_end": per_rank,
+    }
+    with open(dest, "w") as f:
+        json.dump(out, f, indent=1)
+        f.write("\n")
+    return out
+
+
+def concurrent(dest, dirs):
+    """The machine's throughput of serial runs started together, one per core (`dirs`, each
+    a copy of the same case): the sum over the runs of their particle-steps per wall second
+    over steps 2..N. Another way for OpenFOAM to use several cores, an upper bound when the
+    runs are independent cases."""
+    rates, per = 0.0, []
+    for d in dirs:
+        lg = parse_log(os.path.join(d, "log.foam"))
+        if len(lg["wall"]) < 2 or len(lg["wall"]) != len(lg["cpu"]):
+            sys.exit(f"{d}/log.foam: {len(lg['cpu'])} ExecutionTime lines, {len(lg['wall'])} timed")
+        ps, wall = sum(lg["parcels"][1:]), lg["wall"][-1] - lg["wall"][0]
+        per.append({"dir": d, "particle_steps": ps, "wall_s": wall})
+        rates += ps / wall
+    out = {"code": "openfoam", "processes": len(dirs), "runs": per, "particle_steps_per_s": rates}
+    with open(dest, "w") as f:
+        json.dump(out, f, indent=1)
+        f.write("\n")
+    return out
+
+
 def efficiency(fed, escaped):
     return 1.0 - escaped / fed if fed else None
 
@@ -551,8 +621,10 @@ def rows(fo, s1):
     return out
 
 
-def table(grade_path, scg1_path, scg2_path):
+def table(grade_path, scg1_path, scg2_path, parallel_path=None, concurrent_path=None):
     fo, s1, s2 = read_json(grade_path), read_json(scg1_path), read_json(scg2_path)
+    fp = read_json(parallel_path) if parallel_path else None
+    fc = read_json(concurrent_path) if concurrent_path else None
     print(f"{'class':>6} {'d [µm]':>7} | {'OpenFOAM':>8} {'fed':>5} {'esc':>5} {'held':>5} {'lost':>4} "
           f"| {'scg':>8} {'fed':>5} {'esc':>5} {'held':>5} {'lost':>4} | {'diff [pp]':>9} {'sigma':>6}")
     fmt = lambda e: f"{e:8.4f}" if e is not None else f"{'-':>8}"
@@ -579,9 +651,26 @@ def table(grade_path, scg1_path, scg2_path):
     for s in (s1, s2):
         print(f"  scg, {s['threads']} thread{'s' if s['threads'] > 1 else ' '}:       {s['particle_steps_per_s']:.4e}  "
               f"({s['particle_steps']} in {s['wall_s']:.2f} s wall: the run's steps)")
+    if fp is not None:
+        held = " / ".join(str(n) for n in fp["parcels_per_rank_at_end"][0])
+        print(f"  OpenFOAM, {fp['ranks']} ranks:   {fp['particle_steps_per_s']:.4e}  ({fp['particle_steps']} in "
+              f"{fp['wall_s']:.2f} s wall, steps 2..N; {fp['decomposition']}; parcels per rank at the end {held})")
+    if fc is not None:
+        walls = ", ".join(f"{r['wall_s']:.2f}" for r in fc["runs"])
+        print(f"  OpenFOAM, {fc['processes']} serial runs at once: {fc['particle_steps_per_s']:.4e}  (sum of their "
+              f"rates; {walls} s wall)")
     print(f"max efficiency difference: {worst:.2f} pp" if worst is not None else "max efficiency difference: -")
-    ratio = s2["particle_steps_per_s"] / fo["particle_steps_per_s"]
-    print(f"speed ratio (scg 2 threads / openfoam 1 process): {ratio:.2f}")
+    print(f"speed ratio per core (scg 1 thread / OpenFOAM 1 process, CPU): "
+          f"{s1['particle_steps_per_s'] / fo['particle_steps_per_s']:.2f}")
+    both = [(x["particle_steps_per_s"], name) for x, name in
+            ((fp, "its decomposed run"), (fc, "serial runs at once")) if x is not None]
+    if both:
+        best, how = max(both)
+        print(f"speed ratio, the machine's 2 cores (scg 2 threads / OpenFOAM's faster use of them, {how}): "
+              f"{s2['particle_steps_per_s'] / best:.2f}")
+    else:
+        print(f"speed ratio (scg 2 threads / OpenFOAM 1 process): "
+              f"{s2['particle_steps_per_s'] / fo['particle_steps_per_s']:.2f}")
 
 
 def main(argv):
@@ -601,6 +690,15 @@ def main(argv):
     t.add_argument("grade")
     t.add_argument("scg1")
     t.add_argument("scg2")
+    t.add_argument("parallel", nargs="?")
+    t.add_argument("concurrent", nargs="?")
+    q = sub.add_parser("concurrent")
+    q.add_argument("out")
+    q.add_argument("dirs", nargs="+")
+    p = sub.add_parser("parallel")
+    p.add_argument("out")
+    p.add_argument("decomposition")
+    p.add_argument("dirs", nargs="+")
     a = ap.parse_args(argv[1:])
     try:
         if a.cmd == "case":
@@ -609,8 +707,12 @@ def main(argv):
                 print(r["dir"])
         elif a.cmd == "grade":
             grade(a.dir, a.out)
+        elif a.cmd == "parallel":
+            parallel(a.out, a.dirs, a.decomposition)
+        elif a.cmd == "concurrent":
+            concurrent(a.out, a.dirs)
         else:
-            table(a.grade, a.scg1, a.scg2)
+            table(a.grade, a.scg1, a.scg2, a.parallel, a.concurrent)
     except SceneError as e:
         print(f"error: {e}", file=sys.stderr)
         sys.exit(2)

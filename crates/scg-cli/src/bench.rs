@@ -21,6 +21,10 @@ pub enum BenchKind {
     /// the cell centres of a perturbed tetrahedral box generated in memory (`--cells`),
     /// walls all round: the engine path of `flow.kind = "openfoam"`.
     Mesh,
+    /// Neighbour-list builds alone (`--steps` each): 100 µm spheres at random, in index
+    /// order unrelated to their places, spread at solid fraction 10^-6 (a coarse grid)
+    /// and packed at 0.5 (a dense grid), skin 10 µm. Last line: `particle-builds/s`.
+    Neighbours,
 }
 
 /// Arguments of `scg bench`.
@@ -236,17 +240,61 @@ pub fn dense_scene(n: u64, steps: u64) -> String {
     )
 }
 
-/// Run a benchmark; the last line printed is `particle-steps/s: <number>`.
+/// `scg bench neighbours`: `builds` builds of the list of `n` spheres at random, spread
+/// and packed; prints each layout's time per build, grid and pairs, and last
+/// `particle-builds/s: <packed>`.
+fn bench_neighbours(n: u64, builds: u64) -> i32 {
+    use glam::DVec3;
+    use rand::{Rng, SeedableRng};
+    use scg_core::physics::neighbour::NeighbourList;
+    let (d, skin) = (100e-6, 10e-6);
+    let volume = n as f64 * std::f64::consts::PI / 6.0 * d * d * d;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let unit: Vec<DVec3> = (0..n)
+        .map(|_| DVec3::new(rng.random(), rng.random(), rng.random()))
+        .collect();
+    let radius = vec![0.5 * d; n as usize];
+    let mut rate = 0.0;
+    for (layout, fraction) in [("spread", 1e-6), ("packed", 0.5)] {
+        let side = (volume / fraction).cbrt();
+        let pos: Vec<DVec3> = unit.iter().map(|u| *u * side).collect();
+        let mut list = NeighbourList::new(skin, None);
+        let t0 = Instant::now();
+        for _ in 0..builds {
+            list.build(&pos, &radius);
+        }
+        let per = t0.elapsed().as_secs_f64() / builds as f64;
+        println!(
+            "{layout}: {n} particles in a {side:.3} m cube (solid fraction {fraction:e}): \
+             {per:.4} s a build on a {:?} grid, {} pairs",
+            list.grid,
+            list.pairs.len()
+        );
+        rate = n as f64 / per;
+    }
+    println!("particle-builds/s: {rate:.4e}");
+    0
+}
+
+/// Run a benchmark; the last line printed is `particle-steps/s: <number>`
+/// (`particle-builds/s` for `neighbours`).
 pub fn bench(a: BenchArgs) -> i32 {
     if a.particles == 0 || a.steps == 0 {
         eprintln!("error: --particles and --steps must be ≥ 1");
         return EXIT_BAD_INPUT;
     }
+    if let BenchKind::Neighbours = a.kind {
+        if a.scene_out.is_some() {
+            eprintln!("error: --scene-out: the neighbours benchmark has no scene");
+            return EXIT_BAD_INPUT;
+        }
+        return bench_neighbours(a.particles, a.steps);
+    }
     let text = match a.kind {
         BenchKind::Drag => drag_scene(a.particles),
         BenchKind::Dilute => dilute_scene(a.particles, a.steps),
         BenchKind::Dense => dense_scene(a.particles, a.steps),
-        BenchKind::Mesh => String::new(),
+        BenchKind::Mesh | BenchKind::Neighbours => String::new(),
     };
     if let Some(path) = &a.scene_out {
         if text.is_empty() {
