@@ -155,10 +155,14 @@ fn neighbours_benchmark_names_its_grids() {
         "{text}"
     );
     assert!(
-        lines[1].starts_with("packed: 20000") && lines[1].contains("Dense grid"),
+        lines[1].starts_with("clustered: 20000") && lines[1].contains("Hashed grid"),
         "{text}"
     );
-    let rate: f64 = lines[2]
+    assert!(
+        lines[2].starts_with("packed: 20000") && lines[2].contains("Dense grid"),
+        "{text}"
+    );
+    let rate: f64 = lines[3]
         .strip_prefix("particle-builds/s: ")
         .and_then(|r| r.parse().ok())
         .unwrap_or_else(|| panic!("{text}"));

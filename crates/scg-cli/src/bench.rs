@@ -22,8 +22,9 @@ pub enum BenchKind {
     /// walls all round: the engine path of `flow.kind = "openfoam"`.
     Mesh,
     /// Neighbour-list builds alone (`--steps` each): 100 µm spheres at random, in index
-    /// order unrelated to their places, spread at solid fraction 10^-6 (a coarse grid)
-    /// and packed at 0.5 (a dense grid), skin 10 µm. Last line: `particle-builds/s`.
+    /// order unrelated to their places, spread at solid fraction 10^-6 (a coarse grid),
+    /// in eight packed clusters far apart (hashed cells) and packed at 0.5 (a dense grid),
+    /// skin 10 µm. Last line: `particle-builds/s` of the packed cloud.
     Neighbours,
 }
 
@@ -240,8 +241,8 @@ pub fn dense_scene(n: u64, steps: u64) -> String {
     )
 }
 
-/// `scg bench neighbours`: `builds` builds of the list of `n` spheres at random, spread
-/// and packed; prints each layout's time per build, grid and pairs, and last
+/// `scg bench neighbours`: `builds` builds of the list of `n` spheres at random, spread,
+/// clustered and packed; prints each layout's time per build, grid and pairs, and last
 /// `particle-builds/s: <packed>`.
 fn bench_neighbours(n: u64, builds: u64) -> i32 {
     use glam::DVec3;
@@ -255,17 +256,37 @@ fn bench_neighbours(n: u64, builds: u64) -> i32 {
         .collect();
     let radius = vec![0.5 * d; n as usize];
     let mut rate = 0.0;
-    for (layout, fraction) in [("spread", 1e-6), ("packed", 0.5)] {
+    for (layout, fraction) in [("spread", 1e-6), ("clustered", 0.5), ("packed", 0.5)] {
         let side = (volume / fraction).cbrt();
-        let pos: Vec<DVec3> = unit.iter().map(|u| *u * side).collect();
+        let pos: Vec<DVec3> = if layout == "clustered" {
+            // Eight packed clusters at the corners of a cube 1000 times their size.
+            (unit.iter().enumerate())
+                .map(|(k, u)| {
+                    let corner =
+                        DVec3::new((k & 1) as f64, (k >> 1 & 1) as f64, (k >> 2 & 1) as f64);
+                    (*u * 0.5 + corner * 1000.0) * side
+                })
+                .collect()
+        } else {
+            unit.iter().map(|u| *u * side).collect()
+        };
         let mut list = NeighbourList::new(skin, None);
         let t0 = Instant::now();
         for _ in 0..builds {
             list.build(&pos, &radius);
         }
         let per = t0.elapsed().as_secs_f64() / builds as f64;
+        let place = if layout == "clustered" {
+            format!(
+                "in eight {:.3} m cubes {:.1} m apart",
+                0.5 * side,
+                1000.0 * side
+            )
+        } else {
+            format!("in a {side:.3} m cube")
+        };
         println!(
-            "{layout}: {n} particles in a {side:.3} m cube (solid fraction {fraction:e}): \
+            "{layout}: {n} particles {place} (solid fraction {fraction:e}): \
              {per:.4} s a build on a {:?} grid, {} pairs",
             list.grid,
             list.pairs.len()

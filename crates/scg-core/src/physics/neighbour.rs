@@ -237,52 +237,65 @@ impl NeighbourList {
         // With fewer than three cells along an axis the 27 neighbours repeat: dedup then.
         let repeats = dims.is_some_and(|d| d.iter().any(|&k| k < 3));
         let (cells, order, skin) = (&self.cells, &self.order, self.skin);
-        // The pairs of particles i in [lo, hi), in (i, j) order.
+        // Centres, radii and indices in cell order, so that a cell's particles are read
+        // together.
+        let body: Vec<(DVec3, f64, u32)> = order
+            .iter()
+            .map(|&(_, j)| (pos[j as usize], radius[j as usize], j))
+            .collect();
+        // The pairs of the particles in slots [lo, hi) of the cell order, listed particle by
+        // particle (each one's j ascending); the 27 look-ups are made once per cell.
         let pairs_of = |lo: usize, hi: usize| -> Vec<[u32; 2]> {
             let mut out = Vec::new();
             let mut neighbour_cells: Vec<[i64; 3]> = Vec::with_capacity(27);
+            let mut ranges: Vec<(u32, u32)> = Vec::with_capacity(27);
+            let mut current: Option<[i64; 3]> = None;
             let mut cand: Vec<u32> = Vec::new();
-            for i in lo..hi {
-                let c = cell_of(pos[i]);
-                neighbour_cells.clear();
-                for dx in -1..=1 {
-                    for dy in -1..=1 {
-                        for dz in -1..=1 {
-                            let mut k = [c[0] + dx, c[1] + dy, c[2] + dz];
-                            if let Some(d) = dims {
-                                for a in 0..3 {
-                                    k[a] = k[a].rem_euclid(d[a]);
+            for s in lo..hi {
+                let c = order[s].0;
+                if current != Some(c) {
+                    current = Some(c);
+                    neighbour_cells.clear();
+                    for dx in -1..=1 {
+                        for dy in -1..=1 {
+                            for dz in -1..=1 {
+                                let mut k = [c[0] + dx, c[1] + dy, c[2] + dz];
+                                if let Some(d) = dims {
+                                    for a in 0..3 {
+                                        k[a] = k[a].rem_euclid(d[a]);
+                                    }
                                 }
+                                neighbour_cells.push(k);
                             }
-                            neighbour_cells.push(k);
                         }
                     }
+                    if repeats {
+                        neighbour_cells.sort_unstable();
+                        neighbour_cells.dedup();
+                    }
+                    ranges.clear();
+                    ranges.extend(neighbour_cells.iter().filter_map(|k| cells.get(k).copied()));
                 }
-                if repeats {
-                    neighbour_cells.sort_unstable();
-                    neighbour_cells.dedup();
-                }
+                let (xi, ri, i) = body[s];
                 cand.clear();
-                for k in &neighbour_cells {
-                    if let Some(&(a, b)) = cells.get(k) {
-                        for &(_, j) in &order[a as usize..b as usize] {
-                            if (j as usize) <= i {
-                                continue;
-                            }
-                            let d = separation(pos[i], pos[j as usize], periodic.as_ref());
-                            let cut = radius[i] + radius[j as usize] + skin;
-                            if d.length_squared() < cut * cut {
-                                cand.push(j);
-                            }
+                for &(a, b) in &ranges {
+                    for &(xj, rj, j) in &body[a as usize..b as usize] {
+                        if j <= i {
+                            continue;
+                        }
+                        let d = separation(xi, xj, periodic.as_ref());
+                        let cut = ri + rj + skin;
+                        if d.length_squared() < cut * cut {
+                            cand.push(j);
                         }
                     }
                 }
                 cand.sort_unstable();
-                out.extend(cand.iter().map(|&j| [i as u32, j]));
+                out.extend(cand.iter().map(|&j| [i, j]));
             }
             out
         };
-        self.pairs = in_blocks(n, pairs_of);
+        self.pairs = by_first(&in_blocks(n, pairs_of), n);
     }
 
     /// The pairs found through a dense grid of cells over the particles' bounding box
