@@ -1064,7 +1064,7 @@ fn wall_candidates_give_the_full_scans_bits() {
         let rows = listed
             .world
             .resource::<WallCandidates>()
-            .current(&st.list)
+            .current(Some(st))
             .map(<[u32]>::len);
         if st.list.builds == builds {
             skipping_steps += 1;

@@ -88,10 +88,9 @@ pub fn integrate_rotation(
         return;
     };
     // Only the wall stage's candidates can have a torque when it listed them.
-    let current = match (&contacts, &candidates) {
-        (Some(c), Some(w)) => w.current(&c.list),
-        _ => None,
-    };
+    let current = candidates
+        .as_deref()
+        .and_then(|w| w.current(contacts.as_deref()));
     let rows = Rows(0..ws.len());
     for_each_piece((bypass(ws), ts, ms, ds, rows), |(ws, ts, ms, ds, rows)| {
         let visit = |i: usize| {

@@ -21,7 +21,6 @@ use crate::components::*;
 use crate::exec::par::{Rows, for_each_piece};
 use crate::physics::contact::tangential::{rolling_torque, tangential_force};
 use crate::physics::contact::{Material, NormalLaw, TangentialLaw};
-use crate::physics::neighbour::NeighbourList;
 use crate::physics::trimesh::{MeshContact, MeshScratch};
 use crate::physics::wall_shape::{WallShape, WallTouch};
 use crate::state::{ContactResolution, SimClock};
@@ -98,22 +97,31 @@ pub struct WallCandidates {
 }
 
 impl WallCandidates {
-    /// The candidate rows, when they were listed since the last build of `list`.
-    pub fn current(&self, list: &NeighbourList) -> Option<&[u32]> {
+    /// The candidate rows, when the scene has particle contacts (`contacts`) and they were
+    /// listed since the last build of its neighbour list; `None`: visit every row.
+    pub fn current(&self, contacts: Option<&ContactState>) -> Option<&[u32]> {
+        let list = &contacts?.list;
         (self.built_at == Some(list.builds)).then_some(&self.rows[..])
     }
 
-    /// List the candidates after a wall stage that visited every particle: the rows
-    /// with a wall history (`busy`) or whose sphere grown by half the skin of `list` is
-    /// not surely clear of every wall.
+    /// After a wall stage that visited every particle (no [`WallCandidates::current`]
+    /// rows) in a scene with particle contacts, list the candidates: the rows with a
+    /// wall history (`busy`) or whose sphere grown by half the neighbour list's skin is
+    /// not surely clear of every wall. Does nothing otherwise.
     fn refresh(
         &mut self,
-        list: &NeighbourList,
+        contacts: Option<&ContactState>,
         walls: &WallSet,
         xs: &[Position],
         ds: &[Diameter],
         busy: impl Fn(usize) -> bool,
     ) {
+        let Some(list) = contacts.map(|c| &c.list) else {
+            return;
+        };
+        if self.built_at == Some(list.builds) {
+            return;
+        }
         let half = 0.5 * list.skin;
         self.rows.clear();
         for i in 0..xs.len() {
@@ -172,8 +180,8 @@ pub fn wall_normal_forces(
         return;
     };
     let keys = history_keys(&walls.walls);
-    let list = contacts.as_deref().map(|c| &c.list);
-    let current = list.and_then(|l| candidates.current(l));
+    let contacts = contacts.as_deref();
+    let current = candidates.current(contacts);
     let columns = (xs, vs, ds, ms, bypass(fs), Rows(0..xs.len()));
     for_each_piece(columns, |(xs, vs, ds, ms, fs, rows)| {
         let (mut scratch, mut found) = (MeshScratch::default(), Vec::new());
@@ -198,11 +206,7 @@ pub fn wall_normal_forces(
         // particle.
         rows.visit(current, visit);
     });
-    if current.is_none()
-        && let Some(l) = list
-    {
-        candidates.refresh(l, walls, xs, ds, |_| false);
-    }
+    candidates.refresh(contacts, walls, xs, ds, |_| false);
 }
 
 /// Every touch of the sphere at `x` (m) of radius `r` (m) with the walls, with its history
@@ -353,8 +357,8 @@ pub fn wall_contact_forces(
     let Some((xs, vs, ws, ds, ms, fs, ts, hs)) = columns_mut(&mut q) else {
         return;
     };
-    let list = contacts.as_deref().map(|c| &c.list);
-    let current = list.and_then(|l| candidates.current(l));
+    let contacts = contacts.as_deref();
+    let current = candidates.current(contacts);
     let hs = bypass(hs);
     let columns = (
         (xs, vs, ws, ds, ms),
@@ -383,9 +387,5 @@ pub fn wall_contact_forces(
         };
         rows.visit(current, visit);
     });
-    if current.is_none()
-        && let Some(l) = list
-    {
-        candidates.refresh(l, walls, xs, ds, |i| !hs[i].0.is_empty());
-    }
+    candidates.refresh(contacts, walls, xs, ds, |i| !hs[i].0.is_empty());
 }
