@@ -304,8 +304,8 @@ impl NeighbourList {
     ///
     /// Cells have an edge of `min_cell` (the largest cut-off), or larger in a dilute cloud
     /// so that there are at most about 4 cells per particle. Particles are counting-sorted by cell
-    /// (stable, so each cell lists its particles in index order), and every particle scans
-    /// the cells around its own by direct indexing. Cells wider than 4 cut-offs are kept
+    /// (stable, so each cell lists its particles in index order), and, taken in that order,
+    /// every particle scans the cells around its own by direct indexing. Cells wider than 4 cut-offs are kept
     /// only when they crowd the particles no more than [`COARSE_CROWDING`] allows: an even
     /// cloud in a large box, not far-apart clusters. (Hashed, such a cloud cost 27 hash
     /// look-ups per particle, mostly of empty cells: 7 s a build for 2·10^6 particles of
@@ -373,8 +373,7 @@ impl NeighbourList {
         };
         let linear = |c: [i64; 3]| ((c[2] * dims[1] + c[1]) * dims[0] + c[0]) as usize;
         // Counting sort by cell: start[c]..start[c + 1] are the slots of cell c in `sorted`.
-        let coords: Vec<[i64; 3]> = pos.iter().map(|x| coord(*x)).collect();
-        let cell: Vec<u32> = coords.iter().map(|c| linear(*c) as u32).collect();
+        let cell: Vec<u32> = pos.iter().map(|x| linear(coord(*x)) as u32).collect();
         let mut start = vec![0u32; cells as usize + 1];
         for &c in &cell {
             start[c as usize + 1] += 1;
@@ -496,8 +495,8 @@ fn by_first(pairs: &[[u32; 2]], n: usize) -> Vec<[u32; 2]> {
     out
 }
 
-/// `pairs_of(lo, hi)` over blocks of particle indices, in parallel, concatenated in block
-/// order: the list is the same whatever the thread count.
+/// `pairs_of(lo, hi)` over blocks of the `n` particles (slots of the cell order), in
+/// parallel, concatenated in block order: the list is the same whatever the thread count.
 fn in_blocks(n: usize, pairs_of: impl Fn(usize, usize) -> Vec<[u32; 2]> + Sync) -> Vec<[u32; 2]> {
     const BLOCK: usize = 1024;
     if n <= 2 * BLOCK {
