@@ -335,10 +335,7 @@ const STEPS: u64 = 2;
 
 /// Particles a case holds over its steps: at the start and fed (skip building huge ones).
 fn case_particles(s: &scg::scene::Scene) -> u64 {
-    let steps = STEPS.min(s.steps());
-    s.feeders.iter().fold(s.initial_count(), |n, f| {
-        n.saturating_add(s.fed_after(f, steps))
-    })
+    s.particles_after(STEPS.min(s.steps()))
 }
 
 fn check_error(e: &SceneError, text: &str, sets: &[String]) -> Result<(), TestCaseError> {
@@ -409,7 +406,7 @@ fn rng_seed(test: &str) -> u64 {
 // ── memory: no case may hold more than `MEMORY_CAP` ─────────────────────────────────────
 
 /// The most a case may hold at once (bytes, every thread's allocations together). The
-/// largest legitimate case (2 000 particles, the CFD seed's mesh and locator) holds tens
+/// largest legitimate case (5 000 particles, the CFD seed's mesh and locator) holds tens
 /// of MB; a case that asks for more than this is a scene whose size validation let
 /// through.
 const MEMORY_CAP: usize = 2 << 30;
@@ -425,12 +422,20 @@ static CAP: AtomicUsize = AtomicUsize::new(MEMORY_CAP);
 static CAPPED: AtomicBool = AtomicBool::new(false);
 static CASE: Mutex<String> = Mutex::new(String::new());
 
+impl Capped {
+    /// Count `bytes` more held; over the cap while a case runs, name it and stop.
+    #[inline]
+    fn take(bytes: usize) {
+        let held = HELD.fetch_add(bytes, Ordering::Relaxed) + bytes;
+        if held > CAP.load(Ordering::Relaxed) && CAPPED.load(Ordering::Relaxed) {
+            over_cap(bytes);
+        }
+    }
+}
+
 unsafe impl GlobalAlloc for Capped {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let held = HELD.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
-        if held > CAP.load(Ordering::Relaxed) && CAPPED.load(Ordering::Relaxed) {
-            over_cap(layout.size());
-        }
+        Capped::take(layout.size());
         unsafe { System.alloc(layout) }
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
@@ -438,19 +443,12 @@ unsafe impl GlobalAlloc for Capped {
         unsafe { System.dealloc(ptr, layout) }
     }
     unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        let held = HELD.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
-        if held > CAP.load(Ordering::Relaxed) && CAPPED.load(Ordering::Relaxed) {
-            over_cap(layout.size());
-        }
+        Capped::take(layout.size());
         unsafe { System.alloc_zeroed(layout) }
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
         if new_size > layout.size() {
-            let grow = new_size - layout.size();
-            let held = HELD.fetch_add(grow, Ordering::Relaxed) + grow;
-            if held > CAP.load(Ordering::Relaxed) && CAPPED.load(Ordering::Relaxed) {
-                over_cap(grow);
-            }
+            Capped::take(new_size - layout.size());
         } else {
             HELD.fetch_sub(layout.size() - new_size, Ordering::Relaxed);
         }
@@ -478,18 +476,22 @@ fn over_cap(asked: usize) -> ! {
     std::process::abort()
 }
 
-/// Run `f` as one case, `describe` being what names it if it breaks the memory cap.
-fn capped<T>(describe: impl FnOnce() -> String, f: impl FnOnce() -> T) -> T {
-    if let Some(cap) = std::env::var("SCG_FUZZ_MEMORY_CAP")
-        .ok()
-        .and_then(|s| s.parse().ok())
-    {
-        CAP.store(cap, Ordering::Relaxed);
-    }
-    let text = describe();
-    *CASE.lock().unwrap_or_else(|e| e.into_inner()) = text;
+/// [`one_case`] under the memory cap, the case written down first to be named if it
+/// breaks it.
+fn capped_case(text: &str, sets: &[String]) -> Result<(), TestCaseError> {
+    static FROM_ENV: std::sync::Once = std::sync::Once::new();
+    FROM_ENV.call_once(|| {
+        if let Some(cap) = std::env::var("SCG_FUZZ_MEMORY_CAP")
+            .ok()
+            .and_then(|s| s.parse().ok())
+        {
+            CAP.store(cap, Ordering::Relaxed);
+        }
+    });
+    let described = format!("--set {sets:?}, text:\n{text}");
+    *CASE.lock().unwrap_or_else(|e| e.into_inner()) = described;
     CAPPED.store(true, Ordering::Relaxed);
-    let out = f();
+    let out = one_case(text, sets);
     CAPPED.store(false, Ordering::Relaxed);
     out
 }
@@ -525,10 +527,7 @@ fn mutated_scenes_never_hurt() {
                 text = apply(&text, o);
             }
             let t = Instant::now();
-            let r = capped(
-                || format!("--set {sets:?}, text:\n{text}"),
-                || one_case(&text, &sets),
-            );
+            let r = capped_case(&text, &sets);
             let dt = t.elapsed();
             slowest.set(slowest.get().max(dt));
             // No hang: the slowest legitimate case (an uncached contact-damping solve
@@ -556,12 +555,7 @@ fn random_text_never_hurts() {
     runner
         .run(
             &("(?s).{0,200}", proptest::collection::vec(set_arg(), 0..2)),
-            |(text, sets)| {
-                capped(
-                    || format!("--set {sets:?}, text:\n{text}"),
-                    || one_case(&text, &sets),
-                )
-            },
+            |(text, sets)| capped_case(&text, &sets),
         )
         .unwrap();
 }

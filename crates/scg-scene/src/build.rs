@@ -45,6 +45,14 @@ impl Scene {
         scg_core::stages::feeder::fed_by(f.rate, f.window.0, f.window.1, steps as f64 * self.dt)
     }
 
+    /// Particles the scene has held after `steps` steps if none left: its groups' at the
+    /// start plus every feeder's ([`Scene::fed_after`]).
+    pub fn particles_after(&self, steps: u64) -> u64 {
+        (self.feeders.iter()).fold(self.initial_count(), |n, f| {
+            n.saturating_add(self.fed_after(f, steps))
+        })
+    }
+
     /// Steps per `interval` seconds at the current `dt` (rounded to the nearest step, at
     /// least 1): how often a feeder releases and the outlet checks.
     pub fn interval_steps(&self, interval: f64) -> u64 {

@@ -95,7 +95,7 @@ pub const MAX_PARTICLES: u64 = 50_000_000;
 /// largest contributor.
 fn particle_budget(scene: &Scene, cx: &Ctx) -> Result<(), SceneError> {
     let steps = scene.steps();
-    let mut total = scene.initial_count();
+    let total = scene.particles_after(steps);
     let mut largest = (0, String::new());
     for (i, g) in scene.groups.iter().enumerate() {
         if let Placement::Random { count, .. } = g.placement
@@ -106,7 +106,6 @@ fn particle_budget(scene: &Scene, cx: &Ctx) -> Result<(), SceneError> {
     }
     for (i, f) in scene.feeders.iter().enumerate() {
         let fed = scene.fed_after(f, steps);
-        total = total.saturating_add(fed);
         if fed > largest.0 {
             largest = (fed, format!("feeders[{i}].rate"));
         }
