@@ -130,14 +130,18 @@ echo "wrote $out/grade.json"
 # two halves (of the simple splits it ran fastest here: (2 1 1) 19.7 s, (1 2 1) 22.5 s,
 # (1 1 2) 26.0 s wall on the full scene). The run fails when a processor holds no parcel.
 decomposition="simple (2 1 1)"
+# copy_case SRC DST: a fresh copy of case SRC's inputs (no results) in DST.
+copy_case() {
+    rm -rf "$2"
+    mkdir -p "$2"
+    cp -r "$1/0" "$1/constant" "$1/system" "$2/"
+}
 mpi_flags=()
 [ "$(id -u)" = 0 ] && mpi_flags+=(--allow-run-as-root)
 par_dirs=()
 for d in "${runs[@]}"; do
     p=$d-np2
-    rm -rf "$p"
-    mkdir -p "$p"
-    cp -r "$d/0" "$d/constant" "$d/system" "$p/"
+    copy_case "$d" "$p"
     printf '%s\n' 'FoamFile' '{' '    version     2.0;' '    format      ascii;' \
         '    class       dictionary;' '    location    "system";' '    object      decomposeParDict;' \
         '}' 'numberOfSubdomains 2;' 'method          simple;' 'simpleCoeffs' '{' \
@@ -167,9 +171,7 @@ pids=()
 twin_dirs=()
 for k in a b; do
     p=${runs[0]}-$k
-    rm -rf "$p"
-    mkdir -p "$p"
-    cp -r "${runs[0]}/0" "${runs[0]}/constant" "${runs[0]}/system" "$p/"
+    copy_case "${runs[0]}" "$p"
     twin_dirs+=("$p")
 done
 echo "== OpenFOAM, two serial runs at once: ${twin_dirs[*]}"

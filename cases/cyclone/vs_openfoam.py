@@ -409,6 +409,31 @@ def parse_log(log):
     return {"parcels": parcels, "cpu": cpu, "added": added, "wall": wall}
 
 
+def timed_steps(case):
+    """(particle-steps, wall seconds) of the run in `case` over steps 2..N: the parcels in
+    the system after each step after the first, and LOG.wall's times of those steps."""
+    lg = parse_log(os.path.join(case, "log.foam"))
+    if len(lg["wall"]) < 2 or len(lg["wall"]) != len(lg["cpu"]):
+        sys.exit(f"{case}/log.foam: {len(lg['cpu'])} ExecutionTime lines, {len(lg['wall'])} timed")
+    return sum(lg["parcels"][1:]), lg["wall"][-1] - lg["wall"][0]
+
+
+def diameters_at_end(case):
+    """The diameters of the parcels written at the case's last time (> 0), or [] when
+    none were written."""
+    times = [x for x in os.listdir(case) if re.fullmatch(r"[0-9.eE+-]+", x) and float(x) > 0]
+    if not times:
+        return []
+    dfile = os.path.join(case, max(times, key=float), "lagrangian", CLOUD, "d")
+    return foam.foam_list(dfile, float) if os.path.isfile(dfile) else []
+
+
+def write_json(dest, obj):
+    with open(dest, "w") as f:
+        json.dump(obj, f, indent=1)
+        f.write("\n")
+
+
 def read_post(case):
     """{patch: [(time, d, age), ...]} from patchPostProcessing's `<patch>.post` files (one
     folder per write time)."""
@@ -486,13 +511,8 @@ def grade(out, dest):
                     c["residence_times"].append(age)
                 else:
                     c["lost"] += 1
-        times = [x for x in os.listdir(d) if re.fullmatch(r"[0-9.eE+-]+", x) and float(x) > 0]
-        if times:
-            last = max(times, key=float)
-            dfile = os.path.join(d, last, "lagrangian", CLOUD, "d")
-            if os.path.isfile(dfile):
-                for dia in foam.foam_list(dfile, float):
-                    nearest_class(dia, cls)["held"] += 1
+        for dia in diameters_at_end(d):
+            nearest_class(dia, cls)["held"] += 1
         if len(lg["parcels"]) and lg["parcels"][-1] != sum(c["held"] for c in cls):
             notes.append(f"{d}: the log's last parcel count {lg['parcels'][-1]} differs from the parcels "
                          f"written ({sum(c['held'] for c in cls)})")
@@ -527,9 +547,7 @@ def grade(out, dest):
         "particle_steps": int(ps), "cpu_s": cpu, "wall_s": wall,
         "particle_steps_per_s": ps / cpu if cpu > 0 else None, "dt": plan["dt"], "notes": notes,
     }
-    with open(dest, "w") as f:
-        json.dump(g, f, indent=1)
-        f.write("\n")
+    write_json(dest, g)
     return g
 
 
@@ -541,26 +559,15 @@ def parallel(dest, dirs, decomposition):
     ps = wall = 0.0
     ranks, per_rank = 0, []
     for d in dirs:
-        lg = parse_log(os.path.join(d, "log.foam"))
-        if len(lg["wall"]) < 2 or len(lg["wall"]) != len(lg["cpu"]):
-            sys.exit(f"{d}/log.foam: {len(lg['cpu'])} ExecutionTime lines, {len(lg['wall'])} timed")
-        ps += sum(lg["parcels"][1:])
-        wall += lg["wall"][-1] - lg["wall"][0]
+        steps, secs = timed_steps(d)
+        ps += steps
+        wall += secs
         procs = sorted((x for x in os.listdir(d) if re.fullmatch(r"processor\d+", x)),
                        key=lambda x: int(x[9:]))
         if not procs:
             sys.exit(f"{d}: no processor folders (not a decomposed case)")
         ranks = max(ranks, len(procs))
-        held = []
-        for pr in procs:
-            times = [x for x in os.listdir(os.path.join(d, pr))
-                     if re.fullmatch(r"[0-9.eE+-]+", x) and float(x) > 0]
-            n = 0
-            if times:
-                dfile = os.path.join(d, pr, max(times, key=float), "lagrangian", CLOUD, "d")
-                if os.path.isfile(dfile):
-                    n = len(foam.foam_list(dfile, float))
-            held.append(n)
+        held = [len(diameters_at_end(os.path.join(d, pr))) for pr in procs]
         if min(held) == 0:
             sys.exit(f"{d}: a processor held no parcel at the end ({held}): one core idled")
         per_rank.append(held)
@@ -570,9 +577,7 @@ def parallel(dest, dirs, decomposition):
         "particle_steps_per_s": ps / wall if wall > 0 else None,
         "parcels_per_rank_at_end": per_rank,
     }
-    with open(dest, "w") as f:
-        json.dump(out, f, indent=1)
-        f.write("\n")
+    write_json(dest, out)
     return out
 
 
@@ -583,16 +588,11 @@ def concurrent(dest, dirs):
     runs are independent cases."""
     rates, per = 0.0, []
     for d in dirs:
-        lg = parse_log(os.path.join(d, "log.foam"))
-        if len(lg["wall"]) < 2 or len(lg["wall"]) != len(lg["cpu"]):
-            sys.exit(f"{d}/log.foam: {len(lg['cpu'])} ExecutionTime lines, {len(lg['wall'])} timed")
-        ps, wall = sum(lg["parcels"][1:]), lg["wall"][-1] - lg["wall"][0]
+        ps, wall = timed_steps(d)
         per.append({"dir": d, "particle_steps": ps, "wall_s": wall})
         rates += ps / wall
     out = {"code": "openfoam", "processes": len(dirs), "runs": per, "particle_steps_per_s": rates}
-    with open(dest, "w") as f:
-        json.dump(out, f, indent=1)
-        f.write("\n")
+    write_json(dest, out)
     return out
 
 
