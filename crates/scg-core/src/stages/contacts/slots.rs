@@ -272,11 +272,14 @@ fn list_touching(
     hits: &mut [u32],
     mut m: usize,
 ) -> usize {
-    use crate::physics::contact::pair::within_reach;
+    use crate::physics::contact::pair::{PairState, within_reach};
     use crate::simd::{F4, V4};
+    use core::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
     let n = range.end;
     let n4 = range.start + range.len() / 4 * 4;
     let periodic = !pairs.shift.is_empty();
+    // The pairs' states, for prefetching only (a hint that never faults).
+    let state: *const PairState = pairs.state.as_ptr();
     let mut separated = |at: usize, touch: bool| {
         if pairs.touching[at] && !touch {
             pairs.touching[at] = false;
@@ -299,6 +302,12 @@ fn list_touching(
         let touch = (dist2.not_ge(reach * reach).and(dist2.ne(F4::zero()))).bits();
         for l in 0..4 {
             hits[m] = (base + l) as u32;
+            if (touch >> l) & 1 != 0 {
+                // The kernel reads this pair's state within the block: load it now.
+                let p = state.wrapping_add(base + l) as *const i8;
+                _mm_prefetch::<_MM_HINT_T0>(p);
+                _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(size_of::<PairState>() - 1));
+            }
             m += ((touch >> l) & 1) as usize;
         }
         for l in 0..4 {
