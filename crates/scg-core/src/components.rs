@@ -108,6 +108,7 @@ pub struct WallHistory(pub Vec<(u32, DVec3)>);
 /// Constant body acceleration of a particle (gravity, reduced by buoyancy), m/s².
 /// Present only when the scene declares gravity.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
+#[repr(transparent)]
 pub struct BodyAcceleration(pub DVec3);
 
 /// The mesh cell holding the particle's centre at the end of the last step (mesh flows

@@ -9,5 +9,6 @@ pub mod mesh_flow;
 pub mod motion;
 pub mod outlet;
 pub mod recording;
+mod stokes_lanes;
 pub mod table;
 pub mod walls;

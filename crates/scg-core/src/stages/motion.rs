@@ -12,6 +12,7 @@ use bevy_ecs::prelude::*;
 use glam::DVec3;
 
 use super::contacts::ContactState;
+use super::stokes_lanes::{AffineFlow, AnyFlow, ClassifierFlow, Lanes, PlanarZ, stokes_piece};
 use super::table::{bypass, columns_mut};
 use super::walls::WallCandidates;
 use crate::components::*;
@@ -19,8 +20,8 @@ use crate::exec::par::{Rows, Split, for_each_piece};
 use crate::physics::drag::{DragLaw, particle_reynolds};
 use crate::physics::flow::{FlowField, Fluid};
 use crate::physics::integrate::{
-    Integrator, angular_kick, explicit_euler, explicit_substeps, exponential_drift,
-    exponential_factors, exponential_midpoint, linear_kick,
+    Integrator, angular_kick, explicit_euler, explicit_substeps, exponential_factors,
+    exponential_midpoint, linear_kick,
 };
 use crate::state::{Health, SimClock, StepDisplacement};
 use crate::step::{StepBuilder, StepSet, StepSystem};
@@ -281,30 +282,10 @@ fn drag_only_loop<const TRACK: bool, U: Fn(DVec3) -> DVec3>(
     (sum, d2max)
 }
 
-/// A flow in the x–y plane that does not depend on z (e.g. a vortex about z), in affine
-/// form: u = (m00·x + m01·y + b0, m10·x + m11·y + b1, 0).
-#[derive(Clone, Copy, Debug)]
-struct PlanarZ {
-    m: [f64; 4],
-    b: [f64; 2],
-}
-
-impl PlanarZ {
-    #[inline(always)]
-    fn velocity(&self, x: DVec3) -> DVec3 {
-        let [m00, m01, m10, m11] = self.m;
-        let [b0, b1] = self.b;
-        DVec3::new(m00 * x.x + m01 * x.y + b0, m10 * x.x + m11 * x.y + b1, 0.0)
-    }
-}
-
-/// A flow the Stokes fast path runs in: its velocity at a point, and the drag-only loop
-/// over a piece of the particle table (the scalar [`drag_only_loop`] unless the flow has
-/// a faster one with the same bits).
-trait StokesFlow: Copy + Send + Sync {
-    /// Fluid velocity at `x`, m/s.
-    fn velocity_at(&self, x: DVec3) -> DVec3;
-
+/// A flow the Stokes fast path runs in ([`Lanes`]: its velocity at a point, also four
+/// at a time), and the drag-only loop over a piece of the particle table (the scalar
+/// [`drag_only_loop`] unless the flow has a faster one with the same bits).
+trait StokesFlow: Lanes {
     /// [`drag_only_loop`] in this flow.
     fn drag_only<const TRACK: bool>(
         self,
@@ -313,23 +294,15 @@ trait StokesFlow: Copy + Send + Sync {
         sfs: &[StokesFactors],
         dt: f64,
     ) -> (DVec3, f64) {
-        drag_only_loop::<TRACK, _>(xs, vs, sfs, dt, move |x| self.velocity_at(x))
+        drag_only_loop::<TRACK, _>(xs, vs, sfs, dt, move |x| self.velocity(x))
     }
 }
 
-impl<U: Fn(DVec3) -> DVec3 + Copy + Send + Sync> StokesFlow for U {
-    #[inline(always)]
-    fn velocity_at(&self, x: DVec3) -> DVec3 {
-        self(x)
-    }
-}
+impl StokesFlow for AffineFlow {}
+impl StokesFlow for ClassifierFlow {}
+impl StokesFlow for AnyFlow {}
 
 impl StokesFlow for PlanarZ {
-    #[inline(always)]
-    fn velocity_at(&self, x: DVec3) -> DVec3 {
-        self.velocity(x)
-    }
-
     fn drag_only<const TRACK: bool>(
         self,
         xs: &mut [Position],
@@ -458,8 +431,12 @@ pub fn integrate_stokes_exponential(
             };
             stokes_kernel(q, dt, &health, disp, planar)
         }
-        Some(aff) => stokes_kernel(q, dt, &health, disp, move |x| aff.velocity(x)),
-        None => stokes_kernel(q, dt, &health, disp, move |x| flow.velocity(x)),
+        Some(aff) => stokes_kernel(q, dt, &health, disp, AffineFlow(aff)),
+        // Only the classifier is not affine (its nozzle makes it piecewise).
+        None => match ClassifierFlow::of(&flow) {
+            Some(c) => stokes_kernel(q, dt, &health, disp, c),
+            None => stokes_kernel(q, dt, &health, disp, AnyFlow(flow)),
+        },
     }
 }
 
@@ -471,20 +448,28 @@ fn stokes_kernel<U: StokesFlow>(
     disp: Option<&StepDisplacement>,
     flow: U,
 ) {
-    let columns = move_columns(&mut q);
-    let advance = move |p: Mover, (sf, fc): (&StokesFactors, &FluidCoupling)| {
-        let vk = p.kicked(dt);
-        let u = flow.velocity_at(p.x + vk * (0.5 * dt));
-        exponential_drift(p.x, vk, u, p.a, fc.tau, sf.gain, sf.relax, dt)
+    let Some(columns) = move_columns(&mut q) else {
+        if let Some(d) = disp {
+            d.mark_reported();
+        }
+        return;
     };
-    let drag_only = columns
-        .as_ref()
-        .is_some_and(|c| c.4.is_none() && c.5.is_none());
-    if !drag_only {
-        // No particle, or wall forces or gravity: the general per-particle step.
-        return move_pass(columns, health, disp, advance);
+    if columns.4.is_some() || columns.5.is_some() {
+        // Wall forces or gravity: the general step, four particles at a time.
+        for_each_piece(columns, move |piece| {
+            let (d2max, finite) = stokes_piece(piece, flow, dt);
+            if !finite {
+                health.raise();
+            }
+            if let Some(d) = disp {
+                d.record(d2max);
+            }
+        });
+        if let Some(d) = disp {
+            d.mark_reported();
+        }
+        return;
     }
-    let Some(columns) = columns else { return };
     // Drag only: the common case, kept free of per-particle branches.
     for_each_piece(columns, move |(xs, vs, (sfs, _), ..)| {
         // Any NaN or infinity makes the running sum non-finite: one test per piece.
