@@ -12,7 +12,10 @@ use bevy_ecs::prelude::*;
 use glam::DVec3;
 
 use super::contacts::ContactState;
-use super::stokes_lanes::{AffineFlow, AnyFlow, ClassifierFlow, Lanes, PlanarZ, stokes_piece};
+use super::move_lanes::{
+    AffineFlow, AnyFlow, BallisticDrift, ClassifierFlow, Drift, Lanes, MovePiece, PlanarZ,
+    StokesDrift, move_piece,
+};
 use super::table::{bypass, columns_mut};
 use super::walls::WallCandidates;
 use crate::components::*;
@@ -244,6 +247,32 @@ fn move_pass<S: DragRows>(
     }
 }
 
+/// [`move_pass`] for the moves of [`super::move_lanes`]: each piece moved by
+/// [`move_piece`] (four particles at a time) with the drift `drift` makes of the piece's
+/// drag columns.
+fn lanes_pass<'a, S: Split + 'a, D: Drift>(
+    columns: Option<Columns<'a, S>>,
+    health: &Health,
+    disp: Option<&StepDisplacement>,
+    dt: f64,
+    drift: impl Fn(S) -> D + Sync,
+) {
+    if let Some(columns) = columns {
+        for_each_piece(columns, |(x, v, drag, m, f, a)| {
+            let (d2max, finite) = move_piece(MovePiece { x, v, m, f, a }, drift(drag), dt);
+            if !finite {
+                health.raise();
+            }
+            if let Some(d) = disp {
+                d.record(d2max);
+            }
+        });
+    }
+    if let Some(d) = disp {
+        d.mark_reported();
+    }
+}
+
 /// The drag-only loop of the fast path (no forces, no body acceleration): returns the sum
 /// of all new positions and velocities (non-finite iff one of them is) and, with `TRACK`,
 /// the largest squared step displacement, m².
@@ -448,28 +477,22 @@ fn stokes_kernel<U: StokesFlow>(
     disp: Option<&StepDisplacement>,
     flow: U,
 ) {
-    let Some(columns) = move_columns(&mut q) else {
-        if let Some(d) = disp {
-            d.mark_reported();
-        }
-        return;
-    };
-    if columns.4.is_some() || columns.5.is_some() {
-        // Wall forces or gravity: the general step, four particles at a time.
-        for_each_piece(columns, move |piece| {
-            let (d2max, finite) = stokes_piece(piece, flow, dt);
-            if !finite {
-                health.raise();
-            }
-            if let Some(d) = disp {
-                d.record(d2max);
+    let columns = move_columns(&mut q);
+    let drag_only = columns
+        .as_ref()
+        .is_some_and(|c| c.4.is_none() && c.5.is_none());
+    if !drag_only {
+        // No particle, or wall forces or gravity: the general step, four at a time.
+        return lanes_pass(columns, health, disp, dt, |(factors, couplings)| {
+            StokesDrift {
+                flow,
+                factors,
+                couplings,
+                dt,
             }
         });
-        if let Some(d) = disp {
-            d.mark_reported();
-        }
-        return;
     }
+    let Some(columns) = columns else { return };
     // Drag only: the common case, kept free of per-particle branches.
     for_each_piece(columns, move |(xs, vs, (sfs, _), ..)| {
         // Any NaN or infinity makes the running sum non-finite: one test per piece.
@@ -571,10 +594,8 @@ pub fn integrate_ballistic(
 ) {
     let dt = clock.dt;
     let columns = move_columns(&mut q);
-    move_pass(columns, &health, disp.as_deref(), |p, ()| {
-        let vk = p.kicked(dt);
-        let x1 = p.x + vk * dt + 0.5 * p.a * dt * dt;
-        (x1, vk + p.a * dt)
+    lanes_pass(columns, &health, disp.as_deref(), dt, |()| BallisticDrift {
+        dt,
     });
 }
 

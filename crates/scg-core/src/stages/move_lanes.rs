@@ -1,14 +1,16 @@
-//! The general step of the Stokes fast path — wall forces or a body acceleration present —
-//! four particles at a time.
+//! The per-particle moves of the integration stage with wall forces or a body
+//! acceleration — Stokes drag in a flow, or no fluid — four particles at a time.
 //!
-//! [`stokes_piece`] moves one piece of the particle table: the wall kick
-//! ([`linear_kick`]), the flow at the predicted mid-step point and the exact exponential
-//! drift ([`exponential_drift`]), the finiteness test and the largest displacement, as
-//! the scalar per-particle step does. On x86-64 CPUs with AVX2 it runs four particles at
-//! a time with the same operations in the same order, unfused, so every lane gives the
-//! scalar step's bits (tested below); the flows here ([`Lanes`]) have a four-lane
-//! velocity written the same way. The paper's classifier (walls, a nozzle that makes the
-//! flow piecewise) spends most of its time in this step.
+//! [`move_piece`] moves one piece of the particle table: the wall kick ([`linear_kick`]),
+//! then a [`Drift`] — the flow at the predicted mid-step point and the exact exponential
+//! drift ([`StokesDrift`], [`exponential_drift`]), or the ballistic drift under the body
+//! acceleration ([`BallisticDrift`]) — then the finiteness test and the largest
+//! displacement, as the scalar per-particle step does. On x86-64 CPUs with AVX2 it runs
+//! four particles at a time with the same operations in the same order, unfused, so every
+//! lane gives the scalar step's bits (tested below); the flows here ([`Lanes`]) have a
+//! four-lane velocity written the same way. The paper's classifier (walls, and a nozzle
+//! that makes its flow piecewise) and the dense contact bed (walls, gravity, no fluid)
+//! spend their integration in this step.
 
 use glam::DVec3;
 
@@ -17,18 +19,6 @@ use crate::physics::flow::{Affine, FlowField, Vortex};
 use crate::physics::integrate::{exponential_drift, linear_kick};
 #[cfg(target_arch = "x86_64")]
 use crate::simd::{F4, V4};
-
-/// A piece of the particle table as the Stokes step reads it: positions, velocities,
-/// drag factors and couplings, masses, wall forces (with walls) and body accelerations
-/// (with gravity).
-pub(super) type StokesPiece<'a> = (
-    &'a mut [Position],
-    &'a mut [Velocity],
-    (&'a [StokesFactors], &'a [FluidCoupling]),
-    &'a [Mass],
-    Option<&'a [Force]>,
-    Option<&'a [BodyAcceleration]>,
-);
 
 /// A flow field with a scalar and a four-lane velocity that give the same bits.
 pub(super) trait Lanes: Copy + Send + Sync {
@@ -190,42 +180,127 @@ impl Lanes for ClassifierFlow {
     }
 }
 
-/// One particle's step (the scalar path): wall kick, flow at the predicted mid-step
-/// point, exponential drift.
-#[inline(always)]
-fn advance<L: Lanes>(piece: &StokesPiece, i: usize, flow: &L, dt: f64) -> (DVec3, DVec3) {
-    let (xs, vs, (sfs, fcs), ms, fs, gs) = piece;
-    let x = xs[i].0;
-    let vk = match fs {
-        Some(f) => linear_kick(vs[i].0, f[i].0, ms[i].0, dt),
-        None => vs[i].0,
-    };
-    let a = gs.map_or(DVec3::ZERO, |g| g[i].0);
-    let u = flow.velocity(x + vk * (0.5 * dt));
-    exponential_drift(x, vk, u, a, fcs[i].tau, sfs[i].gain, sfs[i].relax, dt)
+/// What moves a particle once its wall kick is applied: the exponential drift in a flow
+/// (Stokes drag) or the ballistic drift. `one` is the scalar step of row `i`; `four` the
+/// same for rows `k..k + 4`, lane by lane the same operations (`None`: these four take
+/// the scalar step).
+pub(super) trait Drift: Copy {
+    /// Position and velocity after the step of row `i`, from its position `x`, kicked
+    /// velocity `vk` and body acceleration `a`.
+    fn one(&self, i: usize, x: DVec3, vk: DVec3, a: DVec3) -> (DVec3, DVec3);
+
+    /// [`Drift::one`] for rows `k..k + 4`.
+    #[cfg(target_arch = "x86_64")]
+    fn four(&self, k: usize, x: V4, vk: V4, a: V4) -> Option<(V4, V4)>;
 }
 
-/// Rows `range` of a piece, one particle at a time: their new positions and velocities
-/// are written; returns the largest squared displacement and whether every result is
-/// finite.
-fn scalar_rows<L: Lanes>(
-    piece: &mut StokesPiece,
+/// Stokes drag, exponential scheme: the flow at the predicted mid-step point, then the
+/// exact drift ([`exponential_drift`]) with the precomputed factors.
+#[derive(Clone, Copy)]
+pub(super) struct StokesDrift<'a, L> {
+    /// The flow.
+    pub flow: L,
+    /// Drag factors per row.
+    pub factors: &'a [StokesFactors],
+    /// Couplings per row (τ).
+    pub couplings: &'a [FluidCoupling],
+    /// Time step, s.
+    pub dt: f64,
+}
+
+impl<L: Lanes> Drift for StokesDrift<'_, L> {
+    #[inline(always)]
+    fn one(&self, i: usize, x: DVec3, vk: DVec3, a: DVec3) -> (DVec3, DVec3) {
+        let (sf, fc) = (&self.factors[i], &self.couplings[i]);
+        let u = self.flow.velocity(x + vk * (0.5 * self.dt));
+        exponential_drift(x, vk, u, a, fc.tau, sf.gain, sf.relax, self.dt)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn four(&self, k: usize, x0: V4, vk: V4, a: V4) -> Option<(V4, V4)> {
+        let tau = F4::from_array(std::array::from_fn(|l| self.couplings[k + l].tau));
+        if F4::splat(f64::INFINITY).gt(tau.abs()).bits() != 0b1111 {
+            // A particle without drag (or a non-finite τ): its own branch, one by one.
+            return None;
+        }
+        let row = |f: fn(&StokesFactors) -> f64| {
+            F4::from_array(std::array::from_fn(|l| f(&self.factors[k + l])))
+        };
+        let (gain, relax) = (row(|s| s.gain), row(|s| s.relax));
+        // `exponential_drift` with finite τ.
+        let u = self.flow.velocity4(x0 + vk.scale(F4::splat(0.5 * self.dt)));
+        let w = u + a.scale(tau);
+        let dv = vk - w;
+        let x1 = x0 + w.scale(F4::splat(self.dt)) + dv.scale(relax);
+        Some((x1, vk - dv.scale(gain)))
+    }
+}
+
+/// No fluid: the exact drift under the body acceleration, x + v·dt + a·dt²/2.
+#[derive(Clone, Copy)]
+pub(super) struct BallisticDrift {
+    /// Time step, s.
+    pub dt: f64,
+}
+
+impl Drift for BallisticDrift {
+    #[inline(always)]
+    fn one(&self, _: usize, x: DVec3, vk: DVec3, a: DVec3) -> (DVec3, DVec3) {
+        let dt = self.dt;
+        (x + vk * dt + 0.5 * a * dt * dt, vk + a * dt)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn four(&self, _: usize, x: V4, vk: V4, a: V4) -> Option<(V4, V4)> {
+        let dt = F4::splat(self.dt);
+        let x1 = x + vk.scale(dt) + a.scale(F4::splat(0.5)).scale(dt).scale(dt);
+        Some((x1, vk + a.scale(dt)))
+    }
+}
+
+/// A piece of the particle table as a move reads it: positions, velocities, masses, wall
+/// forces (with walls) and body accelerations (with gravity).
+pub(super) struct MovePiece<'a> {
+    /// Positions, m.
+    pub x: &'a mut [Position],
+    /// Velocities, m/s.
+    pub v: &'a mut [Velocity],
+    /// Masses, kg.
+    pub m: &'a [Mass],
+    /// Wall forces of the step, N.
+    pub f: Option<&'a [Force]>,
+    /// Body accelerations, m/s².
+    pub a: Option<&'a [BodyAcceleration]>,
+}
+
+/// Rows `range` of a piece, one particle at a time: the wall kick ([`linear_kick`]) and
+/// `drift`; their new positions and velocities are written. Returns the largest squared
+/// displacement and whether every result is finite.
+fn scalar_rows<D: Drift>(
+    p: &mut MovePiece,
     range: std::ops::Range<usize>,
-    flow: &L,
+    drift: &D,
     dt: f64,
 ) -> (f64, bool) {
     let (mut d2max, mut finite) = (0.0_f64, true);
     for i in range {
-        let x = piece.0[i].0;
-        let (x1, v1) = advance(piece, i, flow, dt);
+        let x = p.x[i].0;
+        let vk = match p.f {
+            Some(f) => linear_kick(p.v[i].0, f[i].0, p.m[i].0, dt),
+            None => p.v[i].0,
+        };
+        let a = p.a.map_or(DVec3::ZERO, |g| g[i].0);
+        let (x1, v1) = drift.one(i, x, vk, a);
         // One test catches any NaN or infinity among the six numbers.
         finite &= (x1 + v1).element_sum().is_finite();
         let d2 = (x1 - x).length_squared();
         if d2 > d2max {
             d2max = d2;
         }
-        piece.0[i].0 = x1;
-        piece.1[i].0 = v1;
+        p.x[i].0 = x1;
+        p.v[i].0 = v1;
     }
     (d2max, finite)
 }
@@ -233,65 +308,51 @@ fn scalar_rows<L: Lanes>(
 /// Move the particles of a piece (see the module documentation): the largest squared
 /// displacement, m², and whether every new position and velocity is finite. Four at a
 /// time where the CPU has AVX2, with the scalar path's bits.
-pub(super) fn stokes_piece<L: Lanes>(mut piece: StokesPiece, flow: L, dt: f64) -> (f64, bool) {
-    let n = piece.0.len();
+pub(super) fn move_piece<D: Drift>(mut p: MovePiece, drift: D, dt: f64) -> (f64, bool) {
+    let n = p.x.len();
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2, checked just above.
-        return unsafe { stokes_piece_avx2(&mut piece, flow, dt) };
+        return unsafe { move_piece_avx2(&mut p, drift, dt) };
     }
-    scalar_rows(&mut piece, 0..n, &flow, dt)
+    scalar_rows(&mut p, 0..n, &drift, dt)
 }
 
-/// The four-lane body of [`stokes_piece`]; groups of four holding a particle without
-/// drag (τ = ∞, the ballistic branch) and the last `n % 4` rows take the scalar path.
+/// The four-lane body of [`move_piece`]; groups of four the drift declines and the last
+/// `n % 4` rows take the scalar path.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn stokes_piece_avx2<L: Lanes>(piece: &mut StokesPiece, flow: L, dt: f64) -> (f64, bool) {
-    let n = piece.0.len();
+fn move_piece_avx2<D: Drift>(p: &mut MovePiece, drift: D, dt: f64) -> (f64, bool) {
+    let n = p.x.len().min(p.v.len()).min(p.m.len());
     let n4 = n / 4 * 4;
-    let (half_dt, dtv) = (F4::splat(0.5 * dt), F4::splat(dt));
-    let inf = F4::splat(f64::INFINITY);
+    let (dtv, inf) = (F4::splat(dt), F4::splat(f64::INFINITY));
     let mut d2max = F4::zero();
     let (mut top, mut finite) = (0.0_f64, true);
     for k in (0..n4).step_by(4) {
-        let (xs, vs, (sfs, fcs), ms, fs, gs) = &mut *piece;
-        let tau = F4::from_array(std::array::from_fn(|l| fcs[k + l].tau));
-        if (inf.gt(tau.abs())).bits() != 0b1111 {
-            // A particle without drag (or a non-finite τ): its own branch, one by one.
-            let (d2, ok) = scalar_rows(piece, k..k + 4, &flow, dt);
-            top = top.max(d2);
-            finite &= ok;
-            continue;
-        }
-        let row = |s: &[StokesFactors], f: fn(&StokesFactors) -> f64| {
-            F4::from_array(std::array::from_fn(|l| f(&s[k + l])))
-        };
-        let (gain, relax) = (row(sfs, |s| s.gain), row(sfs, |s| s.relax));
-        let xp = xs[k..k + 4].as_mut_ptr() as *mut f64;
-        let vp = vs[k..k + 4].as_mut_ptr() as *mut f64;
+        let xp = p.x[k..k + 4].as_mut_ptr() as *mut f64;
+        let vp = p.v[k..k + 4].as_mut_ptr() as *mut f64;
         // SAFETY: four consecutive `Position`s, `Velocity`s, `Force`s and
         // `BodyAcceleration`s (transparent DVec3s) are 12 f64 each.
         let (x0, v0) = unsafe { (V4::load_aos(xp), V4::load_aos(vp)) };
-        let vk = match fs {
+        let vk = match p.f {
             Some(f) => {
                 // `linear_kick`: v + F·(dt/m).
                 let force = unsafe { V4::load_aos(f[k..k + 4].as_ptr() as *const f64) };
-                let m = F4::from_array(std::array::from_fn(|l| ms[k + l].0));
+                let m = F4::from_array(std::array::from_fn(|l| p.m[k + l].0));
                 v0 + force.scale(dtv / m)
             }
             None => v0,
         };
-        let a = match gs {
+        let a = match p.a {
             Some(g) => unsafe { V4::load_aos(g[k..k + 4].as_ptr() as *const f64) },
             None => V4::zero(),
         };
-        // `exponential_drift` with finite τ.
-        let u = flow.velocity4(x0 + vk.scale(half_dt));
-        let w = u + a.scale(tau);
-        let dv = vk - w;
-        let x1 = x0 + w.scale(dtv) + dv.scale(relax);
-        let v1 = vk - dv.scale(gain);
+        let Some((x1, v1)) = drift.four(k, x0, vk, a) else {
+            let (d2, ok) = scalar_rows(p, k..k + 4, &drift, dt);
+            top = top.max(d2);
+            finite &= ok;
+            continue;
+        };
         let s = x1 + v1;
         let sum = s.x + s.y + s.z;
         finite &= inf.gt(sum.abs()).bits() == 0b1111;
@@ -303,8 +364,8 @@ fn stokes_piece_avx2<L: Lanes>(piece: &mut StokesPiece, flow: L, dt: f64) -> (f6
             v1.store_aos(vp);
         }
     }
-    let (d2, ok) = scalar_rows(piece, n4..n, &flow, dt);
-    for v in d2max.to_array().into_iter().chain([top, d2]) {
+    let (d2, ok) = scalar_rows(p, n4..n, &drift, dt);
+    for v in d2max.to_array().into_iter().chain([d2]) {
         if v > top {
             top = v;
         }
@@ -392,8 +453,8 @@ mod tests {
     }
 
     /// Both paths on the same columns: the same bits of every position and velocity, the
-    /// same largest displacement and finiteness.
-    fn same_bits<L: Lanes>(flow: L, seed: u64) {
+    /// same largest displacement and finiteness; Stokes drag in `flow`, or no fluid.
+    fn same_bits<L: Lanes>(seed: u64, flow: Option<L>) {
         let dt = 2e-7;
         let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
         for (n, walls, gravity, ballistic, bad) in [
@@ -406,19 +467,29 @@ mod tests {
             let (xs, vs, sfs, fcs, ms, fs, gs) = columns(&mut rng, n, ballistic, bad);
             let run = |lanes: bool| {
                 let (mut x, mut v) = (xs.clone(), vs.clone());
-                let piece: StokesPiece = (
-                    &mut x,
-                    &mut v,
-                    (&sfs, &fcs),
-                    &ms,
-                    walls.then_some(&fs[..]),
-                    gravity.then_some(&gs[..]),
-                );
-                let mut piece = piece;
-                let (d2, ok) = if lanes {
-                    stokes_piece(piece, flow, dt)
-                } else {
-                    scalar_rows(&mut piece, 0..n, &flow, dt)
+                let mut piece = MovePiece {
+                    x: &mut x,
+                    v: &mut v,
+                    m: &ms,
+                    f: walls.then_some(&fs[..]),
+                    a: gravity.then_some(&gs[..]),
+                };
+                let (d2, ok) = match (flow, lanes) {
+                    (Some(flow), lanes) => {
+                        let d = StokesDrift {
+                            flow,
+                            factors: &sfs,
+                            couplings: &fcs,
+                            dt,
+                        };
+                        if lanes {
+                            move_piece(piece, d, dt)
+                        } else {
+                            scalar_rows(&mut piece, 0..n, &d, dt)
+                        }
+                    }
+                    (None, true) => move_piece(piece, BallisticDrift { dt }, dt),
+                    (None, false) => scalar_rows(&mut piece, 0..n, &BallisticDrift { dt }, dt),
                 };
                 (bits(&x, &v), d2.to_bits(), ok)
             };
@@ -432,51 +503,52 @@ mod tests {
         }
     }
 
-    /// The four-lane step gives the scalar step's bits in every flow with lanes, with and
-    /// without wall forces and gravity, with particles without drag among them, a
-    /// non-finite state and a tail after the last four (on CPUs without AVX2 both are the
-    /// scalar path).
+    /// The four-lane step gives the scalar step's bits in every flow with lanes and
+    /// without a fluid, with and without wall forces and gravity, with particles without
+    /// drag among them, a non-finite state and a tail after the last four (on CPUs
+    /// without AVX2 both are the scalar path).
     #[test]
     fn four_lanes_give_the_scalar_steps_bits() {
+        same_bits::<PlanarZ>(5, None);
         let vortex = Vortex {
             center: DVec3::new(1e-3, -2e-3, 0.01),
             axis: DVec3::new(0.1, -0.2, 0.9).normalize(),
             omega: 523.6,
             inflow_ratio: 5.0,
         };
+        let classifier = ClassifierFlow {
+            vortex,
+            nozzle_radius: 0.012,
+            axial_speed: 1.0,
+        };
+        same_bits(1, Some(classifier));
+        let about_z = Vortex {
+            axis: DVec3::Z,
+            ..vortex
+        };
         same_bits(
-            ClassifierFlow {
-                vortex,
-                nozzle_radius: 0.012,
-                axial_speed: 1.0,
-            },
-            1,
-        );
-        same_bits(
-            ClassifierFlow {
-                vortex: Vortex {
-                    axis: DVec3::Z,
-                    ..vortex
-                },
+            2,
+            Some(ClassifierFlow {
+                vortex: about_z,
                 nozzle_radius: 0.006,
                 axial_speed: -2.0,
-            },
-            2,
+            }),
         );
         same_bits(
-            PlanarZ {
+            3,
+            Some(PlanarZ {
                 m: [0.3, -1.7, 1.9, 0.2],
                 b: [0.5, -0.25],
-            },
-            3,
+            }),
         );
         same_bits(
-            AffineFlow(Affine {
+            4,
+            Some(AffineFlow(Affine {
                 m: DMat3::from_cols_array(&[0.3, -1.7, 1.9, 0.2, 0.4, -0.6, 1.1, 0.9, -0.8]),
                 b: DVec3::new(0.5, -0.25, 2.0),
-            }),
-            4,
+            })),
         );
+        same_bits(6, Some(AnyFlow(FlowField::Vortex(vortex))));
     }
 
     /// The classifier's lanes: the velocity of each lane equals the scalar velocity, inside
