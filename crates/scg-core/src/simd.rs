@@ -160,6 +160,15 @@ impl V4 {
             z: F4::zero(),
         }
     }
+    /// The same 3-vector in every lane.
+    #[inline(always)]
+    pub fn splat(v: glam::DVec3) -> V4 {
+        V4 {
+            x: F4::splat(v.x),
+            y: F4::splat(v.y),
+            z: F4::splat(v.z),
+        }
+    }
     /// As glam's `DVec3::dot`: (x·x′ + y·y′) + z·z′.
     #[inline(always)]
     pub fn dot(self, o: V4) -> F4 {

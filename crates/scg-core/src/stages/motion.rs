@@ -13,15 +13,14 @@ use glam::DVec3;
 
 use super::contacts::ContactState;
 use super::move_lanes::{
-    AffineFlow, AnyFlow, BallisticDrift, ClassifierFlow, Drift, Lanes, MovePiece, PlanarZ,
-    StokesDrift, move_piece,
+    BallisticDrift, ClassifierFlow, Drift, Lanes, MovePiece, PlanarZ, StokesDrift, move_piece,
 };
 use super::table::{bypass, columns_mut};
 use super::walls::WallCandidates;
 use crate::components::*;
 use crate::exec::par::{Rows, Split, for_each_piece};
 use crate::physics::drag::{DragLaw, particle_reynolds};
-use crate::physics::flow::{FlowField, Fluid};
+use crate::physics::flow::{Affine, FlowField, Fluid};
 use crate::physics::integrate::{
     Integrator, angular_kick, explicit_euler, explicit_substeps, exponential_factors,
     exponential_midpoint, linear_kick,
@@ -327,9 +326,9 @@ trait StokesFlow: Lanes {
     }
 }
 
-impl StokesFlow for AffineFlow {}
+impl StokesFlow for Affine {}
 impl StokesFlow for ClassifierFlow {}
-impl StokesFlow for AnyFlow {}
+impl StokesFlow for FlowField {}
 
 impl StokesFlow for PlanarZ {
     fn drag_only<const TRACK: bool>(
@@ -375,8 +374,6 @@ fn drag_only_planar_avx2<const TRACK: bool>(
     use core::arch::x86_64::*;
     let n = xs.len().min(vs.len()).min(sfs.len());
     let n4 = n / 4 * 4;
-    let [m00, m01, m10, m11] = flow.m.map(F4::splat);
-    let [b0, b1] = flow.b.map(F4::splat);
     let (half_dt, dtv) = (F4::splat(0.5 * dt), F4::splat(dt));
     let mut sum = V4::zero();
     let mut d2max = F4::zero();
@@ -400,12 +397,7 @@ fn drag_only_planar_avx2<const TRACK: bool>(
                 ))),
             )
         };
-        let h = x0 + v0.scale(half_dt);
-        let u = V4 {
-            x: m00 * h.x + m01 * h.y + b0,
-            y: m10 * h.x + m11 * h.y + b1,
-            z: F4::zero(),
-        };
+        let u = flow.velocity4(x0 + v0.scale(half_dt));
         let dv = v0 - u;
         let dx = u.scale(dtv) + dv.scale(relax);
         let (x1, v1) = (x0 + dx, v0 - dv.scale(gain));
@@ -460,11 +452,11 @@ pub fn integrate_stokes_exponential(
             };
             stokes_kernel(q, dt, &health, disp, planar)
         }
-        Some(aff) => stokes_kernel(q, dt, &health, disp, AffineFlow(aff)),
+        Some(aff) => stokes_kernel(q, dt, &health, disp, aff),
         // Only the classifier is not affine (its nozzle makes it piecewise).
         None => match ClassifierFlow::of(&flow) {
             Some(c) => stokes_kernel(q, dt, &health, disp, c),
-            None => stokes_kernel(q, dt, &health, disp, AnyFlow(flow)),
+            None => stokes_kernel(q, dt, &health, disp, flow),
         },
     }
 }

@@ -61,30 +61,22 @@ impl Lanes for PlanarZ {
     }
 }
 
-/// Any affine flow, u = M·x + b ([`Affine::velocity`]).
-#[derive(Clone, Copy, Debug)]
-pub(super) struct AffineFlow(pub Affine);
-
-impl Lanes for AffineFlow {
+/// Any affine flow, u = M·x + b.
+impl Lanes for Affine {
     #[inline(always)]
     fn velocity(&self, x: DVec3) -> DVec3 {
-        self.0.velocity(x)
+        Affine::velocity(self, x)
     }
 
     /// glam's `DMat3 * DVec3`: ((X·x + Y·y) + Z·z), then + b.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     fn velocity4(&self, x: V4) -> V4 {
-        let col = |c: DVec3| V4 {
-            x: F4::splat(c.x),
-            y: F4::splat(c.y),
-            z: F4::splat(c.z),
-        };
         let (mx, my, mz, b) = (
-            col(self.0.m.x_axis),
-            col(self.0.m.y_axis),
-            col(self.0.m.z_axis),
-            col(self.0.b),
+            V4::splat(self.m.x_axis),
+            V4::splat(self.m.y_axis),
+            V4::splat(self.m.z_axis),
+            V4::splat(self.b),
         );
         mx.scale(x.x) + my.scale(x.y) + mz.scale(x.z) + b
     }
@@ -120,15 +112,12 @@ impl ClassifierFlow {
     }
 }
 
-/// Any flow field, its lanes one lane at a time ([`FlowField::velocity`]; for a field
-/// none of the other flows here covers).
-#[derive(Clone, Copy, Debug)]
-pub(super) struct AnyFlow(pub FlowField);
-
-impl Lanes for AnyFlow {
+/// Any flow field, its lanes one lane at a time (for a field none of the other flows here
+/// covers).
+impl Lanes for FlowField {
     #[inline(always)]
     fn velocity(&self, x: DVec3) -> DVec3 {
-        self.0.velocity(x)
+        FlowField::velocity(self, x)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -136,7 +125,7 @@ impl Lanes for AnyFlow {
     fn velocity4(&self, x: V4) -> V4 {
         let (px, py, pz) = (x.x.to_array(), x.y.to_array(), x.z.to_array());
         let u: [DVec3; 4] =
-            std::array::from_fn(|l| self.0.velocity(DVec3::new(px[l], py[l], pz[l])));
+            std::array::from_fn(|l| FlowField::velocity(self, DVec3::new(px[l], py[l], pz[l])));
         V4 {
             x: F4::from_array(u.map(|u| u.x)),
             y: F4::from_array(u.map(|u| u.y)),
@@ -146,36 +135,28 @@ impl Lanes for AnyFlow {
 }
 
 impl Lanes for ClassifierFlow {
-    /// As [`crate::physics::flow::FlowField::velocity`] for the classifier, operation for
-    /// operation.
     #[inline(always)]
     fn velocity(&self, x: DVec3) -> DVec3 {
-        let v = &self.vortex;
-        let r = v.radial(x);
-        let u = v.omega * (v.axis.cross(r) - v.inflow_ratio * r);
-        if r.length_squared() < self.nozzle_radius * self.nozzle_radius {
-            u + self.axial_speed * v.axis
-        } else {
-            u
+        FlowField::Classifier {
+            vortex: self.vortex,
+            nozzle_radius: self.nozzle_radius,
+            axial_speed: self.axial_speed,
         }
+        .velocity(x)
     }
 
+    /// [`FlowField::velocity`]'s classifier arm, operation for operation.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     fn velocity4(&self, x: V4) -> V4 {
         let v = &self.vortex;
-        let splat = |c: DVec3| V4 {
-            x: F4::splat(c.x),
-            y: F4::splat(c.y),
-            z: F4::splat(c.z),
-        };
-        let (centre, axis) = (splat(v.center), splat(v.axis));
+        let (centre, axis) = (V4::splat(v.center), V4::splat(v.axis));
         // `Vortex::radial`: rel − (rel·a)·a.
         let rel = x - centre;
         let r = rel - axis.scale(rel.dot(axis));
         let u = (axis.cross(r) - r.scale(F4::splat(v.inflow_ratio))).scale(F4::splat(v.omega));
         let inside = F4::splat(self.nozzle_radius * self.nozzle_radius).gt(r.dot(r));
-        let axial = splat(self.axial_speed * v.axis);
+        let axial = V4::splat(self.axial_speed * v.axis);
         u.or_where(inside, u + axial)
     }
 }
@@ -543,12 +524,12 @@ mod tests {
         );
         same_bits(
             4,
-            Some(AffineFlow(Affine {
+            Some(Affine {
                 m: DMat3::from_cols_array(&[0.3, -1.7, 1.9, 0.2, 0.4, -0.6, 1.1, 0.9, -0.8]),
                 b: DVec3::new(0.5, -0.25, 2.0),
-            })),
+            }),
         );
-        same_bits(6, Some(AnyFlow(FlowField::Vortex(vortex))));
+        same_bits(6, Some(FlowField::Vortex(vortex)));
     }
 
     /// The classifier's lanes: the velocity of each lane equals the scalar velocity, inside
