@@ -13,7 +13,8 @@ use glam::DVec3;
 
 use super::contacts::ContactState;
 use super::move_lanes::{
-    BallisticDrift, ClassifierFlow, Drift, Lanes, MovePiece, PlanarZ, StokesDrift, move_piece,
+    BallisticDrift, ClassifierFlow, Drift, Lanes, MovePiece, Mover, PlanarZ, StokesDrift,
+    move_piece, scalar_rows,
 };
 use super::table::{bypass, columns_mut};
 use super::walls::WallCandidates;
@@ -23,7 +24,7 @@ use crate::physics::drag::{DragLaw, particle_reynolds};
 use crate::physics::flow::{Affine, FlowField, Fluid};
 use crate::physics::integrate::{
     Integrator, angular_kick, explicit_euler, explicit_substeps, exponential_factors,
-    exponential_midpoint, linear_kick,
+    exponential_midpoint,
 };
 use crate::state::{Health, SimClock, StepDisplacement};
 use crate::step::{StepBuilder, StepSet, StepSystem};
@@ -145,120 +146,19 @@ where
     columns_mut(q).map(|(xs, vs, drag, ms, fs, gs)| (bypass(xs), bypass(vs), drag, ms, fs, gs))
 }
 
-/// The drag columns of a move query, read row by row.
-trait DragRows: Split + Copy {
-    /// One particle's drag data.
-    type Row;
-    /// Row `i`.
-    fn row(&self, i: usize) -> Self::Row;
-}
-
-impl DragRows for () {
-    type Row = ();
-    fn row(&self, _: usize) {}
-}
-
-impl<'a> DragRows for &'a [FluidCoupling] {
-    type Row = &'a FluidCoupling;
-    fn row(&self, i: usize) -> &'a FluidCoupling {
-        &self[i]
-    }
-}
-
-impl<'a> DragRows for (&'a [StokesFactors], &'a [FluidCoupling]) {
-    type Row = (&'a StokesFactors, &'a FluidCoupling);
-    fn row(&self, i: usize) -> Self::Row {
-        (&self.0[i], &self.1[i])
-    }
-}
-
-/// Inputs of one particle's move: position (m), velocity (m/s), mass (kg), wall force of
-/// the step (N, when the scene has walls) and body acceleration (m/s²).
-struct Mover {
-    x: DVec3,
-    v: DVec3,
-    m: f64,
-    force: Option<DVec3>,
-    a: DVec3,
-}
-
-impl Mover {
-    /// Velocity after the wall kick: v + F/m·dt (unchanged without walls).
-    #[inline]
-    fn kicked(&self, dt: f64) -> DVec3 {
-        match self.force {
-            Some(f) => linear_kick(self.v, f, self.m, dt),
-            None => self.v,
-        }
-    }
-}
-
-/// Move the particles of one piece: `advance` gives each particle's new position and
-/// velocity; they are written back, a non-finite result raises the guard, and the largest
-/// displacement is recorded.
-#[inline(always)]
-fn move_rows<S: DragRows>(
-    (xs, vs, drag, ms, fs, gs): Columns<'_, S>,
-    health: &Health,
-    disp: Option<&StepDisplacement>,
-    advance: &impl Fn(Mover, S::Row) -> (DVec3, DVec3),
-) {
-    let mut d2max = 0.0_f64;
-    for i in 0..xs.len() {
-        let x = xs[i].0;
-        let mover = Mover {
-            x,
-            v: vs[i].0,
-            m: ms[i].0,
-            force: fs.map(|f| f[i].0),
-            a: gs.map_or(DVec3::ZERO, |g| g[i].0),
-        };
-        let (x1, v1) = advance(mover, drag.row(i));
-        // One test catches any NaN or infinity among the six numbers.
-        if !(x1 + v1).element_sum().is_finite() {
-            health.raise();
-        }
-        let d2 = (x1 - x).length_squared();
-        if d2 > d2max {
-            d2max = d2;
-        }
-        xs[i].0 = x1;
-        vs[i].0 = v1;
-    }
-    if let Some(d) = disp {
-        d.record(d2max);
-    }
-}
-
-/// [`move_rows`] over the particle table's columns (`None`: no particle), in pieces on
-/// the team; the step's displacements are then complete.
-fn move_pass<S: DragRows>(
-    columns: Option<Columns<'_, S>>,
-    health: &Health,
-    disp: Option<&StepDisplacement>,
-    advance: impl Fn(Mover, S::Row) -> (DVec3, DVec3) + Sync,
-) {
-    if let Some(columns) = columns {
-        for_each_piece(columns, |piece| move_rows(piece, health, disp, &advance));
-    }
-    if let Some(d) = disp {
-        d.mark_reported();
-    }
-}
-
-/// [`move_pass`] for the moves of [`super::move_lanes`]: each piece moved by
-/// [`move_piece`] (four particles at a time) with the drift `drift` makes of the piece's
-/// drag columns.
-fn lanes_pass<'a, S: Split + 'a, D: Drift>(
+/// The moves of a pass over the particle table's columns (`None`: no particle), in
+/// pieces on the team: `run` moves a piece (given its drag columns) and returns the
+/// largest squared displacement and whether every result is finite; a non-finite one
+/// raises the guard, and the step's displacements are then complete.
+fn piece_pass<'a, S: Split + 'a>(
     columns: Option<Columns<'a, S>>,
     health: &Health,
     disp: Option<&StepDisplacement>,
-    dt: f64,
-    drift: impl Fn(S) -> D + Sync,
+    run: impl Fn(MovePiece, S) -> (f64, bool) + Sync,
 ) {
     if let Some(columns) = columns {
         for_each_piece(columns, |(x, v, drag, m, f, a)| {
-            let (d2max, finite) = move_piece(MovePiece { x, v, m, f, a }, drift(drag), dt);
+            let (d2max, finite) = run(MovePiece { x, v, m, f, a }, drag);
             if !finite {
                 health.raise();
             }
@@ -270,6 +170,35 @@ fn lanes_pass<'a, S: Split + 'a, D: Drift>(
     if let Some(d) = disp {
         d.mark_reported();
     }
+}
+
+/// [`piece_pass`] one particle at a time: `advance` gives each particle's new position
+/// and velocity from its [`Mover`] and fluid coupling.
+fn move_pass<'a>(
+    columns: Option<Columns<'a, &'a [FluidCoupling]>>,
+    health: &Health,
+    disp: Option<&StepDisplacement>,
+    advance: impl Fn(Mover, &FluidCoupling) -> (DVec3, DVec3) + Sync,
+) {
+    piece_pass(columns, health, disp, |mut p, fcs| {
+        let n = p.x.len();
+        scalar_rows(&mut p, 0..n, |i, mover| advance(mover, &fcs[i]))
+    });
+}
+
+/// [`piece_pass`] with the moves of [`super::move_lanes`]: each piece moved by
+/// [`move_piece`] (four particles at a time) with the drift `drift` makes of the piece's
+/// drag columns.
+fn lanes_pass<'a, S: Split + 'a, D: Drift>(
+    columns: Option<Columns<'a, S>>,
+    health: &Health,
+    disp: Option<&StepDisplacement>,
+    dt: f64,
+    drift: impl Fn(S) -> D + Sync,
+) {
+    piece_pass(columns, health, disp, |p, drag| {
+        move_piece(p, drift(drag), dt)
+    });
 }
 
 /// The drag-only loop of the fast path (no forces, no body acceleration): returns the sum
@@ -480,7 +409,6 @@ fn stokes_kernel<U: StokesFlow>(
                 flow,
                 factors,
                 couplings,
-                dt,
             }
         });
     }
@@ -586,9 +514,7 @@ pub fn integrate_ballistic(
 ) {
     let dt = clock.dt;
     let columns = move_columns(&mut q);
-    lanes_pass(columns, &health, disp.as_deref(), dt, |()| BallisticDrift {
-        dt,
-    });
+    lanes_pass(columns, &health, disp.as_deref(), dt, |()| BallisticDrift);
 }
 
 #[cfg(test)]

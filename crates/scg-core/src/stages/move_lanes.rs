@@ -10,7 +10,9 @@
 //! lane gives the scalar step's bits (tested below); the flows here ([`Lanes`]) have a
 //! four-lane velocity written the same way. The paper's classifier (walls, and a nozzle
 //! that makes its flow piecewise) and the dense contact bed (walls, gravity, no fluid)
-//! spend their integration in this step.
+//! spend their integration in this step. [`scalar_rows`] is the one per-particle loop of
+//! every move (the Reynolds-dependent and explicit schemes of [`super::motion`] too): it
+//! writes the new states and reports the largest displacement and finiteness.
 
 use glam::DVec3;
 
@@ -162,17 +164,17 @@ impl Lanes for ClassifierFlow {
 }
 
 /// What moves a particle once its wall kick is applied: the exponential drift in a flow
-/// (Stokes drag) or the ballistic drift. `one` is the scalar step of row `i`; `four` the
-/// same for rows `k..k + 4`, lane by lane the same operations (`None`: these four take
-/// the scalar step).
+/// (Stokes drag) or the ballistic drift, over the time step `dt` (s). `one` is the scalar
+/// step of row `i`; `four` the same for rows `k..k + 4`, lane by lane the same operations
+/// (`None`: these four take the scalar step).
 pub(super) trait Drift: Copy {
     /// Position and velocity after the step of row `i`, from its position `x`, kicked
     /// velocity `vk` and body acceleration `a`.
-    fn one(&self, i: usize, x: DVec3, vk: DVec3, a: DVec3) -> (DVec3, DVec3);
+    fn one(&self, i: usize, x: DVec3, vk: DVec3, a: DVec3, dt: f64) -> (DVec3, DVec3);
 
     /// [`Drift::one`] for rows `k..k + 4`.
     #[cfg(target_arch = "x86_64")]
-    fn four(&self, k: usize, x: V4, vk: V4, a: V4) -> Option<(V4, V4)>;
+    fn four(&self, k: usize, x: V4, vk: V4, a: V4, dt: f64) -> Option<(V4, V4)>;
 }
 
 /// Stokes drag, exponential scheme: the flow at the predicted mid-step point, then the
@@ -181,25 +183,23 @@ pub(super) trait Drift: Copy {
 pub(super) struct StokesDrift<'a, L> {
     /// The flow.
     pub flow: L,
-    /// Drag factors per row.
+    /// Drag factors per row (for the scene's dt).
     pub factors: &'a [StokesFactors],
     /// Couplings per row (τ).
     pub couplings: &'a [FluidCoupling],
-    /// Time step, s.
-    pub dt: f64,
 }
 
 impl<L: Lanes> Drift for StokesDrift<'_, L> {
     #[inline(always)]
-    fn one(&self, i: usize, x: DVec3, vk: DVec3, a: DVec3) -> (DVec3, DVec3) {
+    fn one(&self, i: usize, x: DVec3, vk: DVec3, a: DVec3, dt: f64) -> (DVec3, DVec3) {
         let (sf, fc) = (&self.factors[i], &self.couplings[i]);
-        let u = self.flow.velocity(x + vk * (0.5 * self.dt));
-        exponential_drift(x, vk, u, a, fc.tau, sf.gain, sf.relax, self.dt)
+        let u = self.flow.velocity(x + vk * (0.5 * dt));
+        exponential_drift(x, vk, u, a, fc.tau, sf.gain, sf.relax, dt)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    fn four(&self, k: usize, x0: V4, vk: V4, a: V4) -> Option<(V4, V4)> {
+    fn four(&self, k: usize, x0: V4, vk: V4, a: V4, dt: f64) -> Option<(V4, V4)> {
         let tau = F4::from_array(std::array::from_fn(|l| self.couplings[k + l].tau));
         if F4::splat(f64::INFINITY).gt(tau.abs()).bits() != 0b1111 {
             // A particle without drag (or a non-finite τ): its own branch, one by one.
@@ -210,32 +210,28 @@ impl<L: Lanes> Drift for StokesDrift<'_, L> {
         };
         let (gain, relax) = (row(|s| s.gain), row(|s| s.relax));
         // `exponential_drift` with finite τ.
-        let u = self.flow.velocity4(x0 + vk.scale(F4::splat(0.5 * self.dt)));
+        let u = self.flow.velocity4(x0 + vk.scale(F4::splat(0.5 * dt)));
         let w = u + a.scale(tau);
         let dv = vk - w;
-        let x1 = x0 + w.scale(F4::splat(self.dt)) + dv.scale(relax);
+        let x1 = x0 + w.scale(F4::splat(dt)) + dv.scale(relax);
         Some((x1, vk - dv.scale(gain)))
     }
 }
 
 /// No fluid: the exact drift under the body acceleration, x + v·dt + a·dt²/2.
 #[derive(Clone, Copy)]
-pub(super) struct BallisticDrift {
-    /// Time step, s.
-    pub dt: f64,
-}
+pub(super) struct BallisticDrift;
 
 impl Drift for BallisticDrift {
     #[inline(always)]
-    fn one(&self, _: usize, x: DVec3, vk: DVec3, a: DVec3) -> (DVec3, DVec3) {
-        let dt = self.dt;
+    fn one(&self, _: usize, x: DVec3, vk: DVec3, a: DVec3, dt: f64) -> (DVec3, DVec3) {
         (x + vk * dt + 0.5 * a * dt * dt, vk + a * dt)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    fn four(&self, _: usize, x: V4, vk: V4, a: V4) -> Option<(V4, V4)> {
-        let dt = F4::splat(self.dt);
+    fn four(&self, _: usize, x: V4, vk: V4, a: V4, dt: f64) -> Option<(V4, V4)> {
+        let dt = F4::splat(dt);
         let x1 = x + vk.scale(dt) + a.scale(F4::splat(0.5)).scale(dt).scale(dt);
         Some((x1, vk + a.scale(dt)))
     }
@@ -256,24 +252,48 @@ pub(super) struct MovePiece<'a> {
     pub a: Option<&'a [BodyAcceleration]>,
 }
 
-/// Rows `range` of a piece, one particle at a time: the wall kick ([`linear_kick`]) and
-/// `drift`; their new positions and velocities are written. Returns the largest squared
+/// Inputs of one particle's move: position (m), velocity (m/s), mass (kg), wall force of
+/// the step (N, when the scene has walls) and body acceleration (m/s²).
+pub(super) struct Mover {
+    pub x: DVec3,
+    pub v: DVec3,
+    pub m: f64,
+    pub force: Option<DVec3>,
+    pub a: DVec3,
+}
+
+impl Mover {
+    /// Velocity after the wall kick: v + F/m·dt ([`linear_kick`]; unchanged without
+    /// walls).
+    #[inline(always)]
+    pub fn kicked(&self, dt: f64) -> DVec3 {
+        match self.force {
+            Some(f) => linear_kick(self.v, f, self.m, dt),
+            None => self.v,
+        }
+    }
+}
+
+/// Rows `range` of a piece, one particle at a time: `step` gives row `i`'s new position
+/// and velocity from its [`Mover`]; they are written. Returns the largest squared
 /// displacement and whether every result is finite.
-fn scalar_rows<D: Drift>(
+#[inline(always)]
+pub(super) fn scalar_rows(
     p: &mut MovePiece,
     range: std::ops::Range<usize>,
-    drift: &D,
-    dt: f64,
+    step: impl Fn(usize, Mover) -> (DVec3, DVec3),
 ) -> (f64, bool) {
     let (mut d2max, mut finite) = (0.0_f64, true);
     for i in range {
         let x = p.x[i].0;
-        let vk = match p.f {
-            Some(f) => linear_kick(p.v[i].0, f[i].0, p.m[i].0, dt),
-            None => p.v[i].0,
+        let mover = Mover {
+            x,
+            v: p.v[i].0,
+            m: p.m[i].0,
+            force: p.f.map(|f| f[i].0),
+            a: p.a.map_or(DVec3::ZERO, |g| g[i].0),
         };
-        let a = p.a.map_or(DVec3::ZERO, |g| g[i].0);
-        let (x1, v1) = drift.one(i, x, vk, a);
+        let (x1, v1) = step(i, mover);
         // One test catches any NaN or infinity among the six numbers.
         finite &= (x1 + v1).element_sum().is_finite();
         let d2 = (x1 - x).length_squared();
@@ -286,6 +306,17 @@ fn scalar_rows<D: Drift>(
     (d2max, finite)
 }
 
+/// [`scalar_rows`] with the wall kick and `drift`.
+#[inline(always)]
+fn drift_rows<D: Drift>(
+    p: &mut MovePiece,
+    range: std::ops::Range<usize>,
+    drift: &D,
+    dt: f64,
+) -> (f64, bool) {
+    scalar_rows(p, range, |i, m| drift.one(i, m.x, m.kicked(dt), m.a, dt))
+}
+
 /// Move the particles of a piece (see the module documentation): the largest squared
 /// displacement, m², and whether every new position and velocity is finite. Four at a
 /// time where the CPU has AVX2, with the scalar path's bits.
@@ -296,7 +327,7 @@ pub(super) fn move_piece<D: Drift>(mut p: MovePiece, drift: D, dt: f64) -> (f64,
         // SAFETY: the CPU supports AVX2, checked just above.
         return unsafe { move_piece_avx2(&mut p, drift, dt) };
     }
-    scalar_rows(&mut p, 0..n, &drift, dt)
+    drift_rows(&mut p, 0..n, &drift, dt)
 }
 
 /// The four-lane body of [`move_piece`]; groups of four the drift declines and the last
@@ -328,8 +359,8 @@ fn move_piece_avx2<D: Drift>(p: &mut MovePiece, drift: D, dt: f64) -> (f64, bool
             Some(g) => unsafe { V4::load_aos(g[k..k + 4].as_ptr() as *const f64) },
             None => V4::zero(),
         };
-        let Some((x1, v1)) = drift.four(k, x0, vk, a) else {
-            let (d2, ok) = scalar_rows(p, k..k + 4, &drift, dt);
+        let Some((x1, v1)) = drift.four(k, x0, vk, a, dt) else {
+            let (d2, ok) = drift_rows(p, k..k + 4, &drift, dt);
             top = top.max(d2);
             finite &= ok;
             continue;
@@ -345,7 +376,7 @@ fn move_piece_avx2<D: Drift>(p: &mut MovePiece, drift: D, dt: f64) -> (f64, bool
             v1.store_aos(vp);
         }
     }
-    let (d2, ok) = scalar_rows(p, n4..n, &drift, dt);
+    let (d2, ok) = drift_rows(p, n4..n, &drift, dt);
     for v in d2max.to_array().into_iter().chain([d2]) {
         if v > top {
             top = v;
@@ -461,16 +492,15 @@ mod tests {
                             flow,
                             factors: &sfs,
                             couplings: &fcs,
-                            dt,
                         };
                         if lanes {
                             move_piece(piece, d, dt)
                         } else {
-                            scalar_rows(&mut piece, 0..n, &d, dt)
+                            drift_rows(&mut piece, 0..n, &d, dt)
                         }
                     }
-                    (None, true) => move_piece(piece, BallisticDrift { dt }, dt),
-                    (None, false) => scalar_rows(&mut piece, 0..n, &BallisticDrift { dt }, dt),
+                    (None, true) => move_piece(piece, BallisticDrift, dt),
+                    (None, false) => drift_rows(&mut piece, 0..n, &BallisticDrift, dt),
                 };
                 (bits(&x, &v), d2.to_bits(), ok)
             };
