@@ -129,7 +129,8 @@ echo "wrote $out/grade.json"
 # by a vertical plane through its axis, so that the swirl shares the parcels between the
 # two halves (of the simple splits it ran fastest here: (2 1 1) 19.7 s, (1 2 1) 22.5 s,
 # (1 1 2) 26.0 s wall on the full scene). The run fails when a processor holds no parcel.
-decomposition="simple (2 1 1)"
+split="2 1 1"
+decomposition="simple ($split)"
 # copy_case SRC DST: a fresh copy of case SRC's inputs (no results) in DST.
 copy_case() {
     rm -rf "$2"
@@ -145,7 +146,7 @@ for d in "${runs[@]}"; do
     printf '%s\n' 'FoamFile' '{' '    version     2.0;' '    format      ascii;' \
         '    class       dictionary;' '    location    "system";' '    object      decomposeParDict;' \
         '}' 'numberOfSubdomains 2;' 'method          simple;' 'simpleCoeffs' '{' \
-        '    n           (2 1 1);' '}' > "$p/system/decomposeParDict"
+        "    n           ($split);" '}' > "$p/system/decomposeParDict"
     echo "== OpenFOAM, 2 ranks ($decomposition): $p"
     if ! (cd "$p" && decomposePar -force > log.decompose 2>&1); then
         tail -20 "$p/log.decompose" >&2
