@@ -34,13 +34,13 @@ pub fn apply_contact_kicks(
     assert_eq!(ids.len(), local, "{MOVED}");
     let vs = Velocity::peel_slice_mut(bypass(vs));
     let ws = AngularVelocity::peel_slice_mut(bypass(ws));
-    let slots = &st.slots;
     let (kick_v, kick_w) = (&st.kick_v, &st.kick_w);
     if !st.sparse {
         assert!(ParticleId::peel_slice(ids) == &st.ids[..local], "{MOVED}");
-        kick_all(vs, ws, slots, kick_v, kick_w);
+        kick_all(vs, ws, &mut st.slots, kick_v, kick_w);
         return;
     }
+    let slots = &st.slots;
     // The particles to visit on a sparse step, in slot order, each once.
     for s in slots {
         for &k in &s.touched {
@@ -63,54 +63,174 @@ pub fn apply_contact_kicks(
     }
 }
 
+/// Part of a slot's sums read by one chunk of the kicks: (first particle, rows).
+type SumsPart<'a> = (usize, &'a mut [[DVec3; 2]]);
+/// One chunk of the kicks: its velocities, angular velocities and parts of the sums.
+type Chunk<'a> = (&'a mut [DVec3], &'a mut [DVec3], Vec<SumsPart<'a>>);
+
 /// The kicks of [`apply_contact_kicks`] for every particle, in parallel chunks (each
-/// particle's update is independent). A chunk sums the slots covering it, in slot order,
-/// into a buffer (contiguous runs), then kicks.
-fn kick_all(v: &mut [DVec3], w: &mut [DVec3], slots: &[Slot], kick_v: &[f64], kick_w: &[f64]) {
+/// particle's update is independent). Each particle's force and torque are the covering
+/// slots' sums added in slot order (to zero first, as [`slot_sum`] adds them); the kick
+/// zeroes the rows it read, so the next force stage clears only what it left (the ghost
+/// rows of a decomposed run).
+fn kick_all(v: &mut [DVec3], w: &mut [DVec3], slots: &mut [Slot], kick_v: &[f64], kick_w: &[f64]) {
     const C: usize = 4096;
-    // Sums are built in blocks small enough to stay in the L1 cache.
-    const B: usize = 256;
-    let block = |base: usize, vc: &mut [DVec3], wc: &mut [DVec3]| {
-        let len = vc.len();
-        let mut f = [DVec3::ZERO; B];
-        let mut t = [DVec3::ZERO; B];
-        let (f, t) = (&mut f[..len], &mut t[..len]);
-        for s in slots {
-            let lo = base.max(s.base);
-            let hi = (base + len).min(s.base + s.sums.len());
-            if lo >= hi {
-                continue;
-            }
-            let ss = &s.sums[lo - s.base..hi - s.base];
-            for ((a, c), [b, d]) in f[lo - base..hi - base]
-                .iter_mut()
-                .zip(t[lo - base..hi - base].iter_mut())
-                .zip(ss)
-            {
-                *a += *b;
-                *c += *d;
-            }
+    let n = v.len();
+    // Each chunk's part of every slot's sums, in slot order: (first particle, rows).
+    let mut shares: Vec<Vec<SumsPart>> = (0..n.div_ceil(C)).map(|_| Vec::new()).collect();
+    for s in slots.iter_mut() {
+        let base = s.base;
+        let end = (base + s.sums.len()).min(n);
+        let mut rest: &mut [[DVec3; 2]] = &mut s.sums;
+        let mut at = base;
+        while at < end {
+            let k = at / C;
+            let stop = ((k + 1) * C).min(end);
+            let (mine, tail) = std::mem::take(&mut rest).split_at_mut(stop - at);
+            shares[k].push((at, mine));
+            (rest, at) = (tail, stop);
         }
-        let kv = &kick_v[base..base + len];
-        for ((v, f), k) in vc.iter_mut().zip(&*f).zip(kv) {
-            *v += *f * *k;
-        }
-        let kw = &kick_w[base..base + len];
-        for ((w, t), k) in wc.iter_mut().zip(&*t).zip(kw) {
-            *w += *t * *k;
-        }
-    };
-    let chunk = |base: usize, vc: &mut [DVec3], wc: &mut [DVec3]| {
-        for (b, (vb, wb)) in vc.chunks_mut(B).zip(wc.chunks_mut(B)).enumerate() {
-            block(base + b * B, vb, wb);
-        }
-    };
-    if v.len() < 2 * C {
-        chunk(0, v, w);
+        s.consumed = n;
+    }
+    let mut work: Vec<Chunk> = (v.chunks_mut(C).zip(w.chunks_mut(C)).zip(shares))
+        .map(|((vc, wc), parts)| (vc, wc, parts))
+        .collect();
+    crate::exec::team::for_each_item(&mut work, |k, (vc, wc, parts)| {
+        kick_rows(k * C, vc, wc, parts, kick_v, kick_w)
+    });
+}
+
+/// Kick particles `base..base + v.len()` with the sums of `parts` (slot order), zeroing
+/// the rows read.
+fn kick_rows(
+    base: usize,
+    v: &mut [DVec3],
+    w: &mut [DVec3],
+    parts: &mut [SumsPart],
+    kick_v: &[f64],
+    kick_w: &[f64],
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2, checked just above.
+        unsafe { kick_rows_avx2(base, v, w, parts, kick_v, kick_w) };
         return;
     }
-    // (velocities, angular velocities) of each chunk; chunk k starts at particle k·C.
-    let mut work: Vec<(&mut [DVec3], &mut [DVec3])> =
-        v.chunks_mut(C).zip(w.chunks_mut(C)).collect();
-    crate::exec::team::for_each_item(&mut work, |k, (vc, wc)| chunk(k * C, vc, wc));
+    kick_rows_body(base, v, w, parts, kick_v, kick_w);
+}
+
+/// [`kick_rows`] compiled for AVX2 (the same operations: no fused multiply–adds).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn kick_rows_avx2(
+    base: usize,
+    v: &mut [DVec3],
+    w: &mut [DVec3],
+    parts: &mut [SumsPart],
+    kick_v: &[f64],
+    kick_w: &[f64],
+) {
+    kick_rows_body(base, v, w, parts, kick_v, kick_w);
+}
+
+#[inline(always)]
+fn kick_rows_body(
+    base: usize,
+    v: &mut [DVec3],
+    w: &mut [DVec3],
+    parts: &mut [SumsPart],
+    kick_v: &[f64],
+    kick_w: &[f64],
+) {
+    let (kick_v, kick_w) = (&kick_v[base..base + v.len()], &kick_w[base..base + v.len()]);
+    for (l, (v, w)) in v.iter_mut().zip(w.iter_mut()).enumerate() {
+        let p = base + l;
+        let (mut f, mut t) = (DVec3::ZERO, DVec3::ZERO);
+        for (start, rows) in parts.iter_mut() {
+            if let Some(r) = p.checked_sub(*start).and_then(|o| rows.get_mut(o)) {
+                f += r[0];
+                t += r[1];
+                *r = [DVec3::ZERO; 2];
+            }
+        }
+        *v += f * kick_v[l];
+        *w += t * kick_w[l];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::stages::contacts::slots::layout_slots;
+    use rand::{Rng, SeedableRng};
+
+    /// The dense kicks add each particle's covering slot sums in slot order (the bits of
+    /// [`slot_sum`]), zero the rows they read and leave the ghost rows to the next
+    /// clear, which then leaves every sum zero.
+    #[test]
+    fn dense_kicks_add_the_slots_in_order_and_consume_them() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let (local, ghosts) = (9000usize, 500usize);
+        let rows = local + ghosts;
+        let mut pairs: Vec<[u32; 2]> = (0..40_000)
+            .map(|_| {
+                let i = rng.random_range(0..local as u32);
+                [i, rng.random_range(i + 1..=(i + 1800).min(rows as u32 - 1))]
+            })
+            .collect();
+        pairs.sort_unstable();
+        let mut slots = layout_slots(&pairs, rows);
+        assert!(slots.len() > 2, "{} slots", slots.len());
+        let mut draw = || DVec3::new(rng.random(), rng.random(), rng.random()) - 0.5;
+        for s in &mut slots {
+            for r in &mut s.sums {
+                *r = [draw(), draw()];
+            }
+            s.dirty = true;
+        }
+        let v: Vec<DVec3> = (0..local).map(|_| draw()).collect();
+        let w: Vec<DVec3> = (0..local).map(|_| draw() * 100.0).collect();
+        let kick_v: Vec<f64> = (0..local).map(|_| rng.random_range(1.0..2.0)).collect();
+        let kick_w: Vec<f64> = (0..local).map(|_| rng.random_range(1e3..2e3)).collect();
+        let expected: Vec<(DVec3, DVec3)> = (0..local)
+            .map(|k| {
+                let (f, t) = slot_sum(&slots, k);
+                (v[k] + f * kick_v[k], w[k] + t * kick_w[k])
+            })
+            .collect();
+        let ghost_rows: Vec<[DVec3; 2]> = (local..rows)
+            .flat_map(|k| {
+                slots
+                    .iter()
+                    .filter(move |s| s.covers(k))
+                    .map(move |s| s.sums[k - s.base])
+            })
+            .collect();
+        let (mut v2, mut w2) = (v.clone(), w.clone());
+        kick_all(&mut v2, &mut w2, &mut slots, &kick_v, &kick_w);
+        let bits = |a: DVec3| a.to_array().map(f64::to_bits);
+        for k in 0..local {
+            assert_eq!(bits(v2[k]), bits(expected[k].0), "v of {k}");
+            assert_eq!(bits(w2[k]), bits(expected[k].1), "w of {k}");
+            assert!(
+                slots
+                    .iter()
+                    .all(|s| !s.covers(k) || s.sums[k - s.base] == [DVec3::ZERO; 2])
+            );
+        }
+        let ghost_after: Vec<[DVec3; 2]> = (local..rows)
+            .flat_map(|k| {
+                slots
+                    .iter()
+                    .filter(move |s| s.covers(k))
+                    .map(move |s| s.sums[k - s.base])
+            })
+            .collect();
+        assert!(!ghost_rows.is_empty());
+        assert_eq!(ghost_rows, ghost_after, "the ghost rows are not kicked");
+        for s in &mut slots {
+            s.clear(1);
+            assert!(s.sums.iter().all(|r| *r == [DVec3::ZERO; 2]));
+        }
+    }
 }

@@ -9,7 +9,8 @@
 //!   a time with [`crate::physics::contact::lanes`], the same bits) and adds it to its two
 //!   particles (+F on i, −F exactly on j) in the slot of the pair;
 //! * [`kicks::apply_contact_kicks`] (first of StepSet::Integration) adds the slots' sums
-//!   per particle in slot order and kicks v and ω.
+//!   per particle in slot order and kicks v and ω (after a dense step it zeroes the sums
+//!   as it reads them, so the next force stage has nothing left to clear).
 //!
 //! The result is bit-identical whatever the thread count.
 //!
@@ -32,7 +33,7 @@ use crate::physics::neighbour::NeighbourList;
 use crate::physics::periodic::PeriodicBox;
 use crate::state::StepDisplacement;
 use crate::step::{StepBuilder, StepSet, StepSystem};
-use slots::{Slot, slot_sum};
+use slots::Slot;
 
 /// Particle–particle contact settings (part of [`crate::SimConfig`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -139,12 +140,6 @@ impl ContactState {
             marked: Vec::new(),
             active: 0,
         }
-    }
-
-    /// The summed contact force (N) and torque (N·m) on the particle at row `k`
-    /// (`ids[k]`) from this step's force stage.
-    pub fn contact_force(&self, k: usize) -> (DVec3, DVec3) {
-        slot_sum(&self.slots, k)
     }
 
     /// One line on the neighbour list for run reports: builds (their time and the last

@@ -45,7 +45,8 @@ const LIST_BLOCK: usize = 64;
 /// One slot of the force accumulation: a fixed range of the pair list whose forces are
 /// summed, in pair order, into per-particle arrays covering particles `base..base+len`.
 /// Invariant between steps: the arrays are zero except where the last step wrote
-/// (`touched`, or anywhere when `dirty`).
+/// (`touched`, or anywhere when `dirty`) and the kicks did not zero what they read
+/// (the rows below `consumed`).
 #[derive(Debug, Default)]
 pub(super) struct Slot {
     /// Pair indices of this slot.
@@ -58,8 +59,11 @@ pub(super) struct Slot {
     pub(super) touched: Vec<u32>,
     /// `touched` membership, local indices.
     marked: Vec<bool>,
-    /// Written anywhere (a dense step): clear everything before the next step.
-    dirty: bool,
+    /// Written anywhere (a dense step): clear everything before the next step, but for
+    /// the rows the kicks zeroed (`consumed`).
+    pub(super) dirty: bool,
+    /// The rows below this one were zeroed by the kicks that read them (0: none).
+    pub(super) consumed: usize,
     /// Contacts started this step, per group.
     pub(super) collisions: Vec<u64>,
     /// Pairs in contact this step.
@@ -78,9 +82,10 @@ impl Slot {
     }
 
     /// Zero what the last step wrote.
-    fn clear(&mut self, groups: usize) {
+    pub(super) fn clear(&mut self, groups: usize) {
         if self.dirty {
-            self.sums.fill([DVec3::ZERO; 2]);
+            let from = self.consumed.saturating_sub(self.base).min(self.sums.len());
+            self.sums[from..].fill([DVec3::ZERO; 2]);
             self.dirty = false;
         } else {
             for &k in &self.touched {
@@ -89,6 +94,7 @@ impl Slot {
                 self.marked[l] = false;
             }
         }
+        self.consumed = 0;
         self.touched.clear();
         self.collisions.clear();
         self.collisions.resize(groups, 0);
@@ -258,6 +264,29 @@ impl Slot {
     }
 }
 
+/// For each 4-bit lane mask, its set lanes in ascending order (then zeros).
+#[cfg(target_arch = "x86_64")]
+const COMPACT: [[u32; 4]; 16] = {
+    let mut t = [[0u32; 4]; 16];
+    let mut mask = 0;
+    while mask < 16 {
+        let (mut l, mut k) = (0, 0);
+        while l < 4 {
+            if mask >> l & 1 != 0 {
+                t[mask][k] = l as u32;
+                k += 1;
+            }
+            l += 1;
+        }
+        mask += 1;
+    }
+    t
+};
+
+/// Set lanes of each 4-bit lane mask.
+#[cfg(target_arch = "x86_64")]
+const COUNT: [u8; 16] = [0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4];
+
 /// The first pass of the four-lane path: list the pairs `range` of `pairs` that touch
 /// in `hits` from `hits[m]` on (in pair order; returns the new count) and clear the pairs
 /// that stopped touching, four pairs at a time with the scalar kernel's test,
@@ -274,20 +303,21 @@ fn list_touching(
 ) -> usize {
     use crate::physics::contact::pair::{PairState, within_reach};
     use crate::simd::{F4, V4};
-    use core::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+    use core::arch::x86_64::*;
     let n = range.end;
     let n4 = range.start + range.len() / 4 * 4;
     let periodic = !pairs.shift.is_empty();
     // The pairs' states, for prefetching only (a hint that never faults).
     let state: *const PairState = pairs.state.as_ptr();
-    let mut separated = |at: usize, touch: bool| {
+    // A pair that stopped touching loses its history.
+    let separated = |pairs: &mut PairsMut, at: usize, touch: bool| {
         if pairs.touching[at] && !touch {
             pairs.touching[at] = false;
             pairs.state[at].history = DVec3::ZERO;
         }
     };
     for base in (range.start..n4).step_by(4) {
-        let ij: [[u32; 2]; 4] = std::array::from_fn(|l| pairs.ij[base + l]);
+        let ij: [[u32; 2]; 4] = pairs.ij[base..base + 4].try_into().expect("four");
         let (i, j) = (ij.map(|p| p[0] as usize), ij.map(|p| p[1] as usize));
         let row = |k: usize| &b.pos[k] as *const DVec3 as *const f64;
         // SAFETY: each pointer addresses a DVec3 (three f64); four shifts are 12 f64.
@@ -299,19 +329,36 @@ fn list_touching(
         let dist2 = d.dot(d);
         let reach = F4::from_array(i.map(|k| b.radius[k])) + F4::from_array(j.map(|k| b.radius[k]));
         // `within_reach` on four lanes: !(|d|² ≥ reach²) and |d|² ≠ 0, NaN counting in.
-        let touch = (dist2.not_ge(reach * reach).and(dist2.ne(F4::zero()))).bits();
-        for l in 0..4 {
-            hits[m] = (base + l) as u32;
-            if (touch >> l) & 1 != 0 {
-                // The kernel reads this pair's state within the block: load it now.
-                let p = state.wrapping_add(base + l) as *const i8;
-                _mm_prefetch::<_MM_HINT_T0>(p);
-                _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(size_of::<PairState>() - 1));
-            }
-            m += ((touch >> l) & 1) as usize;
+        let touch = (dist2.not_ge(reach * reach).and(dist2.ne(F4::zero()))).bits() as usize;
+        // The touching lanes' pair indices, in order, at hits[m..]: four written, the
+        // touching ones counted.
+        let at = hits[m..m + 4].as_mut_ptr();
+        // SAFETY: `at` addresses four u32 (the slice just taken).
+        unsafe {
+            let lanes = _mm_loadu_si128(COMPACT[touch].as_ptr() as *const __m128i);
+            let ids = _mm_add_epi32(lanes, _mm_set1_epi32(base as i32));
+            _mm_storeu_si128(at as *mut __m128i, ids);
         }
+        m += COUNT[touch] as usize;
+        // The kernel reads the touching ones' states within the block: load the four
+        // states' lines now (each state's first byte and the last one's last byte reach
+        // every line they span).
         for l in 0..4 {
-            separated(base + l, touch & (1 << l) != 0);
+            _mm_prefetch::<_MM_HINT_T0>(state.wrapping_add(base + l) as *const i8);
+        }
+        let last = state.wrapping_add(base + 4) as *const i8;
+        _mm_prefetch::<_MM_HINT_T0>(last.wrapping_sub(1));
+        // The pairs that stopped touching (rare: a test of all four first).
+        let was: [bool; 4] = pairs.touching[base..base + 4].try_into().expect("four");
+        let was = was
+            .iter()
+            .enumerate()
+            .fold(0, |a, (l, &w)| a | usize::from(w) << l);
+        let gone = was & !touch;
+        if gone != 0 {
+            for l in 0..4 {
+                separated(pairs, base + l, gone & (1 << l) == 0);
+            }
         }
     }
     for at in n4..n {
@@ -326,7 +373,7 @@ fn list_touching(
         let touch = within_reach(dist2, reach);
         hits[m] = at as u32;
         m += usize::from(touch);
-        separated(at, touch);
+        separated(pairs, at, touch);
     }
     m
 }
