@@ -133,6 +133,8 @@ fn kick_rows_avx2(
     kick_rows_body(base, v, w, parts, kick_v, kick_w);
 }
 
+/// The kicks of [`kick_rows`]: the chunk is cut where the set of covering parts changes,
+/// and each piece runs a loop over its particles with that set fixed.
 #[inline(always)]
 fn kick_rows_body(
     base: usize,
@@ -142,19 +144,77 @@ fn kick_rows_body(
     kick_v: &[f64],
     kick_w: &[f64],
 ) {
-    let (kick_v, kick_w) = (&kick_v[base..base + v.len()], &kick_w[base..base + v.len()]);
-    for (l, (v, w)) in v.iter_mut().zip(w.iter_mut()).enumerate() {
-        let p = base + l;
-        let (mut f, mut t) = (DVec3::ZERO, DVec3::ZERO);
-        for (start, rows) in parts.iter_mut() {
-            if let Some(r) = p.checked_sub(*start).and_then(|o| rows.get_mut(o)) {
-                f += r[0];
-                t += r[1];
-                *r = [DVec3::ZERO; 2];
+    let len = v.len();
+    let (kick_v, kick_w) = (&kick_v[base..base + len], &kick_w[base..base + len]);
+    // Chunk-local places where a part starts or ends.
+    let mut cuts: Vec<usize> = vec![0, len];
+    for (start, rows) in parts.iter() {
+        cuts.extend([start - base, start - base + rows.len()]);
+    }
+    cuts.sort_unstable();
+    cuts.dedup();
+    for piece in cuts.windows(2) {
+        let (lo, hi) = (piece[0], piece[1]);
+        // The parts covering lo..hi, in slot order, cut to it.
+        let cover: Vec<&mut [[DVec3; 2]]> = parts
+            .iter_mut()
+            .filter(|(start, rows)| *start <= base + lo && base + hi <= *start + rows.len())
+            .map(|(start, rows)| &mut rows[base + lo - *start..base + hi - *start])
+            .collect();
+        let (v, w) = (&mut v[lo..hi], &mut w[lo..hi]);
+        let (kv, kw) = (&kick_v[lo..hi], &kick_w[lo..hi]);
+        match cover.len() {
+            0 => kick_piece::<0>([], v, w, kv, kw),
+            1 => kick_piece::<1>(fixed(cover), v, w, kv, kw),
+            2 => kick_piece::<2>(fixed(cover), v, w, kv, kw),
+            3 => kick_piece::<3>(fixed(cover), v, w, kv, kw),
+            _ => {
+                let mut cover = cover;
+                for (p, (v, w)) in v.iter_mut().zip(w.iter_mut()).enumerate() {
+                    let (mut f, mut t) = (DVec3::ZERO, DVec3::ZERO);
+                    for rows in cover.iter_mut() {
+                        let [rf, rt] = std::mem::take(&mut rows[p]);
+                        f += rf;
+                        t += rt;
+                    }
+                    *v += f * kv[p];
+                    *w += t * kw[p];
+                }
             }
         }
-        *v += f * kick_v[l];
-        *w += t * kick_w[l];
+    }
+}
+
+/// The `K` parts of a piece, as an array.
+#[inline(always)]
+fn fixed<const K: usize>(cover: Vec<&mut [[DVec3; 2]]>) -> [&mut [[DVec3; 2]]; K] {
+    cover.try_into().unwrap_or_else(|_| unreachable!("K parts"))
+}
+
+/// Kick a piece covered by `K` parts (each as long as `v`): the parts' rows added to zero
+/// in order, then zeroed.
+#[inline(always)]
+fn kick_piece<const K: usize>(
+    mut cover: [&mut [[DVec3; 2]]; K],
+    v: &mut [DVec3],
+    w: &mut [DVec3],
+    kv: &[f64],
+    kw: &[f64],
+) {
+    let n = v.len();
+    let (w, kv, kw) = (&mut w[..n], &kv[..n], &kw[..n]);
+    for rows in cover.iter_mut() {
+        *rows = &mut std::mem::take(rows)[..n];
+    }
+    for p in 0..n {
+        let (mut f, mut t) = (DVec3::ZERO, DVec3::ZERO);
+        for rows in cover.iter_mut() {
+            let [rf, rt] = std::mem::take(&mut rows[p]);
+            f += rf;
+            t += rt;
+        }
+        v[p] += f * kv[p];
+        w[p] += t * kw[p];
     }
 }
 
@@ -169,13 +229,20 @@ mod tests {
     /// clear, which then leaves every sum zero.
     #[test]
     fn dense_kicks_add_the_slots_in_order_and_consume_them() {
+        // Up to three slots cover a particle; up to seven.
+        for reach in [1800, 6000] {
+            kicks_against_slot_sums(reach);
+        }
+    }
+
+    fn kicks_against_slot_sums(reach: u32) {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         let (local, ghosts) = (9000usize, 500usize);
         let rows = local + ghosts;
         let mut pairs: Vec<[u32; 2]> = (0..40_000)
             .map(|_| {
                 let i = rng.random_range(0..local as u32);
-                [i, rng.random_range(i + 1..=(i + 1800).min(rows as u32 - 1))]
+                [i, rng.random_range(i + 1..=(i + reach).min(rows as u32 - 1))]
             })
             .collect();
         pairs.sort_unstable();
@@ -206,6 +273,10 @@ mod tests {
                     .map(move |s| s.sums[k - s.base])
             })
             .collect();
+        let most = (0..rows)
+            .map(|k| slots.iter().filter(|s| s.covers(k)).count())
+            .max();
+        assert!(most > Some(if reach > 2000 { 4 } else { 2 }), "{most:?}");
         let (mut v2, mut w2) = (v.clone(), w.clone());
         kick_all(&mut v2, &mut w2, &mut slots, &kick_v, &kick_w);
         let bits = |a: DVec3| a.to_array().map(f64::to_bits);
