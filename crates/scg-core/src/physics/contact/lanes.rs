@@ -130,7 +130,11 @@ mod x86 {
             at.map(|k| pairs.ij[k][0] as usize),
             at.map(|k| pairs.ij[k][1] as usize),
         );
-        let v3 = |a: &[glam::DVec3], r: [usize; 4]| r.map(|k| &a[k] as *const _ as *const f64);
+        // SAFETY (`v3`, `radius`): every i and j indexes `b`'s arrays (the contract).
+        let v3 = |a: &[glam::DVec3], r: [usize; 4]| {
+            r.map(|k| unsafe { a.as_ptr().add(k) } as *const f64)
+        };
+        let radius = |k: usize| unsafe { *b.radius.get_unchecked(k) };
         // SAFETY: every pointer addresses a DVec3 (three consecutive f64, `repr(C)`).
         let (pi, pj, shift, vi, vj, wi, wj, hist) = unsafe {
             (
@@ -139,7 +143,7 @@ mod x86 {
                 if pairs.shift.is_empty() {
                     V4::zero()
                 } else {
-                    V4::gather(v3(pairs.shift, at))
+                    V4::gather(at.map(|k| &pairs.shift[k] as *const _ as *const f64))
                 },
                 V4::gather(v3(b.vel, i)),
                 V4::gather(v3(b.vel, j)),
@@ -148,8 +152,8 @@ mod x86 {
                 V4::gather(ps.map(|p| &p.history as *const _ as *const f64)),
             )
         };
-        let ri = F4::from_array(i.map(|k| b.radius[k]));
-        let rj = F4::from_array(j.map(|k| b.radius[k]));
+        let ri = F4::from_array(i.map(radius));
+        let rj = F4::from_array(j.map(radius));
         let r_eff = F4::from_array(ps.map(|p| p.hertz.r_eff));
         let sr = F4::from_array(ps.map(|p| p.hertz.sqrt_r));
         let smk = F4::from_array(ps.map(|p| p.hertz.smk));

@@ -242,7 +242,10 @@ mod tests {
         let mut pairs: Vec<[u32; 2]> = (0..40_000)
             .map(|_| {
                 let i = rng.random_range(0..local as u32);
-                [i, rng.random_range(i + 1..=(i + reach).min(rows as u32 - 1))]
+                [
+                    i,
+                    rng.random_range(i + 1..=(i + reach).min(rows as u32 - 1)),
+                ]
             })
             .collect();
         pairs.sort_unstable();

@@ -292,6 +292,10 @@ const COUNT: [u8; 16] = [0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4];
 /// that stopped touching, four pairs at a time with the scalar kernel's test,
 /// [`crate::physics::contact::pair::within_reach`]. `hits` must have room for
 /// `m + range.len()`.
+///
+/// Every pair listed has both particle indices inside `b`'s arrays (checked here, four
+/// pairs at a time; a pair outside them panics), which is what the four-lane kernel
+/// needs of the pairs it is given.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn list_touching(
@@ -316,10 +320,31 @@ fn list_touching(
             pairs.state[at].history = DVec3::ZERO;
         }
     };
+    // Rows every array of `b` has: particle indices below it are read unchecked.
+    let rows = (b
+        .pos
+        .len()
+        .min(b.vel.len())
+        .min(b.omega.len())
+        .min(b.radius.len()))
+    .min(u32::MAX as usize) as u32;
+    let sign = _mm256_set1_epi32(i32::MIN);
+    let limit = _mm256_set1_epi32((rows ^ 0x8000_0000) as i32);
     for base in (range.start..n4).step_by(4) {
-        let ij: [[u32; 2]; 4] = pairs.ij[base..base + 4].try_into().expect("four");
+        let ij: &[[u32; 2]; 4] = pairs.ij[base..base + 4].try_into().expect("four");
+        // The eight indices below `rows` (unsigned, compared as signed with the sign bit
+        // flipped), or a panic.
+        // SAFETY: `ij` is four [u32; 2], 32 bytes.
+        let inside = unsafe {
+            let raw = _mm256_loadu_si256(ij.as_ptr() as *const __m256i);
+            _mm256_movemask_epi8(_mm256_cmpgt_epi32(limit, _mm256_xor_si256(raw, sign)))
+        };
+        assert!(inside == -1, "a pair indexes past the particle arrays");
         let (i, j) = (ij.map(|p| p[0] as usize), ij.map(|p| p[1] as usize));
-        let row = |k: usize| &b.pos[k] as *const DVec3 as *const f64;
+        // SAFETY (here and below): every index of `i` and `j` is below `rows`, checked
+        // just above.
+        let row = |k: usize| unsafe { b.pos.as_ptr().add(k) } as *const f64;
+        let radius = |k: usize| unsafe { *b.radius.get_unchecked(k) };
         // SAFETY: each pointer addresses a DVec3 (three f64); four shifts are 12 f64.
         let mut d = unsafe { V4::gather(j.map(row)) - V4::gather(i.map(row)) };
         if periodic {
@@ -327,7 +352,7 @@ fn list_touching(
             d = d - unsafe { V4::load_aos(s) };
         }
         let dist2 = d.dot(d);
-        let reach = F4::from_array(i.map(|k| b.radius[k])) + F4::from_array(j.map(|k| b.radius[k]));
+        let reach = F4::from_array(i.map(radius)) + F4::from_array(j.map(radius));
         // `within_reach` on four lanes: !(|d|² ≥ reach²) and |d|² ≠ 0, NaN counting in.
         let touch = (dist2.not_ge(reach * reach).and(dist2.ne(F4::zero()))).bits() as usize;
         // The touching lanes' pair indices, in order, at hits[m..]: four written, the
