@@ -110,7 +110,8 @@ mod x86 {
     /// resistance is not included.
     ///
     /// # Safety
-    /// The CPU must support AVX2; every `idx[l]` must index `pairs`, and every `i`, `j`
+    /// The CPU must support AVX2; every `idx[l]` must index each of `pairs`' arrays
+    /// (`ij`, `touching`, `state`, and `shift` unless it is empty), and every `i`, `j`
     /// of those pairs must index `b`'s arrays.
     #[target_feature(enable = "avx2")]
     #[inline]
@@ -125,11 +126,11 @@ mod x86 {
         dt: f64,
     ) -> LaneOut {
         let at = idx.map(|k| k as usize);
-        let ps = at.map(|k| &pairs.state[k]);
-        let (i, j) = (
-            at.map(|k| pairs.ij[k][0] as usize),
-            at.map(|k| pairs.ij[k][1] as usize),
-        );
+        // SAFETY (here and below, for `at`): every idx[l] indexes `pairs` (the contract),
+        // whose arrays are as long as its pair list (or `shift` empty).
+        let ps = at.map(|k| unsafe { pairs.state.get_unchecked(k) });
+        let ij = at.map(|k| unsafe { *pairs.ij.get_unchecked(k) });
+        let (i, j) = (ij.map(|p| p[0] as usize), ij.map(|p| p[1] as usize));
         // SAFETY (`v3`, `radius`): every i and j indexes `b`'s arrays (the contract).
         let v3 = |a: &[glam::DVec3], r: [usize; 4]| {
             r.map(|k| unsafe { a.as_ptr().add(k) } as *const f64)
@@ -143,7 +144,7 @@ mod x86 {
                 if pairs.shift.is_empty() {
                     V4::zero()
                 } else {
-                    V4::gather(at.map(|k| &pairs.shift[k] as *const _ as *const f64))
+                    V4::gather(at.map(|k| pairs.shift.as_ptr().add(k) as *const f64))
                 },
                 V4::gather(v3(b.vel, i)),
                 V4::gather(v3(b.vel, j)),
@@ -224,14 +225,15 @@ mod x86 {
         let h = rows(history.x, history.y, history.z, F4::zero());
         for (l, &k) in at.iter().enumerate().take(live) {
             if friction > 0.0 {
-                let to = &mut pairs.state[k].history as *mut glam::DVec3 as *mut f64;
+                let to = unsafe { &mut pairs.state.get_unchecked_mut(k).history }
+                    as *mut glam::DVec3 as *mut f64;
                 // SAFETY: `to` addresses a DVec3, three f64: x and y, then z.
                 unsafe {
                     _mm_storeu_pd(to, _mm256_castpd256_pd128(h[l]));
                     _mm_store_sd(to.add(2), _mm256_extractf128_pd::<1>(h[l]));
                 }
             }
-            pairs.touching[k] = true;
+            unsafe { *pairs.touching.get_unchecked_mut(k) = true };
         }
         let mut out = LaneOut::default();
         let fj = -force;

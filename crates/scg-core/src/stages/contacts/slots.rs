@@ -134,6 +134,14 @@ impl Slot {
     ) {
         use crate::physics::contact::lanes::hertz_mindlin_x4;
         self.clear(groups);
+        // The kernel reads the pair arrays unchecked at the listed pairs (below `n`).
+        let n = pairs.len();
+        assert!(
+            pairs.touching.len() == n
+                && pairs.state.len() == n
+                && (pairs.shift.is_empty() || pairs.shift.len() == n),
+            "pair arrays of unequal lengths"
+        );
         let b = &k.bodies;
         let mut hits = std::mem::take(&mut self.hits);
         hits.resize(LIST_BLOCK + 4, 0);
@@ -144,7 +152,6 @@ impl Slot {
         // Listed and computed a block at a time, so that the particles the listing read
         // are still in the first-level cache when their pairs are computed; the touching
         // pairs carried over to the next block (fewer than four) keep the pair order.
-        let n = pairs.len();
         let (mut pending, mut start) = (0, 0);
         while start < n {
             let end = (start + LIST_BLOCK).min(n);
@@ -154,8 +161,9 @@ impl Slot {
                 let live = chunk.len();
                 let idx: [u32; 4] = std::array::from_fn(|l| chunk[l.min(live - 1)]);
                 let was = idx.map(|a| pairs.touching[a as usize]);
-                // SAFETY: AVX2 is enabled here; the indices come from `pairs`, whose particle
-                // indices index the kernel's arrays.
+                // SAFETY: AVX2 is enabled here; the listed pairs are below `n`, the length of
+                // every pair array (asserted above), and their particle indices were checked
+                // against the kernel's arrays as they were listed.
                 let out = unsafe { hertz_mindlin_x4(pairs, idx, live, b, &k.par, law, k.dt) };
                 for l in 0..live {
                     let at = idx[l] as usize;
@@ -388,6 +396,7 @@ fn list_touching(
     }
     for at in n4..n {
         let [i, j] = pairs.ij[at];
+        assert!(i.max(j) < rows, "a pair indexes past the particle arrays");
         let (i, j) = (i as usize, j as usize);
         let mut d = b.pos[j] - b.pos[i];
         if periodic {
@@ -562,6 +571,68 @@ mod tests {
     use crate::physics::contact::pair::{PairArrays, PairState};
     use crate::physics::contact::{NormalLaw, TangentialLaw};
     use rand::{Rng, SeedableRng};
+
+    /// A pair indexing past the particle arrays stops the slot loop (the four-lane path
+    /// reads the arrays unchecked after its own test) rather than reading beyond them.
+    #[test]
+    #[should_panic(expected = "past the particle arrays")]
+    fn a_pair_past_the_particles_panics() {
+        if !cfg!(target_arch = "x86_64") || !std::arch::is_x86_feature_detected!("avx2") {
+            panic!("a pair indexes past the particle arrays (no AVX2 here: nothing to check)");
+        }
+        let n = 8;
+        let pos: Vec<DVec3> = (0..n).map(|k| DVec3::X * k as f64 * 1e-3).collect();
+        let (vel, radius) = (vec![DVec3::ZERO; n], vec![0.6e-3; n]);
+        let material = Material {
+            youngs_modulus: 1e8,
+            poisson_ratio: 0.3,
+            restitution: 0.6,
+            friction: 0.4,
+        };
+        let par = super::super::ContactConfig {
+            law: NormalLaw::hertz(0.6),
+            material,
+            skin: 1e-4,
+            periodic: None,
+            rolling_friction: 0.0,
+            tangential_stiffness: crate::physics::contact::tangential::TangentialStiffness::Mindlin,
+        }
+        .pair_params();
+        let list: Vec<[u32; 2]> = (0..n as u32 - 1)
+            .map(|i| [i, i + 1])
+            .chain([[6, 40]])
+            .collect();
+        let mut pairs = PairArrays::default();
+        for _ in &list {
+            pairs.touching.push(false);
+            pairs.state.push(PairState {
+                history: DVec3::ZERO,
+                hertz: HertzPair::new(par.e_eff, 0.3e-3, 1e-6),
+            });
+        }
+        let group = vec![0; n];
+        let kernel = Kernel {
+            bodies: Bodies {
+                pos: &pos,
+                vel: &vel,
+                omega: &vel,
+                radius: &radius,
+            },
+            par,
+            lanes: HertzMindlin::of(&par),
+            dt: 1e-6,
+            group: &group,
+            local: n,
+        };
+        let mut slot = Slot {
+            pairs: 0..list.len(),
+            base: 0,
+            sums: vec![[DVec3::ZERO; 2]; 64],
+            marked: vec![false; 64],
+            ..Default::default()
+        };
+        slot.run(&mut pairs.view(&list, 0..list.len()), &kernel, 1, false);
+    }
 
     /// The four-lane AVX2 path of the slot loop (rolling resistance included) gives the
     /// same sums, histories and contact flags, bit for bit, as the portable one.
