@@ -160,16 +160,19 @@ impl Slot {
             for chunk in hits[..full].chunks(4) {
                 let live = chunk.len();
                 let idx: [u32; 4] = std::array::from_fn(|l| chunk[l.min(live - 1)]);
-                let was = idx.map(|a| pairs.touching[a as usize]);
+                // SAFETY (`was`, `ij` below): the listed pairs are below `n`, the length of
+                // every pair array (asserted above).
+                let was = idx.map(|a| unsafe { *pairs.touching.get_unchecked(a as usize) });
                 // SAFETY: AVX2 is enabled here; the listed pairs are below `n`, the length of
                 // every pair array (asserted above), and their particle indices were checked
                 // against the kernel's arrays as they were listed.
                 let out = unsafe { hertz_mindlin_x4(pairs, idx, live, b, &k.par, law, k.dt) };
                 for l in 0..live {
                     let at = idx[l] as usize;
-                    let [i, j] = pairs.ij[at];
+                    let [i, j] = unsafe { *pairs.ij.get_unchecked(at) };
                     if whole && was[l] {
                         self.add_whole(i as usize, j as usize, &out, l);
+                        self.active += 1;
                         continue;
                     }
                     let hertz = pairs.state[at].hertz;
@@ -196,7 +199,7 @@ impl Slot {
 
     /// [`Slot::credit`] for lane `l` of `out`, the pair (i, j) whose contact went on,
     /// without rolling resistance or bookkeeping: its rows added to the sums whole, the
-    /// same additions component by component.
+    /// same additions component by component (the caller counts it in `active`).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     #[inline]
@@ -219,7 +222,6 @@ impl Slot {
                 _mm_storeu_pd(s.add(4), b);
             }
         }
-        self.active += 1;
     }
 
     /// The scalar path, pair by pair.
