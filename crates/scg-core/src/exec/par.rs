@@ -148,6 +148,45 @@ pub fn for_each_piece<P: Split>(columns: P, body: impl Fn(P) + Sync) {
     run_pieces(columns, parallel_min(), piece, body);
 }
 
+/// Listed rows per piece of [`for_each_listed_piece`].
+const LISTED_PIECE: usize = 128;
+
+/// `body` on `columns` cut so that each piece holds about [`LISTED_PIECE`] of the `listed`
+/// rows (ascending row numbers), the pieces on the team; `None`: [`for_each_piece`]. For
+/// passes that visit only listed rows, each costly (a wall contact): cut by rows, a list
+/// gathered at one end of the table would fall in one piece, on one thread. The cuts
+/// depend on the list only, and `body` must treat rows independently.
+pub fn for_each_listed_piece<P: Split>(
+    columns: P,
+    listed: Option<&[u32]>,
+    body: impl Fn(P) + Sync,
+) {
+    let Some(listed) = listed else {
+        return for_each_piece(columns, body);
+    };
+    let rows = columns.rows();
+    let per = LISTED_PIECE.min(parallel_min().div_ceil(2).max(1));
+    if rows == usize::MAX || listed.len() < 2 * per {
+        body(columns);
+        return;
+    }
+    let mut pieces = Vec::with_capacity(listed.len().div_ceil(per));
+    // `rest` starts at row `at`; each cut is a listed row (ascending, distinct: after `at`).
+    let (mut rest, mut at) = (columns, 0);
+    for k in (per..listed.len()).step_by(per) {
+        let cut = (listed[k] as usize).min(rows);
+        let (a, b) = rest.split_at(cut - at);
+        pieces.push(Some(a));
+        (rest, at) = (b, cut);
+    }
+    pieces.push(Some(rest));
+    super::team::for_each_item(&mut pieces, |_, p| {
+        if let Some(p) = p.take() {
+            body(p)
+        }
+    });
+}
+
 /// How many times a plain per-particle update (a few ns) a row of
 /// [`for_each_piece_heavy`] costs, roughly.
 const HEAVY: usize = 64;
@@ -224,6 +263,28 @@ pub fn par_max_zip<A: Sync, B: Sync>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Pieces cut at listed rows hold about [`LISTED_PIECE`] listed rows each, cover the
+    /// table once, and a list gathered at one end of the table is still spread.
+    #[test]
+    fn listed_pieces_share_the_list() {
+        let rows = 100_000;
+        let listed: Vec<u32> = (0..1000).map(|k| 3 * k + 1).collect();
+        let seen = std::sync::Mutex::new(Vec::new());
+        for_each_listed_piece(Rows(0..rows), Some(&listed), |piece| {
+            let mine = piece.within(&listed).len();
+            seen.lock().unwrap().push((piece.0.clone(), mine));
+        });
+        let mut seen = seen.into_inner().unwrap();
+        seen.sort_by_key(|(r, _)| r.start);
+        let per = LISTED_PIECE.min(parallel_min().div_ceil(2).max(1));
+        assert_eq!(seen.len(), listed.len().div_ceil(per));
+        assert!(seen.iter().all(|(_, m)| (1..=per).contains(m)), "{seen:?}");
+        assert_eq!(seen.iter().map(|(_, m)| m).sum::<usize>(), listed.len());
+        assert_eq!(seen[0].0.start, 0);
+        assert_eq!(seen.last().unwrap().0.end, rows);
+        assert!(seen.windows(2).all(|w| w[0].0.end == w[1].0.start));
+    }
 
     /// Row ranges cut like columns, and each piece finds exactly its members of a sorted
     /// row list.

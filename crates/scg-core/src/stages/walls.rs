@@ -18,7 +18,7 @@ use glam::DVec3;
 use super::contacts::ContactState;
 use super::table::{bypass, columns_mut};
 use crate::components::*;
-use crate::exec::par::{Rows, for_each_piece};
+use crate::exec::par::{Rows, for_each_listed_piece};
 use crate::physics::contact::tangential::{rolling_torque, tangential_force};
 use crate::physics::contact::{Material, NormalLaw, TangentialLaw};
 use crate::physics::trimesh::{MeshContact, MeshScratch};
@@ -183,7 +183,7 @@ pub fn wall_normal_forces(
     let contacts = contacts.as_deref();
     let current = candidates.current(contacts);
     let columns = (xs, vs, ds, ms, bypass(fs), Rows(0..xs.len()));
-    for_each_piece(columns, |(xs, vs, ds, ms, fs, rows)| {
+    for_each_listed_piece(columns, current, |(xs, vs, ds, ms, fs, rows)| {
         let (mut scratch, mut found) = (MeshScratch::default(), Vec::new());
         let visit = |i: usize| {
             let (x, v, r, m) = (xs[i].0, vs[i].0, 0.5 * ds[i].0, ms[i].0);
@@ -365,27 +365,33 @@ pub fn wall_contact_forces(
         (bypass(fs), bypass(ts), &mut *hs),
         Rows(0..xs.len()),
     );
-    for_each_piece(columns, |((xs, vs, ws, ds, ms), (fs, ts, hs), rows)| {
-        let (mut scratch, mut found) = (MeshScratch::default(), Vec::new());
-        let visit = |i: usize| {
-            let r = 0.5 * ds[i].0;
-            if hs[i].0.is_empty() && walls.walls.iter().all(|w| w.shape.surely_clear(xs[i].0, r)) {
-                return;
-            }
-            let (f, t) = one(
-                xs[i].0,
-                vs[i].0,
-                ws[i].0,
-                ds[i].0,
-                ms[i].0,
-                &mut hs[i].0,
-                &mut scratch,
-                &mut found,
-            );
-            fs[i].0 = f;
-            ts[i].0 = t;
-        };
-        rows.visit(current, visit);
-    });
+    for_each_listed_piece(
+        columns,
+        current,
+        |((xs, vs, ws, ds, ms), (fs, ts, hs), rows)| {
+            let (mut scratch, mut found) = (MeshScratch::default(), Vec::new());
+            let visit = |i: usize| {
+                let r = 0.5 * ds[i].0;
+                if hs[i].0.is_empty()
+                    && walls.walls.iter().all(|w| w.shape.surely_clear(xs[i].0, r))
+                {
+                    return;
+                }
+                let (f, t) = one(
+                    xs[i].0,
+                    vs[i].0,
+                    ws[i].0,
+                    ds[i].0,
+                    ms[i].0,
+                    &mut hs[i].0,
+                    &mut scratch,
+                    &mut found,
+                );
+                fs[i].0 = f;
+                ts[i].0 = t;
+            };
+            rows.visit(current, visit);
+        },
+    );
     candidates.refresh(contacts, walls, xs, ds, |i| !hs[i].0.is_empty());
 }
