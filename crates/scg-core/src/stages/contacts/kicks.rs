@@ -95,55 +95,60 @@ fn kick_all(v: &mut [DVec3], w: &mut [DVec3], slots: &mut [Slot], kick_v: &[f64]
     let mut work: Vec<Chunk> = (v.chunks_mut(C).zip(w.chunks_mut(C)).zip(shares))
         .map(|((vc, wc), parts)| (vc, wc, parts))
         .collect();
-    crate::exec::team::for_each_item(&mut work, |k, (vc, wc, parts)| {
-        kick_rows(k * C, vc, wc, parts, kick_v, kick_w)
+    crate::exec::team::for_each_item(&mut work, |k, (v, w, parts)| {
+        kick_rows(KickChunk {
+            base: k * C,
+            v,
+            w,
+            parts,
+            kick_v,
+            kick_w,
+        })
     });
 }
 
-/// Kick particles `base..base + v.len()` with the sums of `parts` (slot order), zeroing
-/// the rows read.
-fn kick_rows(
+/// One chunk of the dense kicks: particles `base..base + v.len()`, their velocities,
+/// angular velocities and the parts of the sums covering them (slot order), and every
+/// particle's kick factors.
+struct KickChunk<'a, 'p> {
     base: usize,
-    v: &mut [DVec3],
-    w: &mut [DVec3],
-    parts: &mut [SumsPart],
-    kick_v: &[f64],
-    kick_w: &[f64],
-) {
+    v: &'a mut [DVec3],
+    w: &'a mut [DVec3],
+    parts: &'a mut [SumsPart<'p>],
+    kick_v: &'a [f64],
+    kick_w: &'a [f64],
+}
+
+/// Kick a chunk with the sums of its parts (slot order), zeroing the rows read.
+fn kick_rows(c: KickChunk) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2, checked just above.
-        unsafe { kick_rows_avx2(base, v, w, parts, kick_v, kick_w) };
+        unsafe { kick_rows_avx2(c) };
         return;
     }
-    kick_rows_body(base, v, w, parts, kick_v, kick_w);
+    kick_rows_body(c);
 }
 
 /// [`kick_rows`] compiled for AVX2 (the same operations: no fused multiply–adds).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn kick_rows_avx2(
-    base: usize,
-    v: &mut [DVec3],
-    w: &mut [DVec3],
-    parts: &mut [SumsPart],
-    kick_v: &[f64],
-    kick_w: &[f64],
-) {
-    kick_rows_body(base, v, w, parts, kick_v, kick_w);
+fn kick_rows_avx2(c: KickChunk) {
+    kick_rows_body(c);
 }
 
 /// The kicks of [`kick_rows`]: the chunk is cut where the set of covering parts changes,
 /// and each piece runs a loop over its particles with that set fixed.
 #[inline(always)]
-fn kick_rows_body(
-    base: usize,
-    v: &mut [DVec3],
-    w: &mut [DVec3],
-    parts: &mut [SumsPart],
-    kick_v: &[f64],
-    kick_w: &[f64],
-) {
+fn kick_rows_body(c: KickChunk) {
+    let KickChunk {
+        base,
+        v,
+        w,
+        parts,
+        kick_v,
+        kick_w,
+    } = c;
     let len = v.len();
     let (kick_v, kick_w) = (&kick_v[base..base + len], &kick_w[base..base + len]);
     // Chunk-local places where a part starts or ends.
@@ -268,14 +273,18 @@ mod tests {
                 (v[k] + f * kick_v[k], w[k] + t * kick_w[k])
             })
             .collect();
-        let ghost_rows: Vec<[DVec3; 2]> = (local..rows)
-            .flat_map(|k| {
-                slots
-                    .iter()
-                    .filter(move |s| s.covers(k))
-                    .map(move |s| s.sums[k - s.base])
-            })
-            .collect();
+        // The slots' rows of the ghost particles.
+        let ghosts = |slots: &[Slot]| -> Vec<[DVec3; 2]> {
+            (local..rows)
+                .flat_map(|k| {
+                    slots
+                        .iter()
+                        .filter(move |s| s.covers(k))
+                        .map(move |s| s.sums[k - s.base])
+                })
+                .collect()
+        };
+        let ghost_rows = ghosts(&slots);
         let most = (0..rows)
             .map(|k| slots.iter().filter(|s| s.covers(k)).count())
             .max();
@@ -292,16 +301,8 @@ mod tests {
                     .all(|s| !s.covers(k) || s.sums[k - s.base] == [DVec3::ZERO; 2])
             );
         }
-        let ghost_after: Vec<[DVec3; 2]> = (local..rows)
-            .flat_map(|k| {
-                slots
-                    .iter()
-                    .filter(move |s| s.covers(k))
-                    .map(move |s| s.sums[k - s.base])
-            })
-            .collect();
         assert!(!ghost_rows.is_empty());
-        assert_eq!(ghost_rows, ghost_after, "the ghost rows are not kicked");
+        assert_eq!(ghost_rows, ghosts(&slots), "the ghost rows are not kicked");
         for s in &mut slots {
             s.clear(1);
             assert!(s.sums.iter().all(|r| *r == [DVec3::ZERO; 2]));

@@ -574,6 +574,18 @@ mod tests {
     use crate::physics::contact::{NormalLaw, TangentialLaw};
     use rand::{Rng, SeedableRng};
 
+    /// The kernel of the tests: `bodies` in one group, dt = 1 µs, every row local.
+    fn test_kernel<'a>(bodies: Bodies<'a>, par: PairParams, group: &'a [u32]) -> Kernel<'a> {
+        Kernel {
+            local: bodies.pos.len(),
+            bodies,
+            par,
+            lanes: HertzMindlin::of(&par),
+            dt: 1e-6,
+            group,
+        }
+    }
+
     /// A pair indexing past the particle arrays stops the slot loop (the four-lane path
     /// reads the arrays unchecked after its own test) rather than reading beyond them.
     #[test]
@@ -613,19 +625,13 @@ mod tests {
             });
         }
         let group = vec![0; n];
-        let kernel = Kernel {
-            bodies: Bodies {
-                pos: &pos,
-                vel: &vel,
-                omega: &vel,
-                radius: &radius,
-            },
-            par,
-            lanes: HertzMindlin::of(&par),
-            dt: 1e-6,
-            group: &group,
-            local: n,
+        let bodies = Bodies {
+            pos: &pos,
+            vel: &vel,
+            omega: &vel,
+            radius: &radius,
         };
+        let kernel = test_kernel(bodies, par, &group);
         let mut slot = Slot {
             pairs: 0..list.len(),
             base: 0,
@@ -697,19 +703,13 @@ mod tests {
                 }
             }
             let group = vec![0; n];
-            let kernel = Kernel {
-                bodies: Bodies {
-                    pos: &pos,
-                    vel: &vel,
-                    omega: &omega,
-                    radius: &radius,
-                },
-                par,
-                lanes: HertzMindlin::of(&par),
-                dt: 1e-6,
-                group: &group,
-                local: n,
+            let bodies = Bodies {
+                pos: &pos,
+                vel: &vel,
+                omega: &omega,
+                radius: &radius,
             };
+            let kernel = test_kernel(bodies, par, &group);
             let run = |avx: bool| {
                 let mut slots = layout_slots(&list, n);
                 let mut ps = pairs.clone();
