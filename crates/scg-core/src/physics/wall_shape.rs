@@ -93,7 +93,7 @@ impl WallShape {
     /// Signed distance from the wall surface to `x`, positive on the domain side, m, with
     /// the unit normal pointing into the domain; `None` outside a finite cylinder's extent
     /// and for a mesh (two-sided: it has no inside).
-    #[inline]
+    #[inline(always)]
     pub fn distance(&self, x: DVec3) -> Option<(f64, DVec3)> {
         match *self {
             WallShape::Mesh(_) => None,

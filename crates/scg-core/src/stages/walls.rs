@@ -211,7 +211,8 @@ pub fn wall_normal_forces(
 
 /// Every touch of the sphere at `x` (m) of radius `r` (m) with the walls, with its history
 /// key (`keys` from [`history_keys`]): one per touched analytic wall, one per touched
-/// feature of a mesh wall.
+/// feature of a mesh wall. Always inlined: the wall stages' loops are mostly this.
+#[inline(always)]
 fn for_each_touch(
     walls: &WallSet,
     keys: &[u32],
