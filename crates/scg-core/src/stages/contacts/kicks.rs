@@ -65,8 +65,6 @@ pub fn apply_contact_kicks(
 
 /// Part of a slot's sums read by one chunk of the kicks: (first particle, rows).
 type SumsPart<'a> = (usize, &'a mut [[DVec3; 2]]);
-/// One chunk of the kicks: its velocities, angular velocities and parts of the sums.
-type Chunk<'a> = (&'a mut [DVec3], &'a mut [DVec3], Vec<SumsPart<'a>>);
 
 /// The kicks of [`apply_contact_kicks`] for every particle, in parallel chunks (each
 /// particle's update is independent). Each particle's force and torque are the covering
@@ -92,11 +90,9 @@ fn kick_all(v: &mut [DVec3], w: &mut [DVec3], slots: &mut [Slot], kick_v: &[f64]
         }
         s.consumed = n;
     }
-    let mut work: Vec<Chunk> = (v.chunks_mut(C).zip(w.chunks_mut(C)).zip(shares))
-        .map(|((vc, wc), parts)| (vc, wc, parts))
-        .collect();
-    crate::exec::team::for_each_item(&mut work, |k, (v, w, parts)| {
-        kick_rows(KickChunk {
+    let mut work: Vec<KickChunk> = (v.chunks_mut(C).zip(w.chunks_mut(C)).zip(shares))
+        .enumerate()
+        .map(|(k, ((v, w), parts))| KickChunk {
             base: k * C,
             v,
             w,
@@ -104,23 +100,24 @@ fn kick_all(v: &mut [DVec3], w: &mut [DVec3], slots: &mut [Slot], kick_v: &[f64]
             kick_v,
             kick_w,
         })
-    });
+        .collect();
+    crate::exec::team::for_each_item(&mut work, |_, c| kick_rows(c));
 }
 
 /// One chunk of the dense kicks: particles `base..base + v.len()`, their velocities,
 /// angular velocities and the parts of the sums covering them (slot order), and every
 /// particle's kick factors.
-struct KickChunk<'a, 'p> {
+struct KickChunk<'a> {
     base: usize,
     v: &'a mut [DVec3],
     w: &'a mut [DVec3],
-    parts: &'a mut [SumsPart<'p>],
+    parts: Vec<SumsPart<'a>>,
     kick_v: &'a [f64],
     kick_w: &'a [f64],
 }
 
 /// Kick a chunk with the sums of its parts (slot order), zeroing the rows read.
-fn kick_rows(c: KickChunk) {
+fn kick_rows(c: &mut KickChunk) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2, checked just above.
@@ -133,14 +130,14 @@ fn kick_rows(c: KickChunk) {
 /// [`kick_rows`] compiled for AVX2 (the same operations: no fused multiply–adds).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn kick_rows_avx2(c: KickChunk) {
+fn kick_rows_avx2(c: &mut KickChunk) {
     kick_rows_body(c);
 }
 
 /// The kicks of [`kick_rows`]: the chunk is cut where the set of covering parts changes,
 /// and each piece runs a loop over its particles with that set fixed.
 #[inline(always)]
-fn kick_rows_body(c: KickChunk) {
+fn kick_rows_body(c: &mut KickChunk) {
     let KickChunk {
         base,
         v,
@@ -149,6 +146,7 @@ fn kick_rows_body(c: KickChunk) {
         kick_v,
         kick_w,
     } = c;
+    let (base, kick_v, kick_w) = (*base, *kick_v, *kick_w);
     let len = v.len();
     let (kick_v, kick_w) = (&kick_v[base..base + len], &kick_w[base..base + len]);
     // Chunk-local places where a part starts or ends.
@@ -161,31 +159,20 @@ fn kick_rows_body(c: KickChunk) {
     for piece in cuts.windows(2) {
         let (lo, hi) = (piece[0], piece[1]);
         // The parts covering lo..hi, in slot order, cut to it.
-        let cover: Vec<&mut [[DVec3; 2]]> = parts
+        let mut cover: Vec<&mut [[DVec3; 2]]> = parts
             .iter_mut()
             .filter(|(start, rows)| *start <= base + lo && base + hi <= *start + rows.len())
             .map(|(start, rows)| &mut rows[base + lo - *start..base + hi - *start])
             .collect();
         let (v, w) = (&mut v[lo..hi], &mut w[lo..hi]);
         let (kv, kw) = (&kick_v[lo..hi], &kick_w[lo..hi]);
+        // A fixed count (an array) lets the loop over the parts unroll.
         match cover.len() {
-            0 => kick_piece::<0>([], v, w, kv, kw),
-            1 => kick_piece::<1>(fixed(cover), v, w, kv, kw),
-            2 => kick_piece::<2>(fixed(cover), v, w, kv, kw),
-            3 => kick_piece::<3>(fixed(cover), v, w, kv, kw),
-            _ => {
-                let mut cover = cover;
-                for (p, (v, w)) in v.iter_mut().zip(w.iter_mut()).enumerate() {
-                    let (mut f, mut t) = (DVec3::ZERO, DVec3::ZERO);
-                    for rows in cover.iter_mut() {
-                        let [rf, rt] = std::mem::take(&mut rows[p]);
-                        f += rf;
-                        t += rt;
-                    }
-                    *v += f * kv[p];
-                    *w += t * kw[p];
-                }
-            }
+            0 => kick_piece(&mut [], v, w, kv, kw),
+            1 => kick_piece(&mut fixed::<1>(cover), v, w, kv, kw),
+            2 => kick_piece(&mut fixed::<2>(cover), v, w, kv, kw),
+            3 => kick_piece(&mut fixed::<3>(cover), v, w, kv, kw),
+            _ => kick_piece(&mut cover, v, w, kv, kw),
         }
     }
 }
@@ -196,11 +183,11 @@ fn fixed<const K: usize>(cover: Vec<&mut [[DVec3; 2]]>) -> [&mut [[DVec3; 2]]; K
     cover.try_into().unwrap_or_else(|_| unreachable!("K parts"))
 }
 
-/// Kick a piece covered by `K` parts (each as long as `v`): the parts' rows added to zero
-/// in order, then zeroed.
+/// Kick a piece covered by the parts `cover` (each as long as `v`): the parts' rows added
+/// to zero in order, then zeroed.
 #[inline(always)]
-fn kick_piece<const K: usize>(
-    mut cover: [&mut [[DVec3; 2]]; K],
+fn kick_piece(
+    cover: &mut [&mut [[DVec3; 2]]],
     v: &mut [DVec3],
     w: &mut [DVec3],
     kv: &[f64],
