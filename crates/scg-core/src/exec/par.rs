@@ -170,21 +170,11 @@ pub fn for_each_listed_piece<P: Split>(
         body(columns);
         return;
     }
-    let mut pieces = Vec::with_capacity(listed.len().div_ceil(per));
-    // `rest` starts at row `at`; each cut is a listed row (ascending, distinct: after `at`).
-    let (mut rest, mut at) = (columns, 0);
-    for k in (per..listed.len()).step_by(per) {
-        let cut = (listed[k] as usize).min(rows);
-        let (a, b) = rest.split_at(cut - at);
-        pieces.push(Some(a));
-        (rest, at) = (b, cut);
-    }
-    pieces.push(Some(rest));
-    super::team::for_each_item(&mut pieces, |_, p| {
-        if let Some(p) = p.take() {
-            body(p)
-        }
-    });
+    // Each cut a listed row (ascending, distinct).
+    let cuts = (per..listed.len())
+        .step_by(per)
+        .map(|k| (listed[k] as usize).min(rows));
+    run_cut(columns, cuts, body);
 }
 
 /// How many times a plain per-particle update (a few ns) a row of
@@ -216,13 +206,19 @@ fn run_pieces<P: Split>(columns: P, min: usize, piece: usize, body: impl Fn(P) +
         body(columns);
         return;
     }
-    let mut pieces = Vec::with_capacity(rows.div_ceil(piece));
-    let (mut rest, mut left) = (columns, rows);
-    while left > piece {
-        let (a, b) = rest.split_at(piece);
+    run_cut(columns, (piece..rows).step_by(piece), body);
+}
+
+/// `body` on the pieces of `columns` cut at the rows `cuts` (ascending, inside the
+/// table), on the team.
+fn run_cut<P: Split>(columns: P, cuts: impl Iterator<Item = usize>, body: impl Fn(P) + Sync) {
+    let mut pieces = Vec::new();
+    // `rest` starts at row `at`.
+    let (mut rest, mut at) = (columns, 0);
+    for cut in cuts {
+        let (a, b) = rest.split_at(cut - at);
         pieces.push(Some(a));
-        rest = b;
-        left -= piece;
+        (rest, at) = (b, cut);
     }
     pieces.push(Some(rest));
     super::team::for_each_item(&mut pieces, |_, p| {
