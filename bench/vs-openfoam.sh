@@ -165,7 +165,7 @@ echo "  OpenFOAM wrote time $ftime; parcels: $(grep 'Current number of parcels' 
 csv=$(ls "$work"/fc/vs-openfoam_*.csv | sort | tail -1)
 "$SCG" run "$chk/scene.toml" --set drag.law=stokes --out "$work/rec" --frames-csv "$work/fs" > "$work/scg-check.log" 2>&1 ||
   { tail "$work/scg-check.log" >&2; fail "scg check run (Stokes) failed"; }
-csv_stokes=$(ls "$work"/fs/vs-openfoam_*.csv | sort | tail -1)
+csv_stokes=$(ls "$work"/fs/vs-openfoam*_*.csv | sort | tail -1)   # named vs-openfoam-drag.law=stokes_<step>
 want=CellPoint
 [ "$INTERP" = cell_point_idw ] && want=CellPointIdw
 grep -q "field \`U\` ($want)" <("$SCG" check "$chk/scene.toml" 2>&1) || fail "scg is not on $INTERP"

@@ -602,6 +602,15 @@ fn handpicked_command_lines_exit_2_without_panic() {
         let (code, err) = scg(args, dir.path());
         assert_eq!(code, 2, "{args:?} → {code}: {err}");
         assert!(err.contains("error"), "{args:?}: {err}");
+        // one prefix, and no part of a message said twice ("error: error: …",
+        // "file: file: …")
+        for line in err.lines().filter(|l| l.starts_with("error:")) {
+            let parts: Vec<&str> = line.split(": ").collect();
+            assert!(
+                parts.windows(2).all(|w| w[0] != w[1]) && !line[6..].contains("error:"),
+                "{args:?}: {line}"
+            );
+        }
     }
 }
 

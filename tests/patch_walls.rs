@@ -455,7 +455,10 @@ fn check_and_plan_say_what_the_wall_patches_became() {
     );
     let (code, out, _) = scg_cmd(dir.path(), &["check"], &rebound);
     assert_eq!(code, 0);
-    assert!(out.contains("64 faces, wall: specular rebound"), "{out}");
+    assert!(
+        out.contains("64 faces, wall: rebound of the centre as an impulse, restitution e = 0.8"),
+        "{out}"
+    );
     let (_, plan, _) = scg_cmd(dir.path(), &["run", "--plan"], &rebound);
     assert!(!plan.contains("wall_"), "{plan}");
     let s = load(dir.path(), &rebound);
@@ -470,7 +473,12 @@ fn check_and_plan_say_what_the_wall_patches_became() {
     assert!(!bare.contains("[material]"), "{bare}");
     let (code, out, err) = scg_cmd(dir.path(), &["check"], &bare);
     assert_eq!(code, 0, "{err}");
-    assert!(out.contains("wall: specular rebound"), "{out}");
+    assert!(
+        out.contains(
+            "wall: rebound of the centre as an impulse, restitution e = 1, Coulomb friction μ = 0"
+        ),
+        "{out}"
+    );
     let bad = bare.replace(
         "[flow.patches]\n",
         "[flow.patches]\nwall_model = \"contact\"\n",

@@ -98,7 +98,8 @@ fn replay_verify_resolves_relative_paths_from_the_scenes_folder() {
         "2",
         &["duration=0.06", "feed_scale=0.25"],
     );
-    let mcap = dir.path().join("cyclone.mcap");
+    // `feed_scale` changes the run, so the recording's name says so (`duration` does not)
+    let mcap = dir.path().join("cyclone-feed_scale=0.25.mcap");
     let rec = read_mcap(&mcap).unwrap();
     let cases = std::fs::canonicalize(common::repo("cases")).unwrap();
     assert_eq!(Path::new(&rec.meta.scene_dir), cases);

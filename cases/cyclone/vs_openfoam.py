@@ -18,6 +18,14 @@ bench/foam.py's helpers (dictionary header, timed run, list reader) are imported
       1 process, on N ranks and as serial runs at once when given) and the speed ratios:
       per core, and on the machine's cores (against OpenFOAM's faster use of them)
 
+Patch interaction, from [flow.patches]: wall_model "rebound" with [material] restitution and
+no friction (the cyclone scenes) -> standardWallInteraction rebound (e, mu 0); wall_model
+"stick" | "escape" | "rebound" (restitution, friction) and [flow.patches.interaction]
+per-patch tables -> localInteraction, one entry per patch (outlets, inlets and unlisted
+non-wall patches escape). grade.json per class: fed, escaped (outlets), lost (other escape
+patches), stuck (written inactive at the end), held (written active), patches (counts by
+patch), and the log's localInteraction per-patch totals (log_fates).
+
 Exit status 2 (message naming the file and key) when the scene cannot be mapped.
 """
 import gzip
@@ -97,9 +105,32 @@ def read_scene(path, duration=None, feed_scale=None, dt=None):
     walls = list(patches.get("walls", []))
     outlets = list(patches.get("outlets", []))
     inlets = list(patches.get("inlets", []))
-    if patches.get("wall_model", "rebound") != "rebound":
-        bad(path, "flow.patches.wall_model", 'must be "rebound" (OpenFOAM: standardWallInteraction rebound)')
-    restitution = float(s.get("material", {}).get("restitution", 1.0))
+    # What each patch does to a particle (OpenFOAM's patch interaction): the wall patches
+    # by flow.patches.wall_model, outlets and inlets escape, [flow.patches.interaction]
+    # overrides per patch. Rebound: restitution (flow.patches, else [material]) and friction.
+    wall_model = patches.get("wall_model", "rebound")
+    if wall_model not in ("rebound", "stick", "escape"):
+        bad(path, "flow.patches.wall_model", f'{wall_model!r}: must be "rebound", "stick" or "escape" '
+            '(OpenFOAM: standardWallInteraction rebound or localInteraction; "contact" has no counterpart)')
+    restitution = float(patches.get("restitution", s.get("material", {}).get("restitution", 1.0)))
+    friction = float(patches.get("friction", 0.0))
+    interaction = {}
+    for p in walls:
+        interaction[p] = {"model": wall_model, "e": restitution, "mu": friction}
+    for p in outlets + inlets:
+        interaction[p] = {"model": "escape", "e": restitution, "mu": friction}
+    overrides = patches.get("interaction", {})
+    if not isinstance(overrides, dict):
+        bad(path, "flow.patches.interaction", "a table of patch = { model = ... }")
+    for p, o in overrides.items():
+        key = f"flow.patches.interaction.{p}"
+        if not isinstance(o, dict):
+            bad(path, key, 'needs { model = "stick" | "escape" | "rebound", ... }')
+        model = o.get("model")
+        if model not in ("rebound", "stick", "escape"):
+            bad(path, key + ".model", f'{model!r}: must be "rebound", "stick" or "escape"')
+        interaction[p] = {"model": model, "e": float(o.get("restitution", restitution)),
+                          "mu": float(o.get("friction", friction))}
     fluid = s.get("fluid", {})
     rho_f = float(fluid.get("density", 1.2))
     mu = float(fluid.get("viscosity", 1.8e-5))
@@ -146,6 +177,8 @@ def read_scene(path, duration=None, feed_scale=None, dt=None):
         "case": case, "time": time, "field": field, "field_file": field_file,
         "interpolation": interp, "foam_interpolation": foam_interp,
         "walls": walls, "outlets": outlets, "inlets": inlets, "restitution": restitution,
+        "friction": friction, "wall_model": wall_model, "interaction": interaction,
+        "interaction_table": bool(overrides),
         "rho_f": rho_f, "mu": mu, "gravity": g, "dt": float(dt), "duration": dur,
         "drag": s.get("drag", {}).get("law", "stokes"), "classes": classes,
         "feed_scale": feed_scale,
@@ -168,6 +201,83 @@ def g6(x):
     return repr(float(x))
 
 
+def patch_interactions(sc):
+    """{patch: {"model", "e", "mu"}} for every patch of the mesh (sc["boundary"]): the
+    scene's, and "escape" for a non-wall patch the scene does not list (what scg does
+    with it and OpenFOAM's default)."""
+    out = {}
+    for p in sc["boundary"]:
+        out[p] = dict(sc["interaction"].get(p) or {"model": "escape", "e": sc["restitution"], "mu": sc["friction"]})
+    return out
+
+
+def standard_wall(sc):
+    """True when OpenFOAM's standardWallInteraction says what the scene says: every wall
+    patch rebounds with one restitution and no friction, every other patch lets particles
+    escape, and no per-patch table is given (the cyclone scenes); localInteraction else."""
+    if sc.get("interaction_table") or sc.get("wall_model", "rebound") != "rebound" or sc.get("friction", 0.0):
+        return False
+    for p, i in patch_interactions(sc).items():
+        want = "rebound" if sc["boundary"][p] == "wall" else "escape"
+        if i["model"] != want or (want == "rebound" and (i["e"] != sc["restitution"] or i["mu"] != 0.0)):
+            return False
+    return True
+
+
+def fate_patches(sc):
+    """The patches where a particle's fate is decided (escape or stick): the ones
+    patchPostProcessing records."""
+    if standard_wall(sc):
+        return sorted(set(sc["outlets"]) | set(p for p in sc["boundary"] if sc["boundary"][p] != "wall"))
+    return sorted(p for p, i in patch_interactions(sc).items() if i["model"] in ("escape", "stick"))
+
+
+def interaction_text(sc):
+    """The cloud's patchInteractionModel and its coefficients."""
+    if standard_wall(sc):
+        return f"""patchInteractionModel standardWallInteraction;
+
+    standardWallInteractionCoeffs
+    {{
+        type rebound;           // wall patches: v_n' = -e v_n, v_t' = (1 - mu) v_t
+        e    {g6(sc['restitution'])};
+        mu   0;
+    }}
+    // A parcel reaching a patch that is not of type wall escapes (leaves the cloud)."""
+    rows = []
+    for p, i in sorted(patch_interactions(sc).items()):
+        if i["model"] == "rebound":
+            rows.append(f"            {p} {{ type rebound; e {g6(i['e'])}; mu {g6(i['mu'])}; }}")
+        else:
+            rows.append(f"            {p} {{ type {i['model']}; }}")
+    return f"""patchInteractionModel localInteraction;
+
+    // scene [flow.patches]: stick = the parcel stays where it hit (inactive, U = 0);
+    // escape = it leaves the cloud; rebound: v_n' = -e v_n, v_t' = (1 - mu) v_t
+    localInteractionCoeffs
+    {{
+        patches
+        (
+{chr(10).join(rows)}
+        );
+    }}"""
+
+
+def injection_duration(c, dt):
+    """patchInjection's `duration` for class c. It injects in every step whose start,
+    relative to SOI, is below the duration; the accumulated times fall a hair short of
+    whole multiples of dt, so a window of exactly N steps gets an (N+1)th step. When
+    whole parcels come each step (rate * dt >= 1: OpenFOAM then adds floor(rate * dt),
+    one more with the remainder's probability) that step would add them again (505 for
+    scg's 500): the window is then given as N - 1/2 steps. Below one per step OpenFOAM
+    holds the time until a parcel is due and the window is left as it is."""
+    w = c["stop"] - c["start"]
+    n = w / dt
+    if c["rate"] * dt >= 1.0 and round(n) >= 1 and abs(n - round(n)) < 1e-6:
+        return (round(n) - 0.5) * dt
+    return w
+
+
 def cloud_properties(sc, classes, rho_p):
     inj = []
     for k, c in enumerate(classes):
@@ -176,7 +286,7 @@ def cloud_properties(sc, classes, rho_p):
             type            patchInjection;
             patch           {c['patch']};
             SOI             {g6(c['start'])};
-            duration        {g6(c['stop'] - c['start'])};
+            duration        {g6(injection_duration(c, sc['dt']))};
             parcelsPerSecond {g6(c['rate'])};
             massTotal       0;
             parcelBasisType fixed;
@@ -189,10 +299,10 @@ def cloud_properties(sc, classes, rho_p):
                 fixedValueDistribution {{ value {g6(c['diameter'])}; }}
             }}
         }}""")
-    patches = sorted(set(sc["outlets"]) | set(p for p in sc["boundary"] if sc["boundary"][p] != "wall"))
+    patches = fate_patches(sc)
     interp = sc["foam_interpolation"]
     return foam.header("dictionary", "constant", "kinematicCloudProperties") + f"""\
-// scg cases/cyclone/vs-openfoam.sh from {os.path.basename(sc['scene'])}: classes {', '.join(c['group'] for c in classes)}
+// scg vs-openfoam.sh (cases/cyclone/vs_openfoam.py) from {os.path.basename(sc['scene'])}: classes {', '.join(c['group'] for c in classes)}
 solution
 {{
     active          true;
@@ -245,15 +355,7 @@ subModels
 
     dispersionModel none;
 
-    patchInteractionModel standardWallInteraction;
-
-    standardWallInteractionCoeffs
-    {{
-        type rebound;           // wall patches: v_n' = -e v_n, v_t' = (1 - mu) v_t
-        e    {g6(sc['restitution'])};
-        mu   0;
-    }}
-    // A parcel reaching a patch that is not of type wall escapes (leaves the cloud).
+    {interaction_text(sc)}
 
     heatTransferModel none;
     surfaceFilmModel none;
@@ -333,10 +435,11 @@ def make_cases(sc, out):
         for p in sc[key]:
             if p not in sc["boundary"]:
                 bad(sc["scene"], f"flow.patches.{key}", f"no patch {p!r} in the mesh ({sorted(sc['boundary'])})")
-    for p in sc["walls"]:
-        if sc["boundary"][p] != "wall":
-            bad(sc["scene"], "flow.patches.walls", f"patch {p!r} is of type {sc['boundary'][p]}, not wall: "
-                "OpenFOAM's standardWallInteraction rebounds on wall patches only")
+    for p in sc["interaction"]:
+        if p not in sc["boundary"]:
+            bad(sc["scene"], f"flow.patches.interaction.{p}", f"no patch {p!r} in the mesh ({sorted(sc['boundary'])})")
+    # (a listed wall patch of another type than wall: localInteraction, which acts on any
+    # patch; standardWallInteraction rebounds on wall patches only)
     for p, t in sc["boundary"].items():
         if t == "wall" and p not in sc["walls"]:
             bad(sc["scene"], "flow.patches.walls", f"wall patch {p!r} is not listed (scg would remove "
@@ -377,6 +480,9 @@ def make_cases(sc, out):
         w("constant/kinematicCloudProperties", cloud_properties(sc, cls, rho))
         runs.append({"dir": d, "density": rho, "groups": [c["group"] for c in cls]})
     plan = {k: v for k, v in sc.items() if k != "boundary"}
+    plan["patch_model"] = "standardWallInteraction" if standard_wall(sc) else "localInteraction"
+    plan["patch_interactions"] = patch_interactions(sc)
+    plan["fate_patches"] = fate_patches(sc)
     plan["runs"] = runs
     with open(os.path.join(out, "plan.json"), "w") as f:
         json.dump(plan, f, indent=1)
@@ -389,8 +495,24 @@ def parse_log(log):
     """Per step (after each `Evolving` block): parcels in the system, ExecutionTime; the
     last `parcels added` per injector; the wall-clock of each ExecutionTime (LOG.wall)."""
     parcels, cpu, added, inj = [], [], {}, None
+    fates, fate_patch = {}, None
     with open(log) as f:
         for ln in f:
+            # localInteraction's info, per patch (the totals so far; the last one counts):
+            #     Parcel fate (number, mass)      : patch walls
+            #       - escape                      = 0, 0
+            #       - stick                       = 12, 1.2e-09
+            m = re.match(r"\s*Parcel fate.*:\s*patch\s+(\S+)", ln)
+            if m:
+                fate_patch = m.group(1)
+                fates[fate_patch] = {}
+                continue
+            m = re.match(r"\s*- (escape|stick|rebound)\s*=\s*(\d+)", ln)
+            if m and fate_patch is not None:
+                fates[fate_patch][m.group(1)] = int(m.group(2))
+                continue
+            if fate_patch is not None and not re.match(r"\s*-", ln):
+                fate_patch = None
             m = re.match(r"\s*Current number of parcels\s*=\s*(\d+)", ln)
             if m:
                 parcels.append(int(m.group(1)))
@@ -406,7 +528,7 @@ def parse_log(log):
     wall = []
     if os.path.isfile(log + ".wall"):
         wall = [float(x) for x in read_text(log + ".wall").split()]
-    return {"parcels": parcels, "cpu": cpu, "added": added, "wall": wall}
+    return {"parcels": parcels, "cpu": cpu, "added": added, "wall": wall, "fates": fates}
 
 
 def timed_steps(case):
@@ -426,6 +548,45 @@ def diameters_at_end(case):
         return []
     dfile = os.path.join(case, max(times, key=float), "lagrangian", CLOUD, "d")
     return foam.foam_list(dfile, float) if os.path.isfile(dfile) else []
+
+
+def foam_field(path, parse):
+    """The entries of an ASCII OpenFOAM list file: `N ( ... )` one per line, on one line,
+    or uniform `N{value}` (how v1912 writes a list whose entries are all equal)."""
+    text = read_text(path)
+    i = text.find("}", text.find("FoamFile")) + 1 if "FoamFile" in text else 0
+    body = re.sub(r"//.*", "", text[i:])
+    m = re.search(r"(\d+)\s*\{\s*([^}]*?)\s*\}", body)
+    n = re.search(r"(\d+)\s*\(", body)
+    if m and (n is None or m.start() < n.start()):
+        return [parse(m.group(2))] * int(m.group(1))
+    if n is None:
+        return []
+    inner = body[n.end():body.rindex(")")]
+    count = int(n.group(1))
+    items = [ln for ln in inner.splitlines() if ln.strip()]
+    if len(items) != count:  # on one line: scalars separated by blanks
+        items = inner.split()
+    if len(items) != count:
+        sys.exit(f"{path}: {count} entries announced, {len(items)} read")
+    return [parse(x) for x in items]
+
+
+def parcels_at_end(case):
+    """(d, active) of the parcels written at the case's last time (> 0); active is False
+    for a parcel stuck to a patch (localInteraction stick: kept inactive with U = 0)."""
+    times = [x for x in os.listdir(case) if re.fullmatch(r"[0-9.eE+-]+", x) and float(x) > 0]
+    if not times:
+        return []
+    d = os.path.join(case, max(times, key=float), "lagrangian", CLOUD)
+    if not os.path.isfile(os.path.join(d, "d")):
+        return []
+    dia = foam_field(os.path.join(d, "d"), float)
+    act = foam_field(os.path.join(d, "active"), lambda x: int(x) != 0) \
+        if os.path.isfile(os.path.join(d, "active")) else [True] * len(dia)
+    if len(act) != len(dia):
+        sys.exit(f"{d}: {len(dia)} diameters against {len(act)} active flags")
+    return list(zip(dia, act))
 
 
 def write_json(dest, obj):
@@ -484,10 +645,13 @@ def d50(classes):
 
 def grade(out, dest):
     plan = read_json(os.path.join(out, "plan.json"))
-    classes = {c["group"]: dict(c, fed=0, escaped=0, held=0, lost=0, residence_times=[])
+    classes = {c["group"]: dict(c, fed=0, escaped=0, held=0, lost=0, stuck=0, stuck_post=0, patches={},
+                                residence_times=[])
                for c in plan["classes"]}
     ps = cpu = wall = 0.0
     notes = []
+    inter = plan.get("patch_interactions", {})
+    log_fates = {}
     for run in plan["runs"]:
         d = run["dir"]
         lg = parse_log(os.path.join(d, "log.foam"))
@@ -503,29 +667,53 @@ def grade(out, dest):
         cpu += lg["cpu"][-1] - lg["cpu"][0]
         if len(lg["wall"]) == len(lg["cpu"]):
             wall += lg["wall"][-1] - lg["wall"][0]
+        post_counts = {}
         for patch, rows in read_post(d).items():
+            model = inter.get(patch, {}).get("model", "escape")
+            if model == "rebound":
+                continue  # a bounce, not a fate
+            post_counts[patch] = len(rows)
             for t, dia, age in rows:
                 c = nearest_class(dia, cls)
-                if patch in plan["outlets"]:
+                c["patches"][patch] = c["patches"].get(patch, 0) + 1
+                if model == "stick":
+                    c["stuck_post"] += 1
+                elif patch in plan["outlets"]:
                     c["escaped"] += 1
                     c["residence_times"].append(age)
                 else:
                     c["lost"] += 1
-        for dia in diameters_at_end(d):
-            nearest_class(dia, cls)["held"] += 1
-        if len(lg["parcels"]) and lg["parcels"][-1] != sum(c["held"] for c in cls):
+        written = parcels_at_end(d)
+        for dia, active in written:
+            nearest_class(dia, cls)["held" if active else "stuck"] += 1
+        if len(lg["parcels"]) and lg["parcels"][-1] != len(written):
             notes.append(f"{d}: the log's last parcel count {lg['parcels'][-1]} differs from the parcels "
-                         f"written ({sum(c['held'] for c in cls)})")
+                         f"written ({len(written)})")
+        for c in cls:
+            if c["stuck"] != c["stuck_post"]:
+                notes.append(f"{c['group']}: {c['stuck']} parcels written inactive (stuck) at the end, "
+                             f"{c['stuck_post']} recorded by patchPostProcessing on stick patches")
+        # localInteraction's per-patch totals in the log against patchPostProcessing
+        for patch, f in lg["fates"].items():
+            n = sum(f.values())
+            log_fates.setdefault(patch, {})
+            for k, v in f.items():
+                log_fates[patch][k] = log_fates[patch].get(k, 0) + v
+            if patch in post_counts and post_counts[patch] != n:
+                notes.append(f"{d}: patch {patch}: the log's parcel fate counts {f} against "
+                             f"{post_counts[patch]} parcels in patchPostProcessing")
     out_classes = []
     for c in plan["classes"]:
         k = classes[c["group"]]
         fed = k["fed"]
-        gone = fed - k["escaped"] - k["held"] - k["lost"]
+        gone = fed - k["escaped"] - k["held"] - k["lost"] - k["stuck"]
         if gone:
-            notes.append(f"{c['group']}: {gone} parcels neither escaped, held nor lost (removed by OpenFOAM otherwise)")
+            notes.append(f"{c['group']}: {gone} parcels neither escaped, held, stuck nor lost "
+                         "(removed by OpenFOAM otherwise)")
         out_classes.append({
             "group": c["group"], "diameter": c["diameter"], "density": c["density"],
             "fed": fed, "escaped": k["escaped"], "held": k["held"], "lost": k["lost"],
+            "stuck": k["stuck"], "patches": k["patches"],
             "efficiency": (1.0 - k["escaped"] / fed) if fed else None,
             "residence_times": k["residence_times"],
         })
@@ -536,16 +724,23 @@ def grade(out, dest):
         "uncoupledKinematicParcelFoam, 1 process; frozen U = the scene's "
         f"{plan['field']} at time {plan['time']}; U interpolation {plan['foam_interpolation']}",
         "drag: sphereDrag, Cd Re/24 = 1 + Re^(2/3)/6 (scg: " + plan["drag"] + ")",
-        f"walls: standardWallInteraction rebound e = {plan['restitution']}, mu = 0",
+        (f"walls: standardWallInteraction rebound e = {plan['restitution']}, mu = 0"
+         if plan.get("patch_model", "standardWallInteraction") == "standardWallInteraction" else
+         "patches: localInteraction " + ", ".join(
+             f"{p} {i['model']}" + (f" (e {i['e']}, mu {i['mu']})" if i["model"] == "rebound" else "")
+             for p, i in sorted(inter.items()))),
         "escaped: parcels reaching the outlet patch(es) " + ", ".join(plan["outlets"])
-        + "; lost: other non-wall patches; residence time = parcel age at the patch",
+        + "; lost: other escape patches; stuck: parcels written inactive at the end (stick patches); "
+        "held: active parcels written at the end; residence time = parcel age at the patch",
         "particle_steps: sum over steps 2..N of 'Current number of parcels'; cpu_s: ExecutionTime "
         "(process CPU) of the same steps; wall_s: wall time of the same log lines",
     ]
     g = {
         "code": "openfoam", "version": "v1912", "classes": out_classes, "d50": d50(out_classes),
         "particle_steps": int(ps), "cpu_s": cpu, "wall_s": wall,
-        "particle_steps_per_s": ps / cpu if cpu > 0 else None, "dt": plan["dt"], "notes": notes,
+        "particle_steps_per_s": ps / cpu if cpu > 0 else None, "dt": plan["dt"],
+        "patch_model": plan.get("patch_model", "standardWallInteraction"), "log_fates": log_fates,
+        "notes": notes,
     }
     write_json(dest, g)
     return g

@@ -50,8 +50,9 @@ pub struct ReplayArgs {
 pub fn replay(a: ReplayArgs) -> i32 {
     let rec = match read_mcap(&a.recording) {
         Ok(r) => r,
+        // the reader's error names the file
         Err(e) => {
-            eprintln!("error: {}: {e}", a.recording.display());
+            eprintln!("error: {e}");
             return EXIT_BAD_INPUT;
         }
     };

@@ -28,7 +28,8 @@ pub struct RunArgs {
     /// Print the schedule the scene produces and exit without running.
     #[arg(long)]
     pub plan: bool,
-    /// Do not write recordings.
+    /// Do not write the .rrd and .mcap recordings (`--vtk` and `--frames-csv` still
+    /// write their frames).
     #[arg(long)]
     pub no_record: bool,
     /// Also write every frame as VTK for ParaView (`<name>_<step>.vtu`, `<name>.pvd`,
@@ -156,7 +157,9 @@ pub fn run(args: RunArgs) -> i32 {
         eprintln!("error: {e}");
         return EXIT_BAD_INPUT;
     }
-    let mut sim = scene.build(record);
+    // `--vtk` and `--frames-csv` record frames with or without the .rrd/.mcap pair.
+    let frames = record || args.vtk.is_some() || args.frames_csv.is_some();
+    let mut sim = scene.build(frames);
     if let Some(path) = &args.restart {
         let restored = scg_record::checkpoint::read_checkpoint(path).and_then(|c| {
             sim.restore(&c)
@@ -174,14 +177,15 @@ pub fn run(args: RunArgs) -> i32 {
             sim.time()
         );
     }
-    let mut stem = recording_stem(&scene);
+    let base = format!("{}{}", recording_stem(&scene), set_suffix(&args.set));
+    let mut stem = base.clone();
     if args.restart.is_some() {
         stem = format!("{stem}-from{}", sim.step_count());
     }
     let checkpoint_path = args
         .checkpoint
         .clone()
-        .unwrap_or_else(|| args.out.join(format!("{}.ckpt", recording_stem(&scene))));
+        .unwrap_or_else(|| args.out.join(format!("{base}.ckpt")));
     let checkpoint_every = match args.checkpoint_every {
         None => None,
         Some(t) if t.is_finite() && t > 0.0 => Some(((t / scene.dt).round() as u64).max(1)),
@@ -202,25 +206,29 @@ pub fn run(args: RunArgs) -> i32 {
     // Checkpoints name the scene file absolutely (resolved once).
     let scene_file = scene.absolute_file();
     let mut paths = Vec::new();
-    if record {
+    if frames {
         let meta = scene.run_meta(report.messages());
-        let rrd = args.out.join(format!("{stem}.rrd"));
-        let mcap = args.out.join(format!("{stem}.mcap"));
-        let rrd_sink = match scg_record::RrdSink::create(&rrd, &meta) {
-            Ok(s) => s,
-            Err(e) => {
-                eprintln!("error: {e}");
-                return 1;
+        let mut sinks: Vec<Box<dyn FrameSink>> = Vec::new();
+        if record {
+            let rrd = args.out.join(format!("{stem}.rrd"));
+            let mcap = args.out.join(format!("{stem}.mcap"));
+            match scg_record::RrdSink::create(&rrd, &meta) {
+                Ok(s) => sinks.push(Box::new(s)),
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return 1;
+                }
             }
-        };
-        let mcap_sink = match scg_record::McapSink::create(&mcap, &meta) {
-            Ok(s) => s,
-            Err(e) => {
-                eprintln!("error: {e}");
-                return 1;
+            match scg_record::McapSink::create(&mcap, &meta) {
+                Ok(s) => sinks.push(Box::new(s)),
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return 1;
+                }
             }
-        };
-        let mut sinks: Vec<Box<dyn FrameSink>> = vec![Box::new(rrd_sink), Box::new(mcap_sink)];
+            paths.push(rrd);
+            paths.push(mcap);
+        }
         match extra_sinks(&args.vtk, &args.frames_csv, &RunMeta { case: stem, ..meta }) {
             Ok(extra) => sinks.extend(extra),
             Err(e) => {
@@ -230,8 +238,6 @@ pub fn run(args: RunArgs) -> i32 {
         }
         // Encoding and compression run on a writer thread, overlapping the simulation.
         sim.add_recorder(Box::new(scg_record::Background::spawn(sinks)));
-        paths.push(rrd);
-        paths.push(mcap);
         paths.extend(args.vtk.iter().cloned());
         paths.extend(args.frames_csv.iter().cloned());
     }
@@ -319,6 +325,8 @@ pub fn run(args: RunArgs) -> i32 {
     {
         eprintln!("neighbour list: {} at the end", c.summary());
     }
+    let fates = crate::fates::fates(&scene, &mut sim);
+    eprint!("{}", crate::fates::render(&fates));
     let resolved = sim.contact_resolution();
     for line in resolved.summary() {
         eprintln!("{line}");
@@ -360,7 +368,12 @@ pub fn run(args: RunArgs) -> i32 {
             wall_s: wall,
             threads: scg_core::exec::settings().team_size(),
         };
-        let json = summary_json(&scene.name, &groups, &counts, &run);
+        let mut json = summary_json(&scene.name, &groups, &counts, &run);
+        if let Some(gs) = json["groups"].as_array_mut() {
+            for (g, f) in gs.iter_mut().zip(&fates) {
+                g["fates"] = crate::fates::json(f);
+            }
+        }
         let text = serde_json::to_string_pretty(&json).unwrap_or_default();
         if let Err(e) = std::fs::write(path, text + "\n") {
             eprintln!("error: cannot write {}: {e}", path.display());
@@ -392,6 +405,40 @@ pub fn recording_stem(scene: &scg_scene::Scene) -> String {
         }
         _ => scene.name.clone(),
     }
+}
+
+/// The part of a run's file stem that its `--set` overrides add, so that a run with other
+/// physics does not overwrite another's recordings: `-key=value` for each override, in
+/// order, characters other than letters, digits and `._=+-` written `_`; a suffix longer
+/// than 64 characters becomes `-set` and a hash of the overrides. Left out: `duration` (a
+/// longer or shorter run of the same physics replaces its recording, and restarts
+/// lengthen runs with it) and `coarse_grain.alpha` / `coarse_grain.law`, which
+/// [`recording_stem`] names already.
+pub fn set_suffix(sets: &[String]) -> String {
+    let mut s = String::new();
+    for kv in sets {
+        let key = kv.split('=').next().unwrap_or("").trim();
+        if matches!(key, "duration" | "coarse_grain.alpha" | "coarse_grain.law") {
+            continue;
+        }
+        s.push('-');
+        s.extend(kv.trim().chars().map(|c| {
+            if c.is_ascii_alphanumeric() || "._=+-".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        }));
+    }
+    if s.len() > 64 {
+        // FNV-1a: stable across runs and versions
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for b in sets.join("\n").bytes() {
+            h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        s = format!("-set{h:016x}");
+    }
+    s
 }
 
 /// The VTK and per-frame CSV writers asked for (folders `vtk` and `csv`), named after
@@ -511,6 +558,27 @@ pub fn summary_json(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn overrides_that_change_the_physics_name_the_recording() {
+        let s = |v: &[&str]| set_suffix(&v.iter().map(|x| x.to_string()).collect::<Vec<_>>());
+        assert_eq!(s(&[]), "");
+        assert_eq!(s(&["duration=0.5"]), "");
+        assert_eq!(s(&["coarse_grain.alpha=2", "coarse_grain.law=none"]), "");
+        assert_eq!(s(&["drag.law=stokes"]), "-drag.law=stokes");
+        assert_eq!(
+            s(&[
+                "drag.law=stokes",
+                "duration=1",
+                "groups.0.velocity=[1, 2, 3]"
+            ]),
+            "-drag.law=stokes-groups.0.velocity=_1__2__3_"
+        );
+        let long: Vec<String> = (0..20).map(|i| format!("groups.{i}.alpha=2")).collect();
+        let a = set_suffix(&long);
+        assert!(a.starts_with("-set") && a.len() == 20, "{a}");
+        assert_ne!(a, set_suffix(&long[1..]));
+    }
 
     #[test]
     fn summary_lists_each_group_with_its_counts_and_times() {

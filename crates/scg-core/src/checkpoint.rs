@@ -116,6 +116,8 @@ pub struct Checkpoint {
     pub feeders: Vec<FeederRecord>,
     /// Outlet log: drain and loss times per group, s.
     pub outlet: Option<[Vec<Vec<f64>>; 2]>,
+    /// Patch log of a mesh flow: escaped and stuck counts per patch and group.
+    pub patches: Option<[Vec<Vec<u64>>; 2]>,
     /// Contact arrays, when the scene has particle contacts.
     pub contacts: Option<ContactRecord>,
 }
@@ -127,6 +129,7 @@ use crate::sim::Simulation;
 use crate::spawn::spawn_particle_with_id;
 use crate::stages::contacts::ContactState;
 use crate::stages::feeder::Feeders;
+use crate::stages::mesh_flow::PatchLog;
 use crate::stages::outlet::OutletLog;
 use crate::state::{
     ContactCount, ContactResolution, NextParticleId, SimClock, StepDisplacement, Tally,
@@ -280,6 +283,9 @@ impl Simulation {
             outlet: w
                 .get_resource::<OutletLog>()
                 .map(|l| [l.drained.clone(), l.lost.clone()]),
+            patches: w
+                .get_resource::<PatchLog>()
+                .map(|l| [l.escaped.clone(), l.stuck.clone()]),
             contacts: w.get_resource::<ContactState>().map(|c| c.record()),
         }
     }
@@ -358,6 +364,16 @@ impl Simulation {
         if let (Some([d, l]), Some(mut log)) = (&c.outlet, w.get_resource_mut::<OutletLog>()) {
             log.drained.clone_from(d);
             log.lost.clone_from(l);
+        }
+        match (&c.patches, w.get_resource_mut::<PatchLog>()) {
+            (Some([e, s]), Some(mut log)) if e.len() == log.escaped.len() => {
+                log.escaped.clone_from(e);
+                log.stuck.clone_from(s);
+            }
+            (None, None) => {}
+            _ => {
+                return Err("the scene and the checkpoint differ in the mesh flow's patches".into());
+            }
         }
         if let Some(rec) = &c.contacts {
             let dt = c.dt;

@@ -157,10 +157,18 @@ pub fn point_values(
 /// over the neighbours i of a point p (the cells using it, and the boundary faces using
 /// it with the values [`point_values`] gives them), w_i = (1 + λ·R_i)/|R_i| with
 /// R_i = x_i − x_p, λ chosen so that Σ w_i R_i = 0. Where the 3×3 system is singular the
-/// point keeps its [`point_values`] value; where the weights would be wild (Σ|w_i| >
-/// 10 Σw_i; a box corner with one cell and three faces has 5) they are clipped as Holmes &
-/// Connell's and OpenFOAM's `pointLinear`-style corrections are: w_i = clamp(1 + λ·R_i,
-/// 0, 2)/|R_i|, a positive, bounded average (no longer exact for affine fields there).
+/// point keeps its [`point_values`] value; where any weight would be negative they are
+/// clipped as Holmes & Connell's and OpenFOAM's `pointLinear`-style corrections are:
+/// w_i = clamp(1 + λ·R_i, 0, 2)/|R_i|, a positive, bounded average (no longer exact for
+/// affine fields there). So every point value is a convex combination of the cell and
+/// boundary-face values around it, and interpolation never overshoots them.
+///
+/// Negative weights arise exactly where the point lies outside the hull of its neighbours'
+/// centres: on an edge or corner of the boundary (two walls meeting: the fit extrapolates
+/// from the cells through the zero face values, and the edge took a velocity *opposite* to
+/// its cells', which ran particles upstream along the edges of a duct), and at distorted
+/// cells. On a flat wall every neighbouring cell centre lies on one side, so the affine fit
+/// gives the cells zero total weight and the point takes the wall faces' values, exactly.
 ///
 /// Where a wall patch (type `wall`) meets another patch (an inlet or outlet) the boundary
 /// values jump (no-slip against through-flow), and a linear fit over a corner's few
@@ -212,6 +220,7 @@ pub fn point_values_linear_exact(
         }
     }
     let mut nb: Vec<(DVec3, DVec3)> = Vec::new();
+    let mut dropped: Vec<usize> = Vec::new();
     for (p, value) in out.iter_mut().enumerate() {
         let x = mesh.points[p];
         nb.clear();
@@ -224,36 +233,60 @@ pub fn point_values_linear_exact(
                 face_value[f as usize - ni],
             ));
         }
-        let (mut r, mut m) = (DVec3::ZERO, glam::DMat3::ZERO);
-        for &(d, _) in &nb {
-            let w = 1.0 / d.length().max(1e-300);
-            r += w * d;
-            m += glam::DMat3::from_cols(w * d.x * d, w * d.y * d, w * d.z * d);
-        }
-        let scale = (m.x_axis.x + m.y_axis.y + m.z_axis.z) / 3.0;
-        let det = m.determinant();
-        if det.is_nan() || det.abs() <= 1e-9 * scale * scale * scale {
+        let Some(lambda) = affine_fit(&nb, &[]) else {
             continue;
-        }
-        let lambda = -(m.inverse() * r);
-        let (mut s, mut ws, mut wabs) = (DVec3::ZERO, 0.0, 0.0);
-        for &(d, u) in &nb {
-            let w = (1.0 + lambda.dot(d)) / d.length().max(1e-300);
-            s += w * u;
-            ws += w;
-            wabs += w.abs();
-        }
+        };
         let faces = &pfaces[offs[p] as usize..offs[p + 1] as usize];
         let junction = faces.iter().any(|&f| face_on_wall[f as usize - ni])
             && faces.iter().any(|&f| !face_on_wall[f as usize - ni]);
-        if ws > 0.0 && wabs <= 10.0 * ws && s.is_finite() {
-            let v = s / ws;
-            if !junction || within_range(v, &nb) {
-                *value = v;
-                continue;
+        // Holmes & Connell's weights; where one is negative, the neighbour with the most
+        // negative weight is dropped and the fit repeated on the others (an active set),
+        // which finds convex weights exact for affine fields wherever the point lies inside
+        // its remaining neighbours' hull (an interior point of a distorted mesh).
+        dropped.clear();
+        let mut accepted = false;
+        let mut fit = Some(lambda);
+        while let Some(l) = fit {
+            let (mut s, mut ws, mut neg) = (DVec3::ZERO, 0.0, 0.0);
+            let mut worst = (0.0, usize::MAX);
+            for (i, &(d, u)) in nb.iter().enumerate() {
+                if dropped.contains(&i) {
+                    continue;
+                }
+                let c = 1.0 + l.dot(d);
+                let w = c / d.length().max(1e-300);
+                s += w * u;
+                ws += w;
+                if w < 0.0 {
+                    neg -= w;
+                    if c < worst.0 {
+                        worst = (c, i);
+                    }
+                }
             }
+            // weights that are zero but for rounding (a flat wall's cells) keep the fit
+            if neg <= CONVEX_TOLERANCE * ws {
+                if ws > 0.0 && s.is_finite() {
+                    let v = s / ws;
+                    if !junction || within_range(v, &nb) {
+                        *value = v;
+                        accepted = true;
+                    }
+                }
+                break;
+            }
+            dropped.push(worst.1);
+            fit = if nb.len() - dropped.len() >= 4 {
+                affine_fit(&nb, &dropped)
+            } else {
+                None
+            };
         }
-        // ill-conditioned: clipped weights
+        if accepted {
+            continue;
+        }
+        // a negative weight (the point outside its neighbours' hull: an edge or corner of
+        // the boundary, a distorted cell) or ill-conditioned: clipped weights
         let (mut s, mut ws) = (DVec3::ZERO, 0.0);
         for &(d, u) in &nb {
             let w = (1.0 + lambda.dot(d)).clamp(0.0, 2.0) / d.length().max(1e-300);
@@ -266,6 +299,32 @@ pub fn point_values_linear_exact(
     }
     Ok(out)
 }
+
+/// λ of the pseudo-Laplacian over the neighbours `nb` (offset from the point, value) but
+/// those listed in `dropped`: Σ w_i R_i = 0 with w_i = (1 + λ·R_i)/|R_i|; `None` where the
+/// system is singular.
+fn affine_fit(nb: &[(DVec3, DVec3)], dropped: &[usize]) -> Option<DVec3> {
+    let (mut r, mut m) = (DVec3::ZERO, glam::DMat3::ZERO);
+    for (i, &(d, _)) in nb.iter().enumerate() {
+        if dropped.contains(&i) {
+            continue;
+        }
+        let w = 1.0 / d.length().max(1e-300);
+        r += w * d;
+        m += glam::DMat3::from_cols(w * d.x * d, w * d.y * d, w * d.z * d);
+    }
+    let scale = (m.x_axis.x + m.y_axis.y + m.z_axis.z) / 3.0;
+    let det = m.determinant();
+    if det.is_nan() || det.abs() <= 1e-9 * scale * scale * scale {
+        return None;
+    }
+    Some(-(m.inverse() * r))
+}
+
+/// How large the negative linear-exact weights may be together, as a fraction of the sum
+/// of all weights, for rounding, and the fit still count as convex: an overshoot of at
+/// most this fraction of the values' spread.
+pub const CONVEX_TOLERANCE: f64 = 1e-9;
 
 /// Whether every component of `v` lies within the range of the neighbours' values.
 fn within_range(v: DVec3, nb: &[(DVec3, DVec3)]) -> bool {
@@ -405,9 +464,11 @@ impl<'a> Interpolator<'a> {
         }
     }
 
-    /// The velocity at x in `cell` (m/s). When x is not in `cell`, `CellPoint` extrapolates
-    /// linearly on the cell's tetrahedron the ray from the cell centre toward x crosses;
-    /// an out-of-range cell gives NaN (which the simulation's guard reports).
+    /// The velocity at x in `cell` (m/s). When x is not in `cell`, the cell-point schemes
+    /// take the value where the ray from the cell centre toward x leaves the cell (on its
+    /// face triangle: a convex combination of the face's node values; beyond a no-slip
+    /// wall, the wall's value), never an extrapolation, which beyond a wall would reverse
+    /// the flow; an out-of-range cell gives NaN (which the simulation's guard reports).
     pub fn velocity(&self, cell: u32, x: DVec3) -> DVec3 {
         if cell as usize >= self.cells.len() {
             return DVec3::NAN;
@@ -415,7 +476,18 @@ impl<'a> Interpolator<'a> {
         match self.scheme {
             Interpolation::CellValue => self.cells[cell as usize],
             _ => match self.loc.probe(cell, x) {
-                Probe::Inside(h) | Probe::Exit { hit: h, .. } => self.at(&h),
+                Probe::Inside(h) => self.at(&h),
+                Probe::Exit { hit: mut h, .. } => {
+                    // the ray's exit point on the face triangle: cell-centre weight 0
+                    let [_, w1, w2, w3] = h.weights.map(|w| w.max(0.0));
+                    let sum = w1 + w2 + w3;
+                    if sum > 0.0 {
+                        h.weights = [0.0, w1 / sum, w2 / sum, w3 / sum];
+                        self.at(&h)
+                    } else {
+                        self.cells[cell as usize]
+                    }
+                }
                 Probe::Fail => self.cells[cell as usize],
             },
         }

@@ -24,7 +24,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use scg_cli::EXIT_BAD_INPUT;
-use scg_cli::run::{RunArgs, ensure_writable, extra_sinks, recording_stem};
+use scg_cli::run::{RunArgs, ensure_writable, extra_sinks, recording_stem, set_suffix};
 use std::io::Write;
 
 use scg_core::checkpoint::ParticleRecord;
@@ -534,7 +534,7 @@ fn make_sinks(
     paths: &mut Vec<std::path::PathBuf>,
 ) -> Result<Box<dyn FrameSink>, (String, i32)> {
     ensure_writable(&args.out).map_err(|e| (e, EXIT_BAD_INPUT))?;
-    let stem = recording_stem(scene);
+    let stem = format!("{}{}", recording_stem(scene), set_suffix(&args.set));
     let meta = scene.run_meta(report.messages());
     let rrd = args.out.join(format!("{stem}.rrd"));
     let mcap = args.out.join(format!("{stem}.mcap"));

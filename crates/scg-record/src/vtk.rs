@@ -1,7 +1,12 @@
 //! VTK files for ParaView (and any VTK reader): one XML UnstructuredGrid (`.vtu`) per
 //! frame, the particles as vertex cells with their velocity, diameter, density, id and
 //! group as point data; a ParaView collection (`<case>.pvd`) that puts the frames on the
-//! simulation time; and the scene geometry as line cells in `<case>_geometry.vtu`.
+//! simulation time; the scene geometry as line cells in `<case>_geometry.vtu`; and a mesh
+//! flow's boundary patches as triangles in `<case>_patches.vtu` (cell data `patch`,
+//! `role`).
+//!
+//! A frame without particles is a grid of no points and no cells, which VTK's reader and
+//! ParaView load; meshio 5.3 reads no grid without cells (not even one it writes itself).
 //!
 //! The files are ASCII, floats written in shortest round-trip exponent form, so a reader
 //! gets back every recorded value bit for bit. [`VtkSink`] writes them while a run goes
@@ -10,7 +15,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use scg_core::frame::{Frame, FrameSink, Outline, RunMeta};
+use scg_core::frame::{Frame, FrameSink, Outline, PatchSurface, RunMeta};
 
 use crate::RecordError;
 
@@ -38,6 +43,10 @@ impl VtkSink {
         if !meta.outlines.is_empty() {
             let path = dir.join(format!("{}_geometry.vtu", meta.case));
             write_file(&path, &geometry_vtu(&meta.outlines))?;
+        }
+        if !meta.patches.is_empty() {
+            let path = dir.join(format!("{}_patches.vtu", meta.case));
+            write_file(&path, &patches_vtu(&meta.patches))?;
         }
         Ok(sink)
     }
@@ -81,6 +90,7 @@ impl FrameSink for VtkSink {
 /// VTK cell types used here.
 const VTK_VERTEX: u8 = 1;
 const VTK_LINE: u8 = 3;
+const VTK_TRIANGLE: u8 = 5;
 
 /// A number as an ASCII `DataArray` writes it: floats in shortest round-trip exponent
 /// form (`1.5e-5`), integers plain.
@@ -128,11 +138,18 @@ fn data_array<T: Ascii>(
         out,
         "<DataArray type=\"{ty}\" Name=\"{name}\"{comps} format=\"ascii\">"
     );
+    let mut any = false;
     for (k, v) in values.into_iter().enumerate() {
         if k > 0 {
             out.push(' ');
         }
         v.put(out);
+        any = true;
+    }
+    // an empty array holds a line break, not nothing: readers that take the element's
+    // text (meshio) find a string to split
+    if !any {
+        out.push('\n');
     }
     out.push_str("</DataArray>\n");
 }
@@ -177,6 +194,38 @@ pub fn frame_vtu(frame: &Frame) -> String {
         data_array(s, "UInt32", "id", 1, &frame.id);
         data_array(s, "UInt32", "group", 1, &frame.group);
     })
+}
+
+/// The `.vtu` text of a mesh flow's boundary patches: their triangles, with the cell data
+/// `patch` (the patch's index in the mesh) and `role` (0 wall, 1 outlet, 2 inlet, 3 other).
+pub fn patches_vtu(patches: &[PatchSurface]) -> String {
+    let mut points: Vec<[f64; 3]> = Vec::new();
+    let (mut conn, mut offsets, mut patch, mut role) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for (i, p) in patches.iter().enumerate() {
+        let base = points.len();
+        points.extend_from_slice(&p.vertices);
+        let r: u32 = match p.role.as_str() {
+            "wall" => 0,
+            "outlet" => 1,
+            "inlet" => 2,
+            _ => 3,
+        };
+        for t in &p.triangles {
+            conn.extend(t.iter().map(|&v| base + v as usize));
+            offsets.push(conn.len());
+            patch.push(i as u32);
+            role.push(r);
+        }
+    }
+    let mut s = grid(&points, (&conn, &offsets, VTK_TRIANGLE), |_| {});
+    let mut cd = String::from("<CellData>\n");
+    data_array(&mut cd, "UInt32", "patch", 1, &patch);
+    data_array(&mut cd, "UInt32", "role", 1, &role);
+    cd.push_str("</CellData>\n");
+    let at = s.find("<Points>").unwrap_or(s.len());
+    s.insert_str(at, &cd);
+    s
 }
 
 /// The `.vtu` text of the scene geometry: every strip as consecutive line segments.
@@ -240,5 +289,36 @@ impl FrameSink for CsvSink {
 
     fn finish(&mut self) -> Result<(), String> {
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn patches_are_triangles_with_their_patch_and_role() {
+        let p = |name: &str, role: &str, z: f64| PatchSurface {
+            name: name.into(),
+            role: role.into(),
+            vertices: vec![[0.0, 0.0, z], [1.0, 0.0, z], [1.0, 1.0, z], [0.0, 1.0, z]],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        };
+        let s = patches_vtu(&[p("walls", "wall", 0.0), p("out", "outlet", 1.0)]);
+        assert!(
+            s.contains("NumberOfPoints=\"8\" NumberOfCells=\"4\""),
+            "{s}"
+        );
+        assert!(s.contains("Name=\"connectivity\" format=\"ascii\">0 1 2 0 2 3 4 5 6 4 6 7<"));
+        assert!(
+            s.contains("Name=\"patch\" format=\"ascii\">0 0 1 1<"),
+            "{s}"
+        );
+        assert!(s.contains("Name=\"role\" format=\"ascii\">0 0 1 1<"), "{s}");
+        assert!(s.contains("Name=\"types\" format=\"ascii\">5 5 5 5<"));
+        // an empty frame's arrays hold a line break
+        let empty = frame_vtu(&Frame::default());
+        assert!(empty.contains("NumberOfPoints=\"0\" NumberOfCells=\"0\""));
+        assert!(!empty.contains("\"ascii\"></DataArray>"), "{empty}");
     }
 }

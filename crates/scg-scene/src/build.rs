@@ -109,7 +109,7 @@ impl Scene {
             flow: self.flow,
             mesh_flow: self.mesh_flow.as_ref().map(|m| MeshFlowSpec {
                 flow: m.flow.clone(),
-                restitution: self.material.map_or(1.0, |m| m.restitution),
+                interactions: self.patch_models.iter().map(|p| p.interaction).collect(),
                 sort_every: m.sort_every,
             }),
             gravity: self.gravity,

@@ -13,8 +13,10 @@ use scg_core::physics::wall_shape::WallShape;
 
 use crate::model::{Allow, FeedSource};
 use crate::{Placement, Scene};
+use slip::{fluid_velocity, terminal_slip};
 
 mod render;
+mod slip;
 pub use render::render;
 
 /// Derived quantities of one group.
@@ -260,19 +262,22 @@ fn group_report(scene: &Scene, g: &crate::Group) -> GroupReport {
     let (tau, slip, re, ratio) = match (scene.fluid, scene.drag) {
         (Some(f), Some(_)) => {
             let tau = stokes_response_time(s.mass(), f.viscosity, s.drag_diameter, s.force_scale);
+            let law = scene.drag.unwrap_or_default();
             let mut slip: f64 = 0.0;
             for (x, v) in group_velocities(scene, g) {
-                slip = slip.max((scene.flow.velocity(x) - v).length());
+                slip = slip.max((fluid_velocity(scene, x) - v).length());
             }
             let omega = match scene.flow {
                 FlowField::Vortex(v) | FlowField::Classifier { vortex: v, .. } => v.omega.abs(),
                 _ => 0.0,
             };
-            // Centrifugal drift at the largest radius (at most the largest fluid speed: a
-            // particle cannot slip faster than the flow that drives it), and settling.
-            slip = slip.max((tau * omega * omega * max_radius(scene)).min(max_flow_speed(scene)));
+            // The terminal slips under the drag law: the centrifugal drift at the largest
+            // radius (at most the largest fluid speed: a particle cannot slip faster than the
+            // flow that drives it), and settling.
+            let terminal = |a: f64| terminal_slip(law, tau, a, s.drag_diameter, f);
+            slip = slip.max(terminal(omega * omega * max_radius(scene)).min(max_flow_speed(scene)));
             if let Some(gr) = scene.gravity {
-                slip = slip.max(tau * gr.length());
+                slip = slip.max(terminal(gr.length()));
             }
             let re = particle_reynolds(s.drag_diameter, slip, f.density, f.viscosity);
             (tau, slip, re, s.density / f.density)
@@ -398,12 +403,30 @@ pub fn stokes_number(scene: &Scene, reports: &[GroupReport]) -> f64 {
 /// * t_c/50 of the stiffest particle–particle pair with `[contacts]`
 ///   ([`particle_contact_time`]);
 /// * τ/2 of the fastest-responding group with the explicit integrator;
+/// * with a flow on a mesh: a quarter of the time the fastest air takes to cross a mean
+///   cell ((V/N)^(1/3)/(4·u_max)), and the shortest drag time τ (the velocity a particle
+///   sees changes along its path; walls that rebound, stick or escape add no contact time);
 /// * duration/100.
 pub fn auto_dt(scene: &Scene) -> f64 {
     let mut dt = scene.duration / 100.0;
     let rate = scene.flow.rate();
     if rate > 0.0 {
         dt = dt.min(1.0 / (100.0 * rate));
+    }
+    if let Some(m) = &scene.mesh_flow {
+        let g = m.flow.geometry();
+        let volume: f64 = g.cell_volumes.iter().sum();
+        let cell = (volume / g.cell_volumes.len().max(1) as f64).cbrt();
+        let umax = m.flow.field_speed().1;
+        if umax > 0.0 && cell > 0.0 {
+            dt = dt.min(cell / (4.0 * umax));
+        }
+        for g in &scene.groups {
+            let tau = group_report(scene, g).tau;
+            if tau.is_finite() && tau > 0.0 {
+                dt = dt.min(tau);
+            }
+        }
     }
     for g in &scene.groups {
         let r = group_report(scene, g);
@@ -483,6 +506,15 @@ pub fn check(scene: &Scene) -> Report {
                 Some(Allow::StokesReynolds),
                 format!(
                     "group `{}`: particle Reynolds number ≈ {:.3} > 0.1, outside Stokes drag (C_d = 24/Re) validity",
+                    r.name, r.reynolds
+                ),
+            );
+        }
+        if scene.drag == Some(DragLaw::SchillerNaumann) && r.reynolds > 1000.0 {
+            warn_unless(
+                None,
+                format!(
+                    "group `{}`: particle Reynolds number ≈ {:.0} > 1000, outside Schiller–Naumann drag validity (C_d ≈ 0.44 beyond)",
                     r.name, r.reynolds
                 ),
             );
@@ -643,6 +675,28 @@ fn mesh_flow_findings(scene: &Scene) -> Vec<Finding> {
         return Vec::new();
     };
     let mut out = Vec::new();
+    let mesh = m.flow.mesh();
+    let empty: Vec<&str> = mesh
+        .patches
+        .iter()
+        .filter(|p| p.kind == "empty")
+        .map(|p| p.name.as_str())
+        .collect();
+    if !empty.is_empty() {
+        out.push(Finding {
+            level: Level::Note,
+            message: format!(
+                "a 2-D case: patch(es) {} are `empty` (the direction the case does not resolve); particles reflect specularly there, so their motion stays in the slab, and the fates are of the slab's depth",
+                empty.join(", ")
+            ),
+        });
+    }
+    if mesh.patches.iter().any(|p| p.kind == "wedge") {
+        out.push(Finding {
+            level: Level::Warning,
+            message: "an axisymmetric (wedge) case: particles reflect at the wedge faces instead of moving round the axis; their azimuthal motion is not represented".into(),
+        });
+    }
     let particles = scene.initial_particles();
     let outside: Vec<&scg_core::ParticleSpec> = particles
         .iter()

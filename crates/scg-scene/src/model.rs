@@ -121,6 +121,9 @@ pub struct Scene {
     /// The wall patches of a mesh flow as a contact wall (`flow.patches.wall_model =
     /// "contact"`, the default with `[material]`); `None` when they only rebound.
     pub patch_walls: Option<PatchWalls>,
+    /// What particles do at each patch of the mesh flow, in mesh order (empty without a
+    /// mesh flow).
+    pub patch_models: Vec<PatchModel>,
     /// Particle–particle contacts (`[contacts]`), if declared.
     pub contacts: Option<ContactConfig>,
     /// Groups.
@@ -199,6 +202,27 @@ pub struct SceneMeshFlow {
     /// Steps between reorderings of the particle table by mesh cell (0: never; with
     /// particle contacts never).
     pub sort_every: u64,
+}
+
+/// What a particle does at one patch of a mesh flow.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PatchModel {
+    /// At the particle's centre: rebound, stick or escape (for a `contact` patch, the
+    /// rebound that guards the contact law).
+    pub interaction: scg_core::physics::mesh_flow::PatchInteraction,
+    /// The patch is a contact wall (Hertz–Mindlin with the `[material]`).
+    pub contact: bool,
+}
+
+impl PatchModel {
+    /// The model's name in scene files.
+    pub fn name(&self) -> &'static str {
+        if self.contact {
+            "contact"
+        } else {
+            self.interaction.name()
+        }
+    }
 }
 
 /// The wall patches of a mesh flow as one mesh wall: every face of every wall patch,

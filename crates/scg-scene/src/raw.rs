@@ -64,6 +64,8 @@ pub struct RawFeeder {
     pub group: String,
     pub rate: Option<f64>,
     pub volume_rate: Option<f64>,
+    /// Mass flow of the original powder, kg/s.
+    pub mass_rate: Option<f64>,
     pub region: Option<RawRegion>,
     /// A boundary patch of a mesh flow to feed from (instead of `region`).
     pub patch: Option<String>,
@@ -154,19 +156,42 @@ pub struct RawPatches {
     pub outlets: Vec<String>,
     #[serde(default)]
     pub inlets: Vec<String>,
-    /// What the wall patches do: `contact` (default with `[material]`) or `rebound`.
+    /// What the wall patches do: `contact` (default with `[material]`), `rebound`, `stick`
+    /// or `escape`.
     #[serde(default, deserialize_with = "some_name")]
     pub wall_model: Option<RawWallModel>,
+    /// Normal restitution of `rebound` walls (default `material.restitution`, else 1).
+    pub restitution: Option<f64>,
+    /// Coulomb friction of `rebound` walls (default 0).
+    pub friction: Option<f64>,
+    /// Per-patch models by patch name (OpenFOAM's `localInteraction`), overriding the
+    /// role's default.
+    #[serde(default)]
+    pub interaction: std::collections::BTreeMap<String, RawInteraction>,
 }
 
-/// `flow.patches.wall_model`.
+/// `flow.patches.interaction.<patch>`.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawInteraction {
+    #[serde(deserialize_with = "name")]
+    pub model: RawWallModel,
+    pub restitution: Option<f64>,
+    pub friction: Option<f64>,
+}
+
+/// `flow.patches.wall_model`, `flow.patches.interaction.<patch>.model`.
 #[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum RawWallModel {
     /// The contact law of `[material]` against the patches' faces (a mesh wall).
     Contact,
-    /// The specular rebound of the centre only.
+    /// The impulse rebound of the centre: restitution and Coulomb friction.
     Rebound,
+    /// Deposits: the particle stays where it reached the patch (removed, counted).
+    Stick,
+    /// Leaves through the patch (removed, counted).
+    Escape,
 }
 
 /// `flow.interpolation`.

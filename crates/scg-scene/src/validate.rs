@@ -3,6 +3,7 @@
 //! file, the key and (when the key is in the file) its line.
 
 mod particles;
+mod patches;
 mod physics;
 
 use std::path::Path;
@@ -19,7 +20,8 @@ use crate::model::{DtChoice, Group, Placement, Scene};
 use crate::overrides::apply_overrides;
 use crate::raw::{RawDt, RawScene};
 use particles::{feeder, group};
-use physics::{contacts, flow_field, material, mesh_flow, outlet, patch_walls, wall};
+use patches::{patch_models, patch_walls};
+use physics::{contacts, flow_field, material, mesh_flow, outlet, wall};
 
 /// The embedded default scene (the paper's vortex case), run by `scg run` with no file.
 pub const DEFAULT_SCENE: &str = include_str!("../../../cases/vortex.toml");
@@ -176,9 +178,13 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
             (Some(mat), Some(law))
         }
     };
-    let patch_walls = match (&raw.flow, &mesh_flow) {
-        (Some(f), Some(m)) => patch_walls(f, m, material, cx)?,
-        _ => None,
+    let patch_models = match (&raw.flow, &mesh_flow) {
+        (Some(f), Some(m)) => patch_models(f, m, material, cx)?,
+        _ => Vec::new(),
+    };
+    let patch_walls = match &mesh_flow {
+        Some(m) => patch_walls(m, &patch_models, cx)?,
+        None => None,
     };
     let mut walls = Vec::new();
     for (i, w) in raw.walls.iter().enumerate() {
@@ -256,6 +262,7 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
         normal_law,
         walls,
         patch_walls,
+        patch_models,
         contacts: None,
         groups,
         feeders,

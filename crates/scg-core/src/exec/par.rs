@@ -288,7 +288,7 @@ mod tests {
     fn rows_split_like_columns_and_pick_their_members() {
         let (a, b) = Rows(10..30).split_at(7);
         assert_eq!((a.clone(), b.clone()), (Rows(10..17), Rows(17..30)));
-        let (col_a, col_b) = (&[0u8; 20][..]).split_at(7);
+        let (col_a, col_b) = [0u8; 20][..].split_at(7);
         assert_eq!((a.rows(), b.rows()), (col_a.len(), col_b.len()));
         let sorted = [3, 10, 16, 17, 29, 30, 31];
         assert_eq!(a.within(&sorted), &[10, 16]);

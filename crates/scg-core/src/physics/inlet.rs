@@ -375,15 +375,25 @@ mod tests {
         // Q = ∫ (2 + y) dy dz over the unit square = 2.5 m³/s; mean u = (2.5, 0.25, −0.25)
         let q = s.flux(&flow);
         assert!((q.area - 1.0).abs() < 1e-14);
-        assert!((q.inflow - 2.5).abs() < 1e-12, "{q:?}");
-        assert!((q.mean_velocity - DVec3::new(2.5, 0.25, -0.25)).length() < 1e-12);
+        // exact but for the patch's edges and corners, where the point values are convex
+        // combinations (no overshoot) rather than the affine fit: within 2 %
+        assert!((q.inflow - 2.5).abs() < 2e-2 * 2.5, "{q:?}");
+        assert!((q.mean_velocity - DVec3::new(2.5, 0.25, -0.25)).length() < 2e-2 * 2.5);
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         for _ in 0..200 {
             let p = s.sample(&mut rng, 0.02);
             let owner = s.faces()[p.face].owner;
             let (cell, v) = settle(&flow, owner, p.centre);
             assert!((cell as usize) < flow.mesh().n_cells);
-            assert!((v - u(p.centre)).length() < 1e-12, "{v} {}", u(p.centre));
+            // the interpolated field: exact but in cells at the box's edges and corners, where
+            // point values are convex combinations; on this 3 × 3 × 3 box that is every cell
+            let (w, _) = flow.velocity(cell, p.centre);
+            assert!((v - w).length() < 1e-12, "{v} {w}");
+            assert!(
+                (v - u(p.centre)).length() < 0.1 * u(p.centre).length(),
+                "{v} {}",
+                u(p.centre)
+            );
             assert!(matches!(flow.track(cell, p.centre), Location::Inside(h) if h.cell == cell));
         }
     }

@@ -17,16 +17,17 @@ use scg_mesh::{
 /// What a particle meeting a boundary patch does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PatchRole {
-    /// Rebounds (specular reflection, normal velocity × −e). With the contact wall model
-    /// the particles meet a mesh wall of the patch's faces first (the walls stage) and the
-    /// reflection is only the guard that keeps every centre inside.
+    /// A wall: its [`PatchInteraction`] says what a particle reaching it does (rebound,
+    /// stick, escape). With the contact wall model the particles meet a mesh wall of the
+    /// patch's faces first (the walls stage) and the rebound is only the guard that keeps
+    /// every centre inside.
     Wall,
-    /// Drains: removed and counted per group.
+    /// Drains: removed and counted per group as drained (escaped through the patch).
     Outlet,
     /// Particles are fed through it (`[[feeders]] patch`); one going back out through
-    /// it is removed and counted as lost.
+    /// it is removed and counted as lost (escaped through the inlet).
     Inlet,
-    /// Removed and counted as lost.
+    /// Removed and counted as lost (escaped through the patch).
     Lost,
 }
 
@@ -42,15 +43,120 @@ impl PatchRole {
     }
 }
 
+/// What a particle whose centre reaches a boundary patch does: the patch interaction
+/// models of OpenFOAM's `localInteraction` (rebound, stick, escape), one per patch.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PatchInteraction {
+    /// Rebounds as an impulse ([`coulomb_rebound`]): normal restitution `e` and Coulomb
+    /// friction `mu`; the centre is mirrored back inside, never crossing the wall.
+    Rebound {
+        /// Normal restitution, v_n' = −e·v_n, in [0, 1].
+        e: f64,
+        /// Coulomb friction coefficient, ≥ 0.
+        mu: f64,
+    },
+    /// Sticks (deposits): removed from the flow and counted as stuck on the patch.
+    Stick,
+    /// Escapes: removed and counted as escaped through the patch (an outlet drains).
+    Escape,
+}
+
+impl PatchInteraction {
+    /// Name used in scene files and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            PatchInteraction::Rebound { .. } => "rebound",
+            PatchInteraction::Stick => "stick",
+            PatchInteraction::Escape => "escape",
+        }
+    }
+}
+
+/// The velocity after an impulsive impact on a wall of unit outward normal `n` (the wall
+/// at rest), with normal restitution `e` and Coulomb friction `mu`, for a sphere without
+/// spin before the impact (the rigid-sphere impact of Crowe, Sommerfeld & Tsuji, *Multiphase
+/// Flows with Droplets and Particles*, ch. 5):
+/// * normal: v_n' = −e·v_n (only when moving into the wall, v_n = v·n > 0; otherwise the
+///   velocity is returned unchanged);
+/// * tangential, sliding through the impact when |v_t| > (7/2)·μ·(1 + e)·v_n: the friction
+///   impulse μ·(1 + e)·m·v_n against the slip, Δv_t = −μ(1 + e)·v_n·t̂;
+/// * otherwise the contact point stops slipping during the impact and the sphere leaves
+///   rolling: v_t' = (5/7)·v_t (the rolling limit of a solid sphere, I = (2/5)·m·r²).
+#[inline]
+pub fn coulomb_rebound(v: DVec3, n: DVec3, e: f64, mu: f64) -> DVec3 {
+    let vn = v.dot(n);
+    if vn <= 0.0 {
+        return v;
+    }
+    if mu == 0.0 {
+        // frictionless: the tangential velocity is kept (the specular rebound)
+        return v - (1.0 + e) * vn * n;
+    }
+    let vt = v - vn * n;
+    let slip = vt.length();
+    let jt = mu * (1.0 + e) * vn;
+    let vt1 = if slip > 3.5 * jt {
+        vt - (jt / slip) * vt
+    } else {
+        (5.0 / 7.0) * vt
+    };
+    vt1 - e * vn * n
+}
+
 /// A particle's cell hint (the component stores the `u32`): a cell index, or one of
 /// these markers (all ≥ any cell count a `u32` mesh can hold in practice).
 pub mod hint {
     /// Not located yet (spawned this step): the locator's grid finds it.
     pub const UNLOCATED: u32 = u32::MAX - 2;
-    /// Left through an outlet patch this step: the boundary stage drains it.
-    pub const DRAINED: u32 = u32::MAX;
-    /// Left the mesh elsewhere (or was never in it): the boundary stage removes it as lost.
+    /// Left the mesh other than through a patch (or was never in it): the boundary stage
+    /// removes it as lost.
     pub const LOST: u32 = u32::MAX - 1;
+    /// The first marker of a departure through a patch: [`escaped`] and [`stuck`] code the
+    /// patch in the markers `DEPARTED..UNLOCATED`.
+    pub const DEPARTED: u32 = 0xC000_0000;
+
+    /// Patches the markers can name (patch indices below this).
+    pub const MAX_PATCHES: u32 = (UNLOCATED - DEPARTED) / 2;
+
+    /// Escaped through patch `p` this step (`p` < [`MAX_PATCHES`]).
+    #[inline]
+    pub const fn escaped(p: u32) -> u32 {
+        DEPARTED + 2 * p
+    }
+
+    /// Stuck on patch `p` this step.
+    #[inline]
+    pub const fn stuck(p: u32) -> u32 {
+        DEPARTED + 2 * p + 1
+    }
+
+    /// What a hint says of a particle that left this step.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum Departure {
+        /// Escaped through the patch.
+        Escaped(u32),
+        /// Stuck on the patch.
+        Stuck(u32),
+        /// Lost (outside the mesh).
+        Lost,
+    }
+
+    /// The departure `h` marks, `None` for a cell or [`UNLOCATED`].
+    #[inline]
+    pub const fn departure(h: u32) -> Option<Departure> {
+        if h == LOST {
+            Some(Departure::Lost)
+        } else if h >= DEPARTED && h < UNLOCATED {
+            let k = h - DEPARTED;
+            Some(if k.is_multiple_of(2) {
+                Departure::Escaped(k / 2)
+            } else {
+                Departure::Stuck(k / 2)
+            })
+        } else {
+            None
+        }
+    }
 }
 
 /// A flow field on a mesh, ready for queries.
@@ -311,17 +417,15 @@ fn prefetch<T>(v: &[T], i: usize) {
     let _ = (v, i);
 }
 
-/// Specular reflection of a particle that crossed the plane through `p` with unit
-/// outward normal `n`: its centre is mirrored back inside (when beyond the plane) and the
-/// outward normal velocity component reversed and scaled by the restitution `e`
-/// (v_n' = −e·v_n); the tangential component is kept. Returns (x', v').
+/// The rebound of a particle that crossed the wall plane through `p` with unit outward
+/// normal `n`: its centre is mirrored back inside (when beyond the plane) and its velocity
+/// changed by the impulse of [`coulomb_rebound`] (restitution `e`, friction `mu`). Returns
+/// (x', v').
 #[inline]
-pub fn reflect(x: DVec3, v: DVec3, p: DVec3, n: DVec3, e: f64) -> (DVec3, DVec3) {
+pub fn rebound(x: DVec3, v: DVec3, p: DVec3, n: DVec3, e: f64, mu: f64) -> (DVec3, DVec3) {
     let d = (x - p).dot(n);
     let x1 = if d > 0.0 { x - 2.0 * d * n } else { x };
-    let vn = v.dot(n);
-    let v1 = if vn > 0.0 { v - (1.0 + e) * vn * n } else { v };
-    (x1, v1)
+    (x1, coulomb_rebound(v, n, e, mu))
 }
 
 /// Most interior faces [`MeshFlow::walk_table`] crosses before it leaves the search to the
@@ -347,12 +451,14 @@ pub struct Landing {
 pub const MAX_REFLECTIONS: usize = 8;
 
 /// Settle the end of a move on the mesh: locate `x1` from `h_from` (a cell near the path);
-/// crossing a wall patch reflects (restitution `e`) and locates again, at most
-/// [`MAX_REFLECTIONS`] times, after which the particle goes back to `x0` (its start, in
-/// cell `h0`) with the reflected velocity, so a wall is never passed; crossing an outlet
-/// drains, anything else is lost. A boundary face the walk passes on its way to a point
-/// inside the mesh (`Location::Crossed`: a concave boundary) counts as crossed. When the
-/// wall patches are also a contact wall, this reflection is the last-resort guard (a
+/// crossing a patch applies that patch's interaction (`models`, one per patch; a patch
+/// past the list escapes): a rebound mirrors the centre back and changes the velocity
+/// ([`coulomb_rebound`]), then locates again, at most [`MAX_REFLECTIONS`] times, after
+/// which the particle goes back to `x0` (its start, in cell `h0`) with the rebound
+/// velocity, so a wall is never passed; a stick or escape marks the particle
+/// ([`hint::stuck`], [`hint::escaped`]). A boundary face the walk passes on its way to a
+/// point inside the mesh (`Location::Crossed`: a concave boundary) counts as crossed. When
+/// the wall patches are also a contact wall, this rebound is the last-resort guard (a
 /// centre reaches a wall patch only through an overlap beyond the radius).
 #[inline]
 pub fn land(
@@ -362,7 +468,7 @@ pub fn land(
     h_from: u32,
     x1: DVec3,
     v1: DVec3,
-    e: f64,
+    models: &[PatchInteraction],
 ) -> Landing {
     // The table first: x1 is in the cell of the mid-step point (most steps) or a few
     // cells on.
@@ -375,7 +481,7 @@ pub fn land(
             hint: cell,
         };
     }
-    land_boundary(flow, (x0, h0), h_from, walked, x1, v1, e)
+    land_boundary(flow, (x0, h0), h_from, walked, x1, v1, models)
 }
 
 /// [`land`] when the table did not find x1 from `h_from` (`walked`): the boundary, the
@@ -388,7 +494,7 @@ fn land_boundary(
     mut walked: TableWalk,
     mut x1: DVec3,
     mut v1: DVec3,
-    e: f64,
+    models: &[PatchInteraction],
 ) -> Landing {
     let mut from = h_from;
     for k in 0..MAX_REFLECTIONS {
@@ -423,7 +529,7 @@ fn land_boundary(
                 }
                 Location::Crossed { face, patch, hit } => {
                     // The walk passed a boundary face (a concave boundary, a thin baffle)
-                    // on its way to a point inside: the face's role decides, as when
+                    // on its way to a point inside: the face's model decides, as when
                     // leaving.
                     from = hit.cell;
                     (face, patch)
@@ -439,28 +545,25 @@ fn land_boundary(
                 }
             },
         };
-        match flow.role(patch) {
-            PatchRole::Wall => {
+        let model = models
+            .get(patch as usize)
+            .copied()
+            .unwrap_or(PatchInteraction::Escape);
+        let marker = match model {
+            PatchInteraction::Rebound { e, mu } => {
                 let (n, p) = flow.face_plane(face);
-                (x1, v1) = reflect(x1, v1, p, n, e);
+                (x1, v1) = rebound(x1, v1, p, n, e, mu);
+                continue;
             }
-            PatchRole::Outlet => {
-                return Landing {
-                    x: x1,
-                    v: v1,
-                    u: None,
-                    hint: hint::DRAINED,
-                };
-            }
-            PatchRole::Lost | PatchRole::Inlet => {
-                return Landing {
-                    x: x1,
-                    v: v1,
-                    u: None,
-                    hint: hint::LOST,
-                };
-            }
-        }
+            PatchInteraction::Stick => hint::stuck(patch),
+            PatchInteraction::Escape => hint::escaped(patch),
+        };
+        return Landing {
+            x: x1,
+            v: v1,
+            u: None,
+            hint: marker,
+        };
     }
     Landing {
         x: x0,
@@ -576,18 +679,67 @@ mod tests {
 
     #[test]
     fn reflection_is_specular() {
-        let (x, v) = reflect(
+        let (x, v) = rebound(
             DVec3::new(1.1, 0.5, 0.5),
             DVec3::new(2.0, 1.0, 0.0),
             DVec3::new(1.0, 0.0, 0.0),
             DVec3::X,
             0.5,
+            0.0,
         );
         assert!((x - DVec3::new(0.9, 0.5, 0.5)).length() < 1e-15);
         assert_eq!(v, DVec3::new(-1.0, 1.0, 0.0));
         // moving inward already: velocity kept
-        let (_, v) = reflect(DVec3::ZERO, -DVec3::X, DVec3::ONE, DVec3::X, 0.5);
+        let (_, v) = rebound(DVec3::ZERO, -DVec3::X, DVec3::ONE, DVec3::X, 0.5, 0.3);
         assert_eq!(v, -DVec3::X);
+    }
+
+    /// The impulse rebound against its closed forms: normal, oblique sliding (the friction
+    /// impulse μ(1+e)v_n against the slip) and oblique sticking (5/7 of the tangential
+    /// velocity), on a tilted wall, to 1e-12.
+    #[test]
+    fn coulomb_rebound_matches_the_closed_forms() {
+        let n = DVec3::new(1.0, 2.0, -0.5).normalize();
+        let t = n.any_orthonormal_vector();
+        let (e, mu) = (0.7, 0.3);
+        let close = |a: DVec3, b: DVec3| (a - b).length() <= 1e-12 * b.length().max(1.0);
+        // normal
+        let v = coulomb_rebound(4.0 * n, n, e, mu);
+        assert!(close(v, -e * 4.0 * n), "{v}");
+        // oblique, sliding: |v_t| = 10 > 3.5·μ(1+e)·v_n = 3.5·0.3·1.7·2 = 3.57
+        let v = coulomb_rebound(2.0 * n + 10.0 * t, n, e, mu);
+        let want = -e * 2.0 * n + (10.0 - mu * (1.0 + e) * 2.0) * t;
+        assert!(close(v, want), "{v} vs {want}");
+        // oblique, sticking: |v_t| = 3 < 3.57: leaves rolling at 5/7
+        let v = coulomb_rebound(2.0 * n + 3.0 * t, n, e, mu);
+        let want = -e * 2.0 * n + (5.0 / 7.0) * 3.0 * t;
+        assert!(close(v, want), "{v} vs {want}");
+        // the sliding result meets the rolling one at the limit (continuous)
+        let lim = 3.5 * mu * (1.0 + e) * 2.0;
+        let a = coulomb_rebound(2.0 * n + (lim * (1.0 + 1e-12)) * t, n, e, mu);
+        let b = coulomb_rebound(2.0 * n + (lim * (1.0 - 1e-12)) * t, n, e, mu);
+        assert!((a - b).length() < 1e-9, "{a} {b}");
+        // frictionless: the tangential velocity is kept
+        let v = coulomb_rebound(2.0 * n + 3.0 * t, n, e, 0.0);
+        assert!(close(v, -e * 2.0 * n + 3.0 * t));
+    }
+
+    fn models(f: &MeshFlow, e: f64) -> Vec<PatchInteraction> {
+        f.roles()
+            .iter()
+            .map(|r| match r {
+                PatchRole::Wall => PatchInteraction::Rebound { e, mu: 0.0 },
+                _ => PatchInteraction::Escape,
+            })
+            .collect()
+    }
+
+    fn patch(f: &MeshFlow, name: &str) -> u32 {
+        f.mesh()
+            .patches
+            .iter()
+            .position(|p| p.name == name)
+            .unwrap() as u32
     }
 
     #[test]
@@ -602,12 +754,27 @@ mod tests {
         let (w, h) = f.velocity(h0, DVec3::new(0.6, 0.55, 0.45));
         assert!((w - u).length() < 1e-14);
         assert!((h as usize) < f.mesh().n_cells);
+        let m1 = models(&f, 1.0);
         // through the outlet (x max)
-        let l = land(&f, x0, h0, h0, DVec3::new(1.2, 0.5, 0.5), DVec3::X, 1.0);
-        assert_eq!(l.hint, hint::DRAINED);
-        // through the inlet (lost)
-        let l = land(&f, x0, h0, h0, DVec3::new(-0.2, 0.5, 0.5), -DVec3::X, 1.0);
-        assert_eq!(l.hint, hint::LOST);
+        let l = land(&f, x0, h0, h0, DVec3::new(1.2, 0.5, 0.5), DVec3::X, &m1);
+        assert_eq!(
+            hint::departure(l.hint),
+            Some(hint::Departure::Escaped(patch(&f, "outlet")))
+        );
+        // through the inlet (escapes there)
+        let l = land(&f, x0, h0, h0, DVec3::new(-0.2, 0.5, 0.5), -DVec3::X, &m1);
+        assert_eq!(
+            hint::departure(l.hint),
+            Some(hint::Departure::Escaped(patch(&f, "inlet")))
+        );
+        // a stick wall keeps it
+        let mut ms = m1.clone();
+        ms[patch(&f, "walls") as usize] = PatchInteraction::Stick;
+        let l = land(&f, x0, h0, h0, DVec3::new(0.5, 1.25, 0.5), DVec3::Y, &ms);
+        assert_eq!(
+            hint::departure(l.hint),
+            Some(hint::Departure::Stuck(patch(&f, "walls")))
+        );
         // into the y max wall: mirrored back, v_y reversed × e
         let l = land(
             &f,
@@ -616,7 +783,7 @@ mod tests {
             h0,
             DVec3::new(0.5, 1.25, 0.5),
             DVec3::new(0.0, 2.0, 1.0),
-            0.5,
+            &models(&f, 0.5),
         );
         assert!((l.x - DVec3::new(0.5, 0.75, 0.5)).length() < 1e-12);
         assert!((l.v - DVec3::new(0.0, -1.0, 1.0)).length() < 1e-12);
@@ -630,10 +797,23 @@ mod tests {
             h0,
             DVec3::new(0.5, 1.2, -0.1),
             DVec3::new(0.0, 1.0, -1.0),
-            1.0,
+            &m1,
         );
         assert!((l.x - DVec3::new(0.5, 0.8, 0.1)).length() < 1e-12, "{l:?}");
         assert!((l.v - DVec3::new(0.0, -1.0, 1.0)).length() < 1e-12);
+        // markers are never cells, and decode back
+        for p in [0, 1, 7, hint::MAX_PATCHES - 1] {
+            assert_eq!(
+                hint::departure(hint::escaped(p)),
+                Some(hint::Departure::Escaped(p))
+            );
+            assert_eq!(
+                hint::departure(hint::stuck(p)),
+                Some(hint::Departure::Stuck(p))
+            );
+        }
+        assert_eq!(hint::departure(hint::UNLOCATED), None);
+        assert_eq!(hint::departure(12), None);
         // roles must match the patches
         let m = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [1, 1, 1])
             .build()

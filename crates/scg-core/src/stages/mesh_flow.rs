@@ -5,14 +5,14 @@
 //! A step locates the predicted mid-step position by walking from the hint
 //! ([`MeshFlow::velocity`]), interpolates u there, moves the particle with the same drag
 //! laws and integrators as the analytic flows ([`crate::stages::motion`]), then settles the
-//! end position on the mesh ([`land`]): inside, the hint becomes its cell; through a wall
-//! patch it is reflected back (specular, v_n' = −e·v_n with the scene material's
-//! restitution, 1 without a material); through an outlet patch its hint becomes
-//! [`hint::DRAINED`]; anywhere else [`hint::LOST`]. A particle found in no cell when first
-//! located (spawned outside the mesh) is lost too. The boundary system
-//! ([`mesh_boundary`], inlet/outlet stage) removes the marked particles in id order and
-//! counts them per group: drained ones in `Tally::drained` and `OutletLog::drained`,
-//! lost ones in `OutletLog::lost`.
+//! end position on the mesh ([`land`]): inside, the hint becomes its cell; through a patch
+//! the patch's [`PatchInteraction`] decides: a rebound reflects it back (restitution and
+//! Coulomb friction), a stick or an escape marks it ([`hint::stuck`], [`hint::escaped`]).
+//! A particle found in no cell when first located (spawned outside the mesh) is lost
+//! ([`hint::LOST`]). The boundary system ([`mesh_boundary`], inlet/outlet stage) removes
+//! the marked particles in id order and counts them per group and patch ([`PatchLog`]):
+//! escaped through an outlet patch as drained (`Tally::drained`, `OutletLog::drained`),
+//! through other patches or lost as `OutletLog::lost`, stuck ones in [`PatchLog::stuck`].
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -30,7 +30,7 @@ use crate::physics::integrate::{
     Integrator, explicit_euler, explicit_substeps, exponential_drift, exponential_factors,
     linear_kick,
 };
-use crate::physics::mesh_flow::{MeshFlow, hint, land};
+use crate::physics::mesh_flow::{MeshFlow, PatchInteraction, PatchRole, hint, land};
 use crate::stages::motion::{Motion, effective_tau};
 use crate::state::{Health, SimClock, StepDisplacement, Tally};
 use crate::step::{StepBuilder, StepSet, StepSystem};
@@ -40,8 +40,9 @@ use crate::step::{StepBuilder, StepSet, StepSystem};
 pub struct MeshFlowSpec {
     /// The flow (shared by the simulations built from one scene).
     pub flow: Arc<MeshFlow>,
-    /// Restitution of wall patches, v_n' = −e·v_n, in (0, 1].
-    pub restitution: f64,
+    /// What a particle reaching each patch does (one per patch of the mesh, in its
+    /// order; a patch past the list escapes).
+    pub interactions: Vec<PatchInteraction>,
     /// Steps between reorderings of the particle table by mesh cell ([`sort_by_cell`]);
     /// 0: never.
     pub sort_every: u64,
@@ -70,6 +71,7 @@ impl MeshFlowState {
 /// Add the mesh-flow boundary system (inlet/outlet stage) and its resources; the
 /// integration system is added by [`crate::stages::motion::plugin`].
 pub fn plugin(world: &mut World, b: &mut StepBuilder, spec: MeshFlowSpec, groups: usize) {
+    world.insert_resource(PatchLog::new(spec.flow.mesh().patches.len(), groups));
     world.insert_resource(MeshFlowState::new(spec));
     if !world.contains_resource::<OutletLog>() {
         world.insert_resource(OutletLog {
@@ -150,7 +152,7 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
         integrator: d.motion.integrator,
         fluid: d.fluid.as_deref().copied(),
         flow,
-        e: d.state.spec.restitution,
+        models: &d.state.spec.interactions,
         n_cells: flow.mesh().n_cells as u32,
         health: &d.health,
     };
@@ -193,7 +195,7 @@ struct MeshStep<'a> {
     integrator: Integrator,
     fluid: Option<Fluid>,
     flow: &'a MeshFlow,
-    e: f64,
+    models: &'a [PatchInteraction],
     n_cells: u32,
     health: &'a Health,
 }
@@ -212,7 +214,7 @@ impl MeshStep<'_> {
             integrator,
             fluid,
             flow,
-            e,
+            models,
             n_cells,
             health,
         } = *self;
@@ -309,7 +311,7 @@ impl MeshStep<'_> {
                 }
                 continue;
             }
-            let l = land(flow, x0, h0, h_end, x1, v1, e);
+            let l = land(flow, x0, h0, h_end, x1, v1, models);
             if l.hint >= n_cells {
                 gone += 1;
             }
@@ -468,23 +470,72 @@ fn permute<T: Component<Mutability = bevy_ecs::component::Mutable> + Clone>(
     }
 }
 
-/// Remove the particles the integration marked drained or lost, in id order (so the log
-/// is deterministic), counting them per group.
+/// Particles that left through each patch, per group (resource of a mesh flow):
+/// `escaped[patch][group]` and `stuck[patch][group]`, counts of simulated particles.
+#[derive(Resource, Clone, Debug, Default, PartialEq)]
+pub struct PatchLog {
+    /// Escaped through the patch (an outlet drains, an inlet or other patch loses).
+    pub escaped: Vec<Vec<u64>>,
+    /// Stuck on the patch (a `stick` patch).
+    pub stuck: Vec<Vec<u64>>,
+}
+
+impl PatchLog {
+    /// Zero counts for `patches` patches and `groups` groups.
+    pub fn new(patches: usize, groups: usize) -> Self {
+        PatchLog {
+            escaped: vec![vec![0; groups]; patches],
+            stuck: vec![vec![0; groups]; patches],
+        }
+    }
+
+    fn add(v: &mut [Vec<u64>], patch: u32, group: u32) {
+        if let Some(c) = v
+            .get_mut(patch as usize)
+            .and_then(|g| g.get_mut(group as usize))
+        {
+            *c += 1;
+        }
+    }
+}
+
+/// Remove the particles the integration marked as departed, in id order (so the log is
+/// deterministic), counting them per group and per patch: escaped through an outlet patch
+/// as drained (`Tally::drained`, `OutletLog::drained`), escaped through any other patch or
+/// lost outside the mesh as lost (`OutletLog::lost`), stuck on a patch in
+/// [`PatchLog::stuck`] alone.
 pub fn mesh_boundary(
     mut commands: Commands,
     clock: Res<SimClock>,
     state: Res<MeshFlowState>,
     mut log: ResMut<OutletLog>,
     mut tally: ResMut<Tally>,
+    mut patches: ResMut<PatchLog>,
     q: Query<(Entity, &ParticleId, &GroupId, &CellHint)>,
 ) {
+    use hint::Departure;
     if state.departures.swap(0, Ordering::Relaxed) == 0 {
         return;
     }
-    let gone = q
+    let mut gone: Vec<(u32, u32, Entity, Departure)> = q
         .iter()
-        .filter(|(.., h)| h.0 == hint::DRAINED || h.0 == hint::LOST)
-        .map(|(e, id, g, h)| (id.0, g.0, e, h.0 == hint::DRAINED))
+        .filter_map(|(e, id, g, h)| hint::departure(h.0).map(|d| (id.0, g.0, e, d)))
         .collect();
-    remove_departed(&mut commands, &mut log, &mut tally, clock.time(), gone);
+    gone.sort_unstable_by_key(|g| g.0);
+    let flow = &state.spec.flow;
+    let mut removed = Vec::with_capacity(gone.len());
+    for (id, g, e, d) in gone {
+        match d {
+            Departure::Stuck(p) => {
+                PatchLog::add(&mut patches.stuck, p, g);
+                commands.entity(e).despawn();
+            }
+            Departure::Escaped(p) => {
+                PatchLog::add(&mut patches.escaped, p, g);
+                removed.push((id, g, e, flow.role(p) == PatchRole::Outlet));
+            }
+            Departure::Lost => removed.push((id, g, e, false)),
+        }
+    }
+    remove_departed(&mut commands, &mut log, &mut tally, clock.time(), removed);
 }

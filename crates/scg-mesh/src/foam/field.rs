@@ -5,7 +5,7 @@ use std::path::Path;
 use glam::DVec3;
 
 use super::parse::{Dict, ListData, Parser, Token, Value};
-use super::{TimeSel, read_maybe_gz, select_time};
+use super::{TimeSel, boundary, read_maybe_gz, select_time};
 use crate::{CellField, MeshError, Patch, PolyMesh};
 
 /// Read the volVectorField `name` (e.g. `U`, in its own units: m/s for a velocity) of the
@@ -13,9 +13,13 @@ use crate::{CellField, MeshError, Patch, PolyMesh};
 ///
 /// `internalField` gives the cell values (`uniform (x y z)` or `nonuniform List<vector>`
 /// with one value per cell); each patch of the mesh must have a `boundaryField` entry (of
-/// its name, of its group such as `wall`, or a quoted regular expression such as `".*"`), whose `value` (uniform or one per patch face) becomes
-/// [`CellField::patches`]`[i]`, or `None` when the entry has no `value` (zeroGradient,
-/// empty, …). Every value must be finite.
+/// its name, of its group such as `wall`, or a quoted regular expression such as `".*"`),
+/// whose `type` decides the face values [`CellField::patches`]`[i]` as OpenFOAM means
+/// them ([`super::boundary::TABLE`]: `noSlip` zero, `fixedValue`, `inletOutlet`, … their
+/// `value`, `slip` and `symmetry` the owner's tangential part, `zeroGradient` and `empty`
+/// the owner's value, stored as `None`). A type not in the table, or one scg cannot honour
+/// (`cyclic`, `processor`), is an error naming the patch and the type. Every value must be
+/// finite.
 pub fn read_vector_field(
     case_dir: impl AsRef<Path>,
     mesh: &PolyMesh,
@@ -74,10 +78,10 @@ pub(crate) fn parse_vector_field(
                 ));
             }
         };
-        if d.word("type").is_none() {
+        let Some(kind) = d.word("type") else {
             return Err(bad(&format!("{entry}/type"), "missing".into()));
-        }
-        patches.push(match d.get("value") {
+        };
+        let written = match d.get("value") {
             None => None,
             Some(Value::Tokens(t)) => Some(values(file, &format!("{entry}/value"), t, patch.size)?),
             Some(Value::Dict(_)) => {
@@ -86,7 +90,10 @@ pub(crate) fn parse_vector_field(
                     "expected a value, not a dictionary".into(),
                 ));
             }
-        });
+        };
+        let v = boundary::face_values(kind, written, mesh, patch, &cells)
+            .map_err(|m| bad(&format!("{entry}/type"), m))?;
+        patches.push(v);
     }
     Ok(CellField { cells, patches })
 }

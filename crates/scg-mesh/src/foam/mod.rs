@@ -7,6 +7,7 @@
 //! `faceList` or `faceCompactList`, every file optionally gzipped (`points.gz`). Dictionary
 //! directives (`#include`, …) and `$var` macros are rejected with an error naming the entry.
 
+pub mod boundary;
 mod field;
 #[cfg(test)]
 mod fuzz_tests;

@@ -37,13 +37,36 @@ pub fn render(scene: &Scene, r: &Report) -> String {
             g.density_ratio
         ));
     }
+    s.push_str(&time_scales(scene, r));
+    for (i, f) in scene.feeders.iter().enumerate() {
+        let g = &scene.groups[f.group];
+        let represented =
+            g.alpha.powi(3) * scg_core::physics::scaling::sphere_mass(g.diameter, g.density);
+        s.push_str(&format!(
+            "feeders[{i}] → `{}`: {:.6e} simulated particles/s ({:.6e} kg/s of the original powder, {} originals each), from {} s to {}\n",
+            g.name,
+            f.rate,
+            f.rate * represented,
+            g.alpha.powi(3),
+            f.window.0,
+            if f.window.1 >= f64::MAX / 2.0 {
+                "the end".to_string()
+            } else {
+                format!("{} s", f.window.1)
+            }
+        ));
+    }
     for w in &scene.walls {
         if let scg_core::physics::wall_shape::WallShape::Mesh(m) = &w.shape {
             s.push_str(&mesh_line(&w.name, m));
         }
     }
     if let Some(m) = &scene.mesh_flow {
-        s.push_str(&mesh_flow_lines(m, scene.patch_walls.as_ref()));
+        s.push_str(&mesh_flow_lines(
+            m,
+            scene.patch_walls.as_ref(),
+            &scene.patch_models,
+        ));
         s.push_str(&inlet_lines(scene, m));
     }
     s.push_str(&format!(
@@ -84,7 +107,11 @@ fn mesh_line(name: &str, m: &scg_core::physics::trimesh::TriMesh) -> String {
 
 /// The lines describing a flow on a mesh: sizes, bounds, patches with their roles, field
 /// speeds.
-fn mesh_flow_lines(m: &crate::model::SceneMeshFlow, walls: Option<&crate::PatchWalls>) -> String {
+fn mesh_flow_lines(
+    m: &crate::model::SceneMeshFlow,
+    walls: Option<&crate::PatchWalls>,
+    models: &[crate::model::PatchModel],
+) -> String {
     let f = &m.flow;
     let mesh = f.mesh();
     let [lo, hi] = f.geometry().bounds();
@@ -104,19 +131,34 @@ fn mesh_flow_lines(m: &crate::model::SceneMeshFlow, walls: Option<&crate::PatchW
         umin,
         umax
     );
+    use scg_core::physics::mesh_flow::PatchInteraction;
     for (i, (p, role)) in mesh.patches.iter().zip(f.roles()).enumerate() {
-        let what = match (role, walls) {
-            (scg_core::physics::mesh_flow::PatchRole::Wall, Some(w)) => format!(
-                "wall: contact wall with {} triangles (the [material] contact law; the specular rebound only as a guard)",
-                w.per_patch
-                    .iter()
-                    .find(|(k, _)| *k == i)
-                    .map_or(0, |(_, n)| *n)
+        let model = models.get(i);
+        let what = match model {
+            Some(pm) if pm.contact => format!(
+                "{}: contact wall with {} triangles (the [material] contact law; a rebound of the centre with e = {} only as a guard)",
+                role.name(),
+                walls
+                    .and_then(|w| w.per_patch.iter().find(|(k, _)| *k == i))
+                    .map_or(0, |(_, n)| *n),
+                match pm.interaction {
+                    PatchInteraction::Rebound { e, .. } => e,
+                    _ => 1.0,
+                }
             ),
-            (scg_core::physics::mesh_flow::PatchRole::Wall, None) => {
-                "wall: specular rebound of the centre (no contact law)".to_string()
-            }
-            _ => role.name().to_string(),
+            Some(pm) => match pm.interaction {
+                PatchInteraction::Rebound { e, mu } => format!(
+                    "{}: rebound of the centre as an impulse, restitution e = {e}, Coulomb friction μ = {mu}",
+                    role.name()
+                ),
+                PatchInteraction::Stick => {
+                    format!("{}: stick (particles reaching it deposit)", role.name())
+                }
+                PatchInteraction::Escape => {
+                    format!("{}: escape (particles reaching it leave)", role.name())
+                }
+            },
+            None => role.name().to_string(),
         };
         s.push_str(&format!(
             "  patch `{}` ({}): {} faces, {what}\n",
@@ -158,5 +200,38 @@ fn inlet_lines(scene: &Scene, m: &crate::model::SceneMeshFlow) -> String {
             }
         ));
     }
+    s
+}
+
+/// The time scales dt is measured against: the drag time (the shortest τ) and the contact
+/// times of the Hertz contacts in the scene, or that there are none.
+fn time_scales(scene: &Scene, r: &Report) -> String {
+    let tau = r.groups.iter().map(|g| g.tau).fold(f64::INFINITY, f64::min);
+    let mut s = String::from("time scales: ");
+    if tau.is_finite() {
+        s += &format!("drag τ_min = {tau:.4e} s (dt/τ = {:.3})", r.dt / tau);
+    } else {
+        s += "no drag";
+    }
+    let tc = r
+        .groups
+        .iter()
+        .filter_map(|g| g.contact_time)
+        .fold(f64::INFINITY, f64::min);
+    let pair = super::particle_contact_time(scene);
+    match (tc.is_finite(), pair) {
+        (false, None) => {
+            s += "; no Hertz contact in the scene (walls rebound, stick or escape as impulses): dt follows the drag"
+        }
+        _ => {
+            if tc.is_finite() {
+                s += &format!("; wall contact t_c = {tc:.4e} s ({:.1} steps)", tc / r.dt);
+            }
+            if let Some(t) = pair {
+                s += &format!("; particle contact t_c = {t:.4e} s ({:.1} steps)", t / r.dt);
+            }
+        }
+    }
+    s.push('\n');
     s
 }

@@ -181,18 +181,29 @@ pub(super) fn feeder(
         .position(|g| g.name == f.group)
         .ok_or_else(|| cx.err(&k("group"), format!("no group named `{}`", f.group)))?;
     let g = &groups[group];
-    let rate = match (f.rate, f.volume_rate) {
-        (Some(r), None) => cx.non_negative(&k("rate"), r)?,
-        (None, Some(v)) => {
-            let v = cx.non_negative(&k("volume_rate"), v)?;
-            let d = scg_core::physics::scaling::coarse_grain(g.law, g.alpha, g.diameter, g.density)
-                .diameter;
-            v / (std::f64::consts::PI / 6.0 * d * d * d)
+    // Each simulated particle stands for α³ originals: the original powder's volume
+    // (and mass) it carries is the simulated particle's volume.
+    let simulated = scg_core::physics::scaling::coarse_grain(g.law, g.alpha, g.diameter, g.density);
+    let volume = std::f64::consts::PI / 6.0 * simulated.diameter.powi(3);
+    let rate = match (f.rate, f.volume_rate, f.mass_rate) {
+        (Some(r), None, None) => cx.non_negative(&k("rate"), r)?,
+        (None, Some(v), None) => cx.non_negative(&k("volume_rate"), v)? / volume,
+        (None, None, Some(m)) => cx.non_negative(&k("mass_rate"), m)? / (g.density * volume),
+        (None, None, None) => {
+            return Err(cx.err(
+                &k("rate"),
+                "a feeder needs `rate` (simulated particles/s), `volume_rate` (m³/s) or \
+                 `mass_rate` (kg/s of the original powder)",
+            ));
         }
-        (Some(_), Some(_)) => {
-            return Err(cx.err(&k("volume_rate"), "give `rate` or `volume_rate`, not both"));
+        _ => {
+            let key = if f.mass_rate.is_some() {
+                "mass_rate"
+            } else {
+                "volume_rate"
+            };
+            return Err(cx.err(&k(key), "give one of `rate`, `volume_rate` and `mass_rate`"));
         }
-        (None, None) => return Err(cx.err(&k("rate"), "a feeder needs `rate` or `volume_rate`")),
     };
     let start = cx.non_negative(&k("start"), f.start.unwrap_or(0.0))?;
     let stop = cx.finite(&k("stop"), f.stop.unwrap_or(f64::MAX))?;
@@ -270,5 +281,14 @@ fn patch(
             ),
         ));
     };
+    if m.flow.roles()[p] == scg_core::physics::mesh_flow::PatchRole::Wall {
+        return Err(cx.err(
+            key,
+            format!(
+                "patch `{name}` is a wall (flow.patches.walls): feed from an inlet patch, \
+                 where the flow enters"
+            ),
+        ));
+    }
     PatchSampler::new(mesh, m.flow.geometry(), p).map_err(|e| cx.err(key, e))
 }

@@ -14,10 +14,9 @@ use scg_core::stages::walls::Wall;
 
 use super::Ctx;
 use crate::error::SceneError;
-use crate::model::{Group, Outlet, PatchWalls, SceneMeshFlow};
+use crate::model::{Group, Outlet, SceneMeshFlow};
 use crate::raw::{
-    RawContacts, RawFlow, RawFlowKind, RawMaterial, RawNormalModel, RawOutlet, RawWall,
-    RawWallKind, RawWallModel,
+    RawContacts, RawFlow, RawFlowKind, RawMaterial, RawNormalModel, RawOutlet, RawWall, RawWallKind,
 };
 use crate::raw::{RawInterpolation, RawTime};
 use scg_core::physics::mesh_flow::{MeshFlow, PatchRole};
@@ -281,56 +280,6 @@ pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, 
         source,
         field,
         sort_every,
-    }))
-}
-
-/// The wall patches of a mesh flow as a contact wall, by `flow.patches.wall_model`:
-/// `contact` (the default when the scene has a `[material]`; an error without one) builds
-/// one mesh wall of every face of every wall patch (polygons fanned about their face
-/// centres, so the surface is the one the locator tracks against); `rebound` (the default
-/// without a material) none. `None` also without wall patches.
-pub(super) fn patch_walls(
-    f: &RawFlow,
-    mf: &SceneMeshFlow,
-    material: Option<Material>,
-    cx: &Ctx,
-) -> Result<Option<PatchWalls>, SceneError> {
-    const KEY: &str = "flow.patches.wall_model";
-    let model = f.patches.as_ref().and_then(|p| p.wall_model);
-    let contact = match (model, material) {
-        (Some(RawWallModel::Contact), None) => {
-            return Err(cx.err(
-                KEY,
-                "\"contact\" needs a [material] table (the contact law)",
-            ));
-        }
-        (Some(RawWallModel::Contact), Some(_)) | (None, Some(_)) => true,
-        (Some(RawWallModel::Rebound), _) | (None, None) => false,
-    };
-    let flow = &mf.flow;
-    let walls: Vec<usize> = flow
-        .roles()
-        .iter()
-        .enumerate()
-        .filter(|(_, r)| **r == PatchRole::Wall)
-        .map(|(i, _)| i)
-        .collect();
-    if !contact || walls.is_empty() {
-        return Ok(None);
-    }
-    let s = scg_mesh::surface::patch_surface(flow.mesh(), &walls, scg_mesh::surface::Fan::Centre);
-    let mesh = TriMesh::new(s.vertices, s.triangles).map_err(|e| {
-        cx.err(
-            "flow.patches.walls",
-            format!("{}: the wall patches as a contact wall: {e}", mf.source),
-        )
-    })?;
-    Ok(Some(PatchWalls {
-        wall: Wall {
-            name: PatchWalls::NAME.to_string(),
-            shape: WallShape::Mesh(std::sync::Arc::new(mesh)),
-        },
-        per_patch: walls.into_iter().zip(s.per_patch).collect(),
     }))
 }
 

@@ -1,0 +1,276 @@
+"""Helpers of cases/squarebend/vs-openfoam.sh: the fates of the particles in OpenFOAM's
+squareBend duct, per size class, in OpenFOAM's uncoupledKinematicParcelFoam and in scg,
+with binomial 95 % (Wilson) intervals. Python 3.11+ standard library. The scene -> OpenFOAM
+case mapping and OpenFOAM's results (`case`, `grade`) are cases/cyclone/vs_openfoam.py's,
+imported: this file reads their grade.json and scg's `run --summary-json` file.
+
+  python3 vs_openfoam.py openfoam GRADE.json [--json OUT]
+      OpenFOAM's table alone (fed, outlet, inlet, walls, airborne per class)
+  python3 vs_openfoam.py table GRADE.json SCG.json [--json OUT]
+      both codes side by side, per class and fate: counts, fractions, 95 % intervals and
+      whether the two intervals overlap
+
+Fates: `outlet` = escaped through the outlet patch(es), `inlet` = escaped through the
+inlet patch(es) (blown back out), `walls` = stuck on the wall patch(es), `airborne` =
+still in the duct and moving at the end (fed minus the others).
+
+scg's summary is read generically: per group (and its `fates` table, when there is one,
+as written by scg's per-patch fates: `patches` = [{patch, role, escaped, stuck, ...}],
+`airborne`) `fed`, and the per-patch counts from the
+first key among PATCH_KEYS holding a table by patch name (a count, a table of fates
+with counts, or a list of times per patch), else `drained` (outlets), `lost` (inlets)
+and a stuck count from STUCK_KEYS. When the walls' count is not found the table says so
+and prints the keys the summary has.
+"""
+import json
+import math
+import os
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def _load_cyclone():
+    """cases/cyclone/vs_openfoam.py (case, grade) under its own module name: this file has
+    the same name."""
+    import importlib.util
+    name = "cyclone_vs_openfoam"
+    if name in sys.modules:
+        return sys.modules[name]
+    spec = importlib.util.spec_from_file_location(name, os.path.join(HERE, "..", "cyclone", "vs_openfoam.py"))
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
+cyc = _load_cyclone()
+
+FATES = ("outlet", "inlet", "walls", "airborne")
+PATCH_KEYS = ("patches", "patch_fates", "fates", "per_patch", "by_patch", "patch_counts")
+STUCK_KEYS = ("stuck", "stuck_walls", "stick", "held_walls", "deposited", "walls")
+AIRBORNE_KEYS = ("airborne", "held_airborne", "moving", "suspended")
+Z95 = 1.959963984540054
+
+
+def wilson(k, n, z=Z95):
+    """The Wilson score interval (lo, hi) of a binomial fraction k/n; (None, None) if n = 0."""
+    if not n:
+        return None, None
+    p = k / n
+    den = 1.0 + z * z / n
+    mid = (p + z * z / (2 * n)) / den
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / den
+    return (0.0 if k == 0 else max(0.0, mid - half)), (1.0 if k == n else min(1.0, mid + half))
+
+
+def overlap(a, b):
+    """Whether two intervals (lo, hi) overlap; None when one is unknown."""
+    if None in a or None in b:
+        return None
+    return a[0] <= b[1] and b[0] <= a[1]
+
+
+def _count(v):
+    """A count from a summary value: an int, a list (of times), or a table of fates or
+    with a count."""
+    if isinstance(v, bool):
+        return None
+    if isinstance(v, int):
+        return v
+    if isinstance(v, float) and v.is_integer():
+        return int(v)
+    if isinstance(v, list):
+        return len(v)
+    if isinstance(v, dict):
+        for k in ("count", "n", "number", "total"):
+            if k in v:
+                return _count(v[k])
+        parts = [_count(x) for k, x in v.items()
+                 if not k.endswith(("_mass", "_times")) and k not in ("role", "patch", "fate", "model")]
+        parts = [x for x in parts if x is not None]
+        return sum(parts) if parts else None
+    return None
+
+
+def _patch_table(g, names):
+    """{patch: count} from the first of PATCH_KEYS that holds a table (or a list of rows
+    with `patch`) naming at least one of the mesh's patches `names`; None if none does."""
+    for key in PATCH_KEYS:
+        v = g.get(key)
+        if isinstance(v, list) and all(isinstance(r, dict) and "patch" in r for r in v):
+            out = {}
+            for r in v:
+                rest = {k: x for k, x in r.items() if k not in ("patch", "fate", "model")}
+                c = _count(rest) if rest else None
+                out[r["patch"]] = out.get(r["patch"], 0) + (c or 0)
+            if set(out) & names:
+                return key, out
+        if isinstance(v, dict) and set(v) & names:
+            return key, {p: (_count(x) or 0) for p, x in v.items() if p in names}
+        if isinstance(v, dict):  # by fate first: {"stuck": {"walls": 3}, "escaped": {...}}
+            inner = {}
+            for fate, x in v.items():
+                if isinstance(x, dict) and set(x) & names:
+                    for p, y in x.items():
+                        if p in names:
+                            inner[p] = inner.get(p, 0) + (_count(y) or 0)
+            if inner:
+                return key, inner
+    return None, None
+
+
+def scg_fates(summary, walls, outlets, inlets):
+    """Per group {group, diameter, fed, outlet, inlet, walls, airborne, how} from scg's
+    summary JSON; a fate is None when it cannot be read (`how` says what was used)."""
+    names = set(walls) | set(outlets) | set(inlets)
+    out = []
+    for g0 in summary.get("groups", []):
+        # a group's `fates` table (scg's per-patch fates) read as part of the group
+        g = dict(g0, **g0["fates"]) if isinstance(g0.get("fates"), dict) else g0
+        fed = int(g.get("fed", 0))
+        key, table = _patch_table(g, names)
+        how = []
+        if table is not None:
+            how.append(f"per patch from '{key}'")
+            o = sum(table.get(p, 0) for p in outlets)
+            i = sum(table.get(p, 0) for p in inlets)
+            w = sum(table.get(p, 0) for p in walls)
+        else:
+            o = _count(g.get("drained"))
+            i = _count(g.get("lost"))
+            how.append("outlet = drained, inlet = lost")
+            w = None
+            for k in STUCK_KEYS:
+                if k in g and _count(g[k]) is not None:
+                    w = _count(g[k])
+                    how.append(f"walls = {k}")
+                    break
+        a = None
+        for k in AIRBORNE_KEYS:
+            if k in g and _count(g[k]) is not None:
+                a = _count(g[k])
+                how.append(f"airborne = {k}")
+                break
+        rest = fed - o - i - w if None not in (o, i, w) else None
+        if a is None and rest is not None:
+            a = rest
+            how.append("airborne = fed - outlet - inlet - walls")
+            held = _count(g.get("held"))
+            if held is not None and held not in (rest, rest + w):
+                how.append(f"(held {held} is neither airborne {rest} nor airborne + walls {rest + w})")
+        elif a is not None and rest is not None and a != rest:
+            how.append(f"(fed - outlet - inlet - walls = {rest})")
+        out.append({"group": g.get("group"), "diameter": g.get("diameter"), "fed": fed,
+                    "outlet": o, "inlet": i, "walls": w, "airborne": a, "how": "; ".join(how)})
+    return out
+
+
+def openfoam_fates(grade, inlets=None):
+    """Per class {group, diameter, fed, outlet, inlet, walls, airborne} from grade.json
+    (cases/cyclone/vs_openfoam.py grade): escaped = outlet, lost = inlet (and other escape
+    patches: `other`), stuck = walls, held = airborne."""
+    out = []
+    for c in grade["classes"]:
+        lost = c.get("lost", 0)
+        inlet = lost
+        if inlets is not None and "patches" in c:
+            inlet = sum(c["patches"].get(p, 0) for p in inlets)
+        out.append({"group": c["group"], "diameter": c["diameter"], "fed": c["fed"],
+                    "outlet": c["escaped"], "inlet": inlet, "other": lost - inlet,
+                    "walls": c.get("stuck", 0), "airborne": c["held"]})
+    return out
+
+
+def _cell(k, n):
+    if k is None or not n:
+        return f"{'?':>5} {'':>6} {'':>15}", (None, None)
+    lo, hi = wilson(k, n)
+    return f"{k:5d} {k / n:6.3f} [{lo:5.3f}, {hi:5.3f}]", (lo, hi)
+
+
+def openfoam_table(grade_path, dest=None):
+    g = cyc.read_json(grade_path)
+    fo = openfoam_fates(g)
+    print("OpenFOAM uncoupledKinematicParcelFoam: fates per class (count, fraction of fed, "
+          "95 % Wilson interval)")
+    print(f"{'class':>6} {'d [µm]':>7} {'fed':>5} | " + " | ".join(f"{f:^28}" for f in FATES))
+    for c in fo:
+        cells = [_cell(c[f], c["fed"])[0] for f in FATES]
+        print(f"{c['group']:>6} {c['diameter'] * 1e6:7.3g} {c['fed']:5d} | " + " | ".join(cells))
+    if g.get("log_fates"):
+        print("OpenFOAM log, localInteraction per patch (all classes): " + "; ".join(
+            f"{p} " + ", ".join(f"{k} {v}" for k, v in sorted(f.items())) for p, f in sorted(g["log_fates"].items())))
+    if dest:
+        cyc.write_json(dest, {"openfoam": fo})
+    return fo
+
+
+def table(grade_path, scg_path, walls, outlets, inlets, dest=None):
+    """The side-by-side table; returns (rows, all_overlap)."""
+    g = cyc.read_json(grade_path)
+    s = cyc.read_json(scg_path)
+    fo = {c["group"]: c for c in openfoam_fates(g, inlets)}
+    sc = scg_fates(s, walls, outlets, inlets)
+    rows, all_ok, unknown = [], True, False
+    for c in sc:
+        f = fo.get(c["group"])
+        if f is None:
+            print(f"class {c['group']}: not in OpenFOAM's grade.json ({sorted(fo)})")
+            all_ok = False
+            continue
+        print(f"\n== class {c['group']}, d = {c['diameter'] * 1e6:.3g} µm: fed OpenFOAM {f['fed']}, scg {c['fed']}")
+        print(f"{'fate':>9} | {'OpenFOAM':^28} | {'scg':^28} | overlap")
+        for fate in FATES:
+            a, ia = _cell(f[fate], f["fed"])
+            b, ib = _cell(c[fate], c["fed"])
+            ov = overlap(ia, ib)
+            if ov is None:
+                unknown = True
+            elif not ov:
+                all_ok = False
+            print(f"{fate:>9} | {a} | {b} | {'-' if ov is None else 'yes' if ov else 'NO'}")
+            rows.append({"group": c["group"], "fate": fate, "openfoam": f[fate], "openfoam_fed": f["fed"],
+                         "openfoam_ci": ia, "scg": c[fate], "scg_fed": c["fed"], "scg_ci": ib, "overlap": ov})
+        print(f"  scg read: {c['how']}")
+    if unknown:
+        keys = sorted({k for gr in s.get("groups", []) for k in gr})
+        print(f"\nscg's summary lacks a per-patch count (walls); its group keys: {', '.join(keys)}; "
+              f"top-level keys: {', '.join(sorted(s))}")
+    print("\nfractions of the fed; [lo, hi]: binomial 95 % Wilson interval; overlap: the two intervals overlap")
+    verdict = "unknown (missing counts)" if unknown and all_ok else "yes" if all_ok else "NO"
+    print(f"all intervals overlap: {verdict}")
+    if dest:
+        cyc.write_json(dest, {"rows": rows, "all_overlap": None if unknown and all_ok else all_ok,
+                              "openfoam": list(fo.values()), "scg": sc})
+    return rows, (None if unknown and all_ok else all_ok)
+
+
+def main(argv):
+    import argparse
+    ap = argparse.ArgumentParser(prog="vs_openfoam.py")
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    o = sub.add_parser("openfoam")
+    o.add_argument("grade")
+    o.add_argument("--json")
+    t = sub.add_parser("table")
+    t.add_argument("grade")
+    t.add_argument("scg")
+    t.add_argument("--plan", help="the OpenFOAM cases' plan.json (patch roles; default next to GRADE)")
+    t.add_argument("--json")
+    a = ap.parse_args(argv[1:])
+    if a.cmd == "openfoam":
+        openfoam_table(a.grade, a.json)
+        return 0
+    plan_path = a.plan or os.path.join(os.path.dirname(os.path.abspath(a.grade)), "openfoam", "plan.json")
+    if os.path.isfile(plan_path):
+        plan = cyc.read_json(plan_path)
+        walls, outlets, inlets = plan["walls"], plan["outlets"], plan["inlets"]
+    else:
+        walls, outlets, inlets = ["walls"], ["outlet"], ["inlet"]
+    table(a.grade, a.scg, walls, outlets, inlets, a.json)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))

@@ -1,0 +1,173 @@
+//! What particles do at the patches of a mesh flow: `[flow.patches]` `wall_model`,
+//! `restitution`, `friction` and the per-patch `[flow.patches.interaction]` (OpenFOAM's
+//! `localInteraction`), and the contact wall built from the `contact` patches.
+
+use scg_core::physics::contact::Material;
+use scg_core::physics::mesh_flow::{PatchInteraction, PatchRole};
+use scg_core::physics::trimesh::TriMesh;
+use scg_core::physics::wall_shape::WallShape;
+use scg_core::stages::walls::Wall;
+
+use super::Ctx;
+use crate::error::SceneError;
+use crate::model::{PatchModel, PatchWalls, SceneMeshFlow};
+use crate::raw::{RawFlow, RawWallModel};
+
+/// Mesh patch types whose unlisted patches reflect particles specularly, as OpenFOAM's
+/// tracking does at constraint patches.
+pub const MIRROR_KINDS: [&str; 4] = ["empty", "symmetry", "symmetryPlane", "wedge"];
+
+/// The model of every patch of `mf`, in mesh order. Wall patches take `wall_model`
+/// (default `contact` with a `[material]`, else `rebound`); unlisted constraint patches
+/// ([`MIRROR_KINDS`]) reflect specularly; outlets, inlets and other unlisted patches
+/// escape; `interaction.<patch>` overrides either. A `rebound` takes its
+/// `restitution` and `friction` from its own entry, else from `[flow.patches]`, else e
+/// from `material.restitution` (1 without a material) and μ = 0. `contact` needs a
+/// `[material]`; its patches' centres rebound with the material's restitution (the guard
+/// behind the contact law).
+pub(super) fn patch_models(
+    f: &RawFlow,
+    mf: &SceneMeshFlow,
+    material: Option<Material>,
+    cx: &Ctx,
+) -> Result<Vec<PatchModel>, SceneError> {
+    let patches = f.patches.clone().unwrap_or_default();
+    let flow = &mf.flow;
+    let mesh = flow.mesh();
+    let unit = |key: &str, x: Option<f64>| -> Result<Option<f64>, SceneError> {
+        match x {
+            None => Ok(None),
+            Some(x) if x.is_finite() && (0.0..=1.0).contains(&x) => Ok(Some(x)),
+            Some(_) => Err(cx.err(key, "must lie in [0, 1]")),
+        }
+    };
+    let friction = |key: &str, x: Option<f64>| -> Result<Option<f64>, SceneError> {
+        match x {
+            None => Ok(None),
+            Some(x) => cx.non_negative(key, x).map(Some),
+        }
+    };
+    let e_default = unit("flow.patches.restitution", patches.restitution)?
+        .unwrap_or(material.map_or(1.0, |m| m.restitution));
+    let mu_default = friction("flow.patches.friction", patches.friction)?.unwrap_or(0.0);
+    let model = |m: RawWallModel, key: &str, e: Option<f64>, mu: Option<f64>| {
+        Ok(match m {
+            RawWallModel::Contact => {
+                let Some(mat) = material else {
+                    return Err(cx.err(
+                        key,
+                        "\"contact\" needs a [material] table (the contact law)",
+                    ));
+                };
+                PatchModel {
+                    interaction: PatchInteraction::Rebound {
+                        e: mat.restitution,
+                        mu: 0.0,
+                    },
+                    contact: true,
+                }
+            }
+            RawWallModel::Rebound => PatchModel {
+                interaction: PatchInteraction::Rebound {
+                    e: e.unwrap_or(e_default),
+                    mu: mu.unwrap_or(mu_default),
+                },
+                contact: false,
+            },
+            RawWallModel::Stick => PatchModel {
+                interaction: PatchInteraction::Stick,
+                contact: false,
+            },
+            RawWallModel::Escape => PatchModel {
+                interaction: PatchInteraction::Escape,
+                contact: false,
+            },
+        })
+    };
+    let wall_model = patches.wall_model.unwrap_or(if material.is_some() {
+        RawWallModel::Contact
+    } else {
+        RawWallModel::Rebound
+    });
+    let mut out = Vec::with_capacity(mesh.patches.len());
+    for (r, p) in flow.roles().iter().zip(&mesh.patches) {
+        out.push(match r {
+            PatchRole::Wall => model(wall_model, "flow.patches.wall_model", None, None)?,
+            // OpenFOAM's constraint patches reflect a particle specularly (its
+            // hitSymmetryPatch): symmetry planes, and the two sides of a 2-D (`empty`) or
+            // axisymmetric (`wedge`) case, which keeps its motion in the slab
+            PatchRole::Lost if MIRROR_KINDS.contains(&p.kind.as_str()) => PatchModel {
+                interaction: PatchInteraction::Rebound { e: 1.0, mu: 0.0 },
+                contact: false,
+            },
+            _ => model(RawWallModel::Escape, "flow.patches", None, None)?,
+        });
+    }
+    for (name, entry) in &patches.interaction {
+        let key = format!("flow.patches.interaction.{name}");
+        let Some(i) = mesh.patches.iter().position(|p| &p.name == name) else {
+            let known: Vec<&str> = mesh.patches.iter().map(|p| p.name.as_str()).collect();
+            return Err(cx.err(
+                &key,
+                format!("unknown patch `{name}`; the mesh has: {}", known.join(", ")),
+            ));
+        };
+        if entry.model != RawWallModel::Rebound {
+            for (k, v) in [
+                ("restitution", entry.restitution),
+                ("friction", entry.friction),
+            ] {
+                if v.is_some() {
+                    return Err(cx.err(
+                        &format!("{key}.{k}"),
+                        "is used by \"rebound\" only, not by this model",
+                    ));
+                }
+            }
+        }
+        if entry.model == RawWallModel::Contact && flow.roles()[i] != PatchRole::Wall {
+            return Err(cx.err(
+                &format!("{key}.model"),
+                "\"contact\" is for wall patches (list the patch in flow.patches.walls)",
+            ));
+        }
+        let e = unit(&format!("{key}.restitution"), entry.restitution)?;
+        let mu = friction(&format!("{key}.friction"), entry.friction)?;
+        out[i] = model(entry.model, &format!("{key}.model"), e, mu)?;
+    }
+    Ok(out)
+}
+
+/// The `contact` patches of a mesh flow as one contact wall: every face of every such
+/// patch, polygons fanned about their face centres (so the surface is the one the locator
+/// tracks against). `None` without such patches.
+pub(super) fn patch_walls(
+    mf: &SceneMeshFlow,
+    models: &[PatchModel],
+    cx: &Ctx,
+) -> Result<Option<PatchWalls>, SceneError> {
+    let flow = &mf.flow;
+    let walls: Vec<usize> = models
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| m.contact)
+        .map(|(i, _)| i)
+        .collect();
+    if walls.is_empty() {
+        return Ok(None);
+    }
+    let s = scg_mesh::surface::patch_surface(flow.mesh(), &walls, scg_mesh::surface::Fan::Centre);
+    let mesh = TriMesh::new(s.vertices, s.triangles).map_err(|e| {
+        cx.err(
+            "flow.patches.walls",
+            format!("{}: the wall patches as a contact wall: {e}", mf.source),
+        )
+    })?;
+    Ok(Some(PatchWalls {
+        wall: Wall {
+            name: PatchWalls::NAME.to_string(),
+            shape: WallShape::Mesh(std::sync::Arc::new(mesh)),
+        },
+        per_patch: walls.into_iter().zip(s.per_patch).collect(),
+    }))
+}
