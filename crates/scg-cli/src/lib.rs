@@ -8,6 +8,7 @@ pub mod fates;
 pub mod points;
 pub mod replay;
 pub mod run;
+mod stem;
 pub mod study;
 
 use std::path::PathBuf;

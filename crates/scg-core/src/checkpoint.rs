@@ -372,7 +372,9 @@ impl Simulation {
             }
             (None, None) => {}
             _ => {
-                return Err("the scene and the checkpoint differ in the mesh flow's patches".into());
+                return Err(
+                    "the scene and the checkpoint differ in the mesh flow's patches".into(),
+                );
             }
         }
         if let Some(rec) = &c.contacts {

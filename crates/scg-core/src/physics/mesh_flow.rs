@@ -14,6 +14,8 @@ use scg_mesh::{
     PolyMesh, TableWalk,
 };
 
+pub use super::patch_interaction::{PatchInteraction, coulomb_rebound, hint, rebound};
+
 /// What a particle meeting a boundary patch does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PatchRole {
@@ -39,122 +41,6 @@ impl PatchRole {
             PatchRole::Outlet => "outlet",
             PatchRole::Inlet => "inlet",
             PatchRole::Lost => "lost",
-        }
-    }
-}
-
-/// What a particle whose centre reaches a boundary patch does: the patch interaction
-/// models of OpenFOAM's `localInteraction` (rebound, stick, escape), one per patch.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum PatchInteraction {
-    /// Rebounds as an impulse ([`coulomb_rebound`]): normal restitution `e` and Coulomb
-    /// friction `mu`; the centre is mirrored back inside, never crossing the wall.
-    Rebound {
-        /// Normal restitution, v_n' = −e·v_n, in [0, 1].
-        e: f64,
-        /// Coulomb friction coefficient, ≥ 0.
-        mu: f64,
-    },
-    /// Sticks (deposits): removed from the flow and counted as stuck on the patch.
-    Stick,
-    /// Escapes: removed and counted as escaped through the patch (an outlet drains).
-    Escape,
-}
-
-impl PatchInteraction {
-    /// Name used in scene files and reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            PatchInteraction::Rebound { .. } => "rebound",
-            PatchInteraction::Stick => "stick",
-            PatchInteraction::Escape => "escape",
-        }
-    }
-}
-
-/// The velocity after an impulsive impact on a wall of unit outward normal `n` (the wall
-/// at rest), with normal restitution `e` and Coulomb friction `mu`, for a sphere without
-/// spin before the impact (the rigid-sphere impact of Crowe, Sommerfeld & Tsuji, *Multiphase
-/// Flows with Droplets and Particles*, ch. 5):
-/// * normal: v_n' = −e·v_n (only when moving into the wall, v_n = v·n > 0; otherwise the
-///   velocity is returned unchanged);
-/// * tangential, sliding through the impact when |v_t| > (7/2)·μ·(1 + e)·v_n: the friction
-///   impulse μ·(1 + e)·m·v_n against the slip, Δv_t = −μ(1 + e)·v_n·t̂;
-/// * otherwise the contact point stops slipping during the impact and the sphere leaves
-///   rolling: v_t' = (5/7)·v_t (the rolling limit of a solid sphere, I = (2/5)·m·r²).
-#[inline]
-pub fn coulomb_rebound(v: DVec3, n: DVec3, e: f64, mu: f64) -> DVec3 {
-    let vn = v.dot(n);
-    if vn <= 0.0 {
-        return v;
-    }
-    if mu == 0.0 {
-        // frictionless: the tangential velocity is kept (the specular rebound)
-        return v - (1.0 + e) * vn * n;
-    }
-    let vt = v - vn * n;
-    let slip = vt.length();
-    let jt = mu * (1.0 + e) * vn;
-    let vt1 = if slip > 3.5 * jt {
-        vt - (jt / slip) * vt
-    } else {
-        (5.0 / 7.0) * vt
-    };
-    vt1 - e * vn * n
-}
-
-/// A particle's cell hint (the component stores the `u32`): a cell index, or one of
-/// these markers (all ≥ any cell count a `u32` mesh can hold in practice).
-pub mod hint {
-    /// Not located yet (spawned this step): the locator's grid finds it.
-    pub const UNLOCATED: u32 = u32::MAX - 2;
-    /// Left the mesh other than through a patch (or was never in it): the boundary stage
-    /// removes it as lost.
-    pub const LOST: u32 = u32::MAX - 1;
-    /// The first marker of a departure through a patch: [`escaped`] and [`stuck`] code the
-    /// patch in the markers `DEPARTED..UNLOCATED`.
-    pub const DEPARTED: u32 = 0xC000_0000;
-
-    /// Patches the markers can name (patch indices below this).
-    pub const MAX_PATCHES: u32 = (UNLOCATED - DEPARTED) / 2;
-
-    /// Escaped through patch `p` this step (`p` < [`MAX_PATCHES`]).
-    #[inline]
-    pub const fn escaped(p: u32) -> u32 {
-        DEPARTED + 2 * p
-    }
-
-    /// Stuck on patch `p` this step.
-    #[inline]
-    pub const fn stuck(p: u32) -> u32 {
-        DEPARTED + 2 * p + 1
-    }
-
-    /// What a hint says of a particle that left this step.
-    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-    pub enum Departure {
-        /// Escaped through the patch.
-        Escaped(u32),
-        /// Stuck on the patch.
-        Stuck(u32),
-        /// Lost (outside the mesh).
-        Lost,
-    }
-
-    /// The departure `h` marks, `None` for a cell or [`UNLOCATED`].
-    #[inline]
-    pub const fn departure(h: u32) -> Option<Departure> {
-        if h == LOST {
-            Some(Departure::Lost)
-        } else if h >= DEPARTED && h < UNLOCATED {
-            let k = h - DEPARTED;
-            Some(if k.is_multiple_of(2) {
-                Departure::Escaped(k / 2)
-            } else {
-                Departure::Stuck(k / 2)
-            })
-        } else {
-            None
         }
     }
 }
@@ -417,17 +303,6 @@ fn prefetch<T>(v: &[T], i: usize) {
     let _ = (v, i);
 }
 
-/// The rebound of a particle that crossed the wall plane through `p` with unit outward
-/// normal `n`: its centre is mirrored back inside (when beyond the plane) and its velocity
-/// changed by the impulse of [`coulomb_rebound`] (restitution `e`, friction `mu`). Returns
-/// (x', v').
-#[inline]
-pub fn rebound(x: DVec3, v: DVec3, p: DVec3, n: DVec3, e: f64, mu: f64) -> (DVec3, DVec3) {
-    let d = (x - p).dot(n);
-    let x1 = if d > 0.0 { x - 2.0 * d * n } else { x };
-    (x1, coulomb_rebound(v, n, e, mu))
-}
-
 /// Most interior faces [`MeshFlow::walk_table`] crosses before it leaves the search to the
 /// locator (whose walk reads far more memory per cell, and knows the boundary).
 pub const TABLE_HOPS: usize = 4;
@@ -675,53 +550,6 @@ mod tests {
         }
         println!("beyond a boundary: {crossed} inside the mesh elsewhere, {left} outside");
         assert!(crossed > 50 && left > 50, "{crossed} / {left}");
-    }
-
-    #[test]
-    fn reflection_is_specular() {
-        let (x, v) = rebound(
-            DVec3::new(1.1, 0.5, 0.5),
-            DVec3::new(2.0, 1.0, 0.0),
-            DVec3::new(1.0, 0.0, 0.0),
-            DVec3::X,
-            0.5,
-            0.0,
-        );
-        assert!((x - DVec3::new(0.9, 0.5, 0.5)).length() < 1e-15);
-        assert_eq!(v, DVec3::new(-1.0, 1.0, 0.0));
-        // moving inward already: velocity kept
-        let (_, v) = rebound(DVec3::ZERO, -DVec3::X, DVec3::ONE, DVec3::X, 0.5, 0.3);
-        assert_eq!(v, -DVec3::X);
-    }
-
-    /// The impulse rebound against its closed forms: normal, oblique sliding (the friction
-    /// impulse μ(1+e)v_n against the slip) and oblique sticking (5/7 of the tangential
-    /// velocity), on a tilted wall, to 1e-12.
-    #[test]
-    fn coulomb_rebound_matches_the_closed_forms() {
-        let n = DVec3::new(1.0, 2.0, -0.5).normalize();
-        let t = n.any_orthonormal_vector();
-        let (e, mu) = (0.7, 0.3);
-        let close = |a: DVec3, b: DVec3| (a - b).length() <= 1e-12 * b.length().max(1.0);
-        // normal
-        let v = coulomb_rebound(4.0 * n, n, e, mu);
-        assert!(close(v, -e * 4.0 * n), "{v}");
-        // oblique, sliding: |v_t| = 10 > 3.5·μ(1+e)·v_n = 3.5·0.3·1.7·2 = 3.57
-        let v = coulomb_rebound(2.0 * n + 10.0 * t, n, e, mu);
-        let want = -e * 2.0 * n + (10.0 - mu * (1.0 + e) * 2.0) * t;
-        assert!(close(v, want), "{v} vs {want}");
-        // oblique, sticking: |v_t| = 3 < 3.57: leaves rolling at 5/7
-        let v = coulomb_rebound(2.0 * n + 3.0 * t, n, e, mu);
-        let want = -e * 2.0 * n + (5.0 / 7.0) * 3.0 * t;
-        assert!(close(v, want), "{v} vs {want}");
-        // the sliding result meets the rolling one at the limit (continuous)
-        let lim = 3.5 * mu * (1.0 + e) * 2.0;
-        let a = coulomb_rebound(2.0 * n + (lim * (1.0 + 1e-12)) * t, n, e, mu);
-        let b = coulomb_rebound(2.0 * n + (lim * (1.0 - 1e-12)) * t, n, e, mu);
-        assert!((a - b).length() < 1e-9, "{a} {b}");
-        // frictionless: the tangential velocity is kept
-        let v = coulomb_rebound(2.0 * n + 3.0 * t, n, e, 0.0);
-        assert!(close(v, -e * 2.0 * n + 3.0 * t));
     }
 
     fn models(f: &MeshFlow, e: f64) -> Vec<PatchInteraction> {

@@ -19,6 +19,7 @@ pub mod inlet;
 pub mod integrate;
 pub mod mesh_flow;
 pub mod neighbour;
+pub mod patch_interaction;
 pub mod periodic;
 pub mod scaling;
 pub mod trimesh;
