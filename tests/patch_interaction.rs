@@ -58,6 +58,12 @@ fn write(dir: &Path, mesh: &PolyMesh, walls: &str) {
 }
 
 fn scene(dir: &Path, patches: &str, duration: f64) -> Scene {
+    let path = write_scene(dir, patches, duration);
+    scg::scene::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The scene file of [`scene`], written to `dir/scene.toml`.
+fn write_scene(dir: &Path, patches: &str, duration: f64) -> std::path::PathBuf {
     let text = format!(
         r#"duration = {duration:e}
 dt = 2.0e-5
@@ -97,7 +103,7 @@ stop = 0.01
     );
     let path = dir.join("scene.toml");
     std::fs::write(&path, text).unwrap();
-    scg::scene::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"))
+    path
 }
 
 fn positions(scene: &Scene) -> Vec<[u64; 3]> {
@@ -357,4 +363,119 @@ fn every_shipped_case_accounts_for_every_particle() {
         let entered: u64 = fates.iter().map(|f| f.entered()).sum();
         assert!(entered > 0, "{case}: no particle entered");
     }
+}
+
+/// An unknown boundary-condition type in a user's case: `scg check` and `scg run` exit 2
+/// with one message naming the field file, the patch and the type, and listing the types
+/// scg reads.
+#[test]
+fn an_unknown_boundary_type_exits_2_naming_patch_and_type() {
+    let mesh = duct();
+    let d = tempfile::tempdir().unwrap();
+    write(
+        &d.path().join("case"),
+        &mesh,
+        "type myWallFunction; value uniform (0 0 0);",
+    );
+    write_scene(d.path(), "", 0.01);
+    for args in [
+        &["check", "scene.toml"][..],
+        &["run", "scene.toml", "--no-record"],
+    ] {
+        let cmd = args[0];
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_scg"))
+            .args(args)
+            .current_dir(d.path())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{cmd}: {err}");
+        assert!(
+            err.contains("0/U")
+                && err.contains("boundaryField/walls/type")
+                && err.contains("unknown boundary condition type 'myWallFunction'")
+                && err.contains("noSlip"),
+            "{cmd}: {err}"
+        );
+        assert_eq!(err.matches("error:").count(), 1, "{cmd}: {err}");
+    }
+}
+
+/// `[[walls]] model = "rebound" | "stick"` act as impulses on analytic and STL walls
+/// alike, with no `[material]`: a sphere thrown at a plane leaves it with the impulse
+/// model's closed-form velocity (sliding: v_t' = v_t − μ(1+e)v_n) at touching distance;
+/// beads dropped into the open STL box of `tests/fixtures/mesh-box.stl` with `stick` all
+/// deposit, and the fates count them on the wall.
+#[test]
+fn stl_and_analytic_walls_rebound_and_stick_as_impulses() {
+    let d = tempfile::tempdir().unwrap();
+    let plane = r#"duration = 0.02
+dt = 1.0e-4
+[[walls]]
+name = "floor"
+kind = "plane"
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+model = "rebound"
+restitution = 0.5
+friction = 0.1
+[[groups]]
+name = "a"
+diameter = 1.0e-3
+density = 2500.0
+positions = [[0.0, 0.0, 5.0e-3]]
+velocities = [[1.0, 0.0, -1.0]]
+"#;
+    let path = d.path().join("plane.toml");
+    std::fs::write(&path, plane).unwrap();
+    let sc = scg::scene::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+    assert!(sc.walls.is_empty() && sc.impulse_walls.len() == 1);
+    let mut sim = sc.build(false);
+    assert!(
+        sim.plan()
+            .contains(scg::core::step::StepSystem::ImpulseWalls)
+    );
+    sim.run(sc.steps(), |_| true).unwrap();
+    let p = sim.particles()[0];
+    // v_n = 1, μ(1+e)v_n = 0.15 < |v_t|/3.5: sliding, v_t' = 0.85; v_n' = 0.5
+    assert!(
+        (p.velocity - glam::DVec3::new(0.85, 0.0, 0.5)).length() < 1e-12,
+        "{p:?}"
+    );
+    assert!(p.position.z > 0.5e-3, "{p:?}");
+
+    let fixture = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/mesh-box.stl");
+    let mut text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/mesh-box.toml"
+    ))
+    .unwrap();
+    text = text
+        .replace(
+            "file = \"mesh-box.stl\"",
+            &format!("file = \"{fixture}\"\nmodel = \"stick\""),
+        )
+        .replace("duration = 0.02", "duration = 0.1");
+    let i = text.find("[material]").unwrap();
+    let j = text.find("[[walls]]").unwrap();
+    text.replace_range(i..j, "");
+    let path = d.path().join("box.toml");
+    std::fs::write(&path, &text).unwrap();
+    let sc = scg::scene::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = sc.build(false);
+    sim.run(sc.steps(), |_| true).unwrap();
+    let fates = scg::cli::fates::fates(&sc, &mut sim);
+    println!("{}", scg::cli::fates::render(&fates));
+    let f = &fates[0];
+    assert_eq!(f.accounted(), f.entered());
+    assert_eq!(f.airborne, 0, "every bead reaches the floor and sticks");
+    assert_eq!(f.patches, vec![("wall box".to_string(), "wall", 0, 4)]);
+    // restitution on a stick wall is a key the model does not use
+    std::fs::write(
+        &path,
+        text.replace("model = \"stick\"", "model = \"stick\"\nrestitution = 0.5"),
+    )
+    .unwrap();
+    let e = scg::scene::load(&path, &[]).unwrap_err().to_string();
+    assert!(e.contains("walls[0].restitution"), "{e}");
 }

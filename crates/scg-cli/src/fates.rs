@@ -7,6 +7,7 @@
 use scg_core::physics::mesh_flow::PatchRole;
 use scg_core::physics::scaling::sphere_mass;
 use scg_core::sim::Simulation;
+use scg_core::stages::impulse_walls::WallLog;
 use scg_core::stages::mesh_flow::PatchLog;
 use scg_scene::Scene;
 
@@ -49,6 +50,7 @@ impl GroupFates {
 pub fn fates(scene: &Scene, sim: &mut Simulation) -> Vec<GroupFates> {
     let counts = crate::run::GroupCounts::of(sim);
     let log = sim.world.get_resource::<PatchLog>().cloned();
+    let walls = sim.world.get_resource::<WallLog>().cloned();
     let mesh = scene.mesh_flow.as_ref().map(|m| m.flow.clone());
     scene
         .groups
@@ -93,6 +95,14 @@ pub fn fates(scene: &Scene, sim: &mut Simulation) -> Vec<GroupFates> {
                 _ => {
                     f.drained = drained;
                     f.lost = lost;
+                }
+            }
+            if let Some(w) = &walls {
+                for (k, iw) in scene.impulse_walls.iter().enumerate() {
+                    let esc = w.escaped.get(k).map_or(0, get);
+                    let stuck = w.stuck.get(k).map_or(0, get);
+                    f.patches
+                        .push((format!("wall {}", iw.wall.name), "wall", esc, stuck));
                 }
             }
             f
@@ -140,7 +150,7 @@ pub fn render(fates: &[GroupFates]) -> String {
                 line(format!("stuck on `{patch}` ({role})"), *stuck);
             }
         }
-        if f.patches.is_empty() {
+        if !f.patches.iter().any(|p| p.1 == "outlet") {
             line("drained (outlet)".into(), f.drained);
         }
         line("lost (left the domain elsewhere)".into(), f.lost);

@@ -118,6 +118,8 @@ pub struct Checkpoint {
     pub outlet: Option<[Vec<Vec<f64>>; 2]>,
     /// Patch log of a mesh flow: escaped and stuck counts per patch and group.
     pub patches: Option<[Vec<Vec<u64>>; 2]>,
+    /// Impulse walls' log: escaped and stuck counts per wall and group.
+    pub impulse_walls: Option<[Vec<Vec<u64>>; 2]>,
     /// Contact arrays, when the scene has particle contacts.
     pub contacts: Option<ContactRecord>,
 }
@@ -129,6 +131,7 @@ use crate::sim::Simulation;
 use crate::spawn::spawn_particle_with_id;
 use crate::stages::contacts::ContactState;
 use crate::stages::feeder::Feeders;
+use crate::stages::impulse_walls::WallLog;
 use crate::stages::mesh_flow::PatchLog;
 use crate::stages::outlet::OutletLog;
 use crate::state::{
@@ -286,6 +289,9 @@ impl Simulation {
             patches: w
                 .get_resource::<PatchLog>()
                 .map(|l| [l.escaped.clone(), l.stuck.clone()]),
+            impulse_walls: w
+                .get_resource::<WallLog>()
+                .map(|l| [l.escaped.clone(), l.stuck.clone()]),
             contacts: w.get_resource::<ContactState>().map(|c| c.record()),
         }
     }
@@ -376,6 +382,14 @@ impl Simulation {
                     "the scene and the checkpoint differ in the mesh flow's patches".into(),
                 );
             }
+        }
+        match (&c.impulse_walls, w.get_resource_mut::<WallLog>()) {
+            (Some([e, s]), Some(mut log)) if e.len() == log.escaped.len() => {
+                log.escaped.clone_from(e);
+                log.stuck.clone_from(s);
+            }
+            (None, None) => {}
+            _ => return Err("the scene and the checkpoint differ in the impulse walls".into()),
         }
         if let Some(rec) = &c.contacts {
             let dt = c.dt;

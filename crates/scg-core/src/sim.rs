@@ -63,6 +63,8 @@ pub struct InletOutlet {
     pub outlet: Option<OutletSpec>,
     /// Scene seed (feeders' random streams derive from it).
     pub seed: u64,
+    /// Walls that rebound, stick or escape as impulses (no contact law).
+    pub impulse_walls: Vec<crate::stages::impulse_walls::ImpulseWall>,
 }
 
 /// Why a run stopped early.
@@ -220,6 +222,9 @@ impl Simulation {
         motion::plugin(&mut b, &motion_res, rotation, cfg.mesh_flow.is_some());
         if let Some(m) = cfg.mesh_flow.clone() {
             mesh_flow::plugin(&mut world, &mut b, m, ng);
+        }
+        if !io.impulse_walls.is_empty() {
+            crate::stages::impulse_walls::plugin(&mut world, &mut b, io.impulse_walls, ng);
         }
         if let Some(o) = io.outlet {
             outlet::plugin(&mut world, &mut b, o, ng);

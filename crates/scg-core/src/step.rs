@@ -103,6 +103,8 @@ pub enum StepSystem {
     DrainParticles,
     /// Remove particles that left a mesh flow through an outlet or lost patch.
     MeshBoundary,
+    /// Rebound, stick or escape at walls that act as impulses.
+    ImpulseWalls,
     /// Spawn fed particles.
     FeedParticles,
     /// Reorder the particle table by mesh cell (mesh flows without contacts).
@@ -131,6 +133,7 @@ impl StepSystem {
             StepSystem::AdvanceClock => "advance_clock",
             StepSystem::DrainParticles => "drain_particles",
             StepSystem::MeshBoundary => "mesh_boundary",
+            StepSystem::ImpulseWalls => "impulse_walls",
             StepSystem::FeedParticles => "feed_particles",
             StepSystem::SortByCell => "sort_by_cell",
             StepSystem::CheckFiniteState => "check_finite_state",

@@ -96,6 +96,7 @@ impl Scene {
             feeders: self.feeders.iter().map(|f| self.feeder_spec(f)).collect(),
             outlet: self.outlet.as_ref().map(|o| self.outlet_spec(o)),
             seed: self.seed,
+            impulse_walls: self.impulse_walls.clone(),
         }
     }
 
@@ -223,6 +224,7 @@ impl Scene {
             outlines: self
                 .walls
                 .iter()
+                .chain(self.impulse_walls.iter().map(|w| &w.wall))
                 .map(|w| {
                     let (vertices, triangles) = match &w.shape {
                         WallShape::Mesh(m) => (
@@ -297,7 +299,11 @@ impl Scene {
             }
         }
         let mut size = (hi - lo).max_element();
-        for w in &self.walls {
+        for w in self
+            .walls
+            .iter()
+            .chain(self.impulse_walls.iter().map(|w| &w.wall))
+        {
             if let WallShape::CylinderInside { radius, .. }
             | WallShape::CylinderOutside { radius, .. } = w.shape
             {

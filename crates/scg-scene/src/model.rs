@@ -121,6 +121,9 @@ pub struct Scene {
     /// The wall patches of a mesh flow as a contact wall (`flow.patches.wall_model =
     /// "contact"`, the default with `[material]`); `None` when they only rebound.
     pub patch_walls: Option<PatchWalls>,
+    /// `[[walls]]` with `model = "rebound" | "stick" | "escape"`: impulses, no contact law
+    /// (in file order; `walls` holds the contact walls).
+    pub impulse_walls: Vec<scg_core::stages::impulse_walls::ImpulseWall>,
     /// What particles do at each patch of the mesh flow, in mesh order (empty without a
     /// mesh flow).
     pub patch_models: Vec<PatchModel>,

@@ -249,6 +249,13 @@ pub struct RawWall {
     pub scale: Option<f64>,
     pub translate: Option<[f64; 3]>,
     pub rotate: Option<[f64; 3]>,
+    /// `contact` (default: the `[material]` contact law), `rebound`, `stick`, `escape`.
+    #[serde(default, deserialize_with = "some_name")]
+    pub model: Option<RawWallModel>,
+    /// e of a `rebound` wall.
+    pub restitution: Option<f64>,
+    /// Coulomb μ of a `rebound` wall.
+    pub friction: Option<f64>,
 }
 
 #[derive(Deserialize, Debug, Clone)]

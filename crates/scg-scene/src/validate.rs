@@ -22,6 +22,7 @@ use crate::raw::{RawDt, RawScene};
 use particles::{feeder, group};
 use patches::{patch_models, patch_walls};
 use physics::{contacts, flow_field, material, mesh_flow, outlet, wall};
+use scg_core::stages::impulse_walls::ImpulseWall;
 
 /// The embedded default scene (the paper's vortex case), run by `scg run` with no file.
 pub const DEFAULT_SCENE: &str = include_str!("../../../cases/vortex.toml");
@@ -187,11 +188,20 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
         None => None,
     };
     let mut walls = Vec::new();
+    let mut impulse_walls = Vec::new();
     for (i, w) in raw.walls.iter().enumerate() {
-        walls.push(wall(w, i, cx)?);
+        let shape = wall(w, i, cx)?;
+        match patches::wall_model(w, i, material, cx)? {
+            None => walls.push(shape),
+            Some(model) => impulse_walls.push(ImpulseWall { wall: shape, model }),
+        }
     }
     if !walls.is_empty() && material.is_none() {
-        return Err(cx.err("walls", "walls need a [material] table (contact law)"));
+        return Err(cx.err(
+            "walls",
+            "contact walls need a [material] table (the contact law); or give each wall a \
+             `model = \"rebound\"` (with restitution and friction), \"stick\" or \"escape\"",
+        ));
     }
     let contacts_raw = raw.contacts.clone();
     if contacts_raw.is_some() && material.is_none() {
@@ -263,6 +273,7 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
         walls,
         patch_walls,
         patch_models,
+        impulse_walls,
         contacts: None,
         groups,
         feeders,

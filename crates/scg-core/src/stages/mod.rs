@@ -5,6 +5,7 @@
 pub mod contacts;
 pub mod feeder;
 pub mod guard;
+pub mod impulse_walls;
 pub mod mesh_flow;
 pub mod motion;
 mod move_lanes;

@@ -56,6 +56,23 @@ pub fn render(scene: &Scene, r: &Report) -> String {
             }
         ));
     }
+    for w in &scene.impulse_walls {
+        use scg_core::physics::mesh_flow::PatchInteraction;
+        s.push_str(&format!(
+            "wall `{}`: {}\n",
+            w.wall.name,
+            match w.model {
+                PatchInteraction::Rebound { e, mu } => format!(
+                    "rebound as an impulse, restitution e = {e}, Coulomb friction μ = {mu} (no contact law)"
+                ),
+                PatchInteraction::Stick => "stick (particles touching it deposit)".into(),
+                PatchInteraction::Escape => "escape (particles touching it leave)".into(),
+            }
+        ));
+        if let scg_core::physics::wall_shape::WallShape::Mesh(m) = &w.wall.shape {
+            s.push_str(&mesh_line(&w.wall.name, m));
+        }
+    }
     for w in &scene.walls {
         if let scg_core::physics::wall_shape::WallShape::Mesh(m) = &w.shape {
             s.push_str(&mesh_line(&w.name, m));

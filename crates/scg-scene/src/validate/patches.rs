@@ -11,7 +11,7 @@ use scg_core::stages::walls::Wall;
 use super::Ctx;
 use crate::error::SceneError;
 use crate::model::{PatchModel, PatchWalls, SceneMeshFlow};
-use crate::raw::{RawFlow, RawWallModel};
+use crate::raw::{RawFlow, RawWall, RawWallModel};
 
 /// Mesh patch types whose unlisted patches reflect particles specularly, as OpenFOAM's
 /// tracking does at constraint patches.
@@ -170,4 +170,41 @@ pub(super) fn patch_walls(
         },
         per_patch: walls.into_iter().zip(s.per_patch).collect(),
     }))
+}
+
+/// The model of `[[walls]]` entry `i`: `None` for a contact wall (the default; the
+/// `[material]` contact law), else the impulse it acts as. `restitution` (default
+/// `material.restitution`, else 1) and `friction` (default 0) only with `rebound`.
+pub(super) fn wall_model(
+    w: &RawWall,
+    i: usize,
+    material: Option<Material>,
+    cx: &Ctx,
+) -> Result<Option<PatchInteraction>, SceneError> {
+    let k = |s: &str| format!("walls[{i}].{s}");
+    let model = w.model.unwrap_or(RawWallModel::Contact);
+    if model != RawWallModel::Rebound {
+        for (key, v) in [("restitution", w.restitution), ("friction", w.friction)] {
+            if v.is_some() {
+                return Err(cx.err(&k(key), "is used by model = \"rebound\" only"));
+            }
+        }
+    }
+    Ok(match model {
+        RawWallModel::Contact => None,
+        RawWallModel::Stick => Some(PatchInteraction::Stick),
+        RawWallModel::Escape => Some(PatchInteraction::Escape),
+        RawWallModel::Rebound => {
+            let e = match w.restitution {
+                Some(e) if e.is_finite() && (0.0..=1.0).contains(&e) => e,
+                Some(_) => return Err(cx.err(&k("restitution"), "must lie in [0, 1]")),
+                None => material.map_or(1.0, |m| m.restitution),
+            };
+            let mu = match w.friction {
+                Some(mu) => cx.non_negative(&k("friction"), mu)?,
+                None => 0.0,
+            };
+            Some(PatchInteraction::Rebound { e, mu })
+        }
+    })
 }

@@ -1,0 +1,162 @@
+//! Walls that act as impulses instead of contact laws (`[[walls]] model = "rebound" |
+//! "stick" | "escape"`): the patch interaction models of a mesh flow's patches
+//! ([`crate::physics::patch_interaction`]) for STL and analytic walls. After the
+//! integration, a particle whose sphere touches such a wall rebounds (its centre pushed
+//! back to touching distance, its velocity by [`coulomb_rebound`]), sticks (removed,
+//! counted as stuck on the wall) or escapes (removed, counted as escaped through it).
+//! No contact time is resolved, so the time step follows the drag.
+
+use bevy_ecs::prelude::*;
+
+use crate::components::*;
+use crate::physics::patch_interaction::{PatchInteraction, coulomb_rebound};
+use crate::stages::walls::Wall;
+use crate::step::{StepBuilder, StepSet, StepSystem};
+
+/// A wall and what a particle touching it does.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImpulseWall {
+    /// The wall.
+    pub wall: Wall,
+    /// Rebound, stick or escape.
+    pub model: PatchInteraction,
+}
+
+/// The scene's impulse walls (resource).
+#[derive(Resource, Clone, Debug, PartialEq)]
+pub struct ImpulseWalls(pub Vec<ImpulseWall>);
+
+/// Particles removed at each impulse wall, per group (resource): `escaped[wall][group]`,
+/// `stuck[wall][group]`, counts of simulated particles.
+#[derive(Resource, Clone, Debug, Default, PartialEq)]
+pub struct WallLog {
+    /// Escaped through the wall (an `escape` wall).
+    pub escaped: Vec<Vec<u64>>,
+    /// Stuck on the wall (a `stick` wall).
+    pub stuck: Vec<Vec<u64>>,
+}
+
+/// Add the impulse-wall system (inlet/outlet stage, before the outlets) and its resources.
+pub fn plugin(world: &mut World, b: &mut StepBuilder, walls: Vec<ImpulseWall>, groups: usize) {
+    let n = walls.len();
+    world.insert_resource(ImpulseWalls(walls));
+    world.insert_resource(WallLog {
+        escaped: vec![vec![0; groups]; n],
+        stuck: vec![vec![0; groups]; n],
+    });
+    b.add(
+        StepSet::InletOutlet,
+        "impulse_walls",
+        StepSystem::ImpulseWalls,
+        impulse_walls,
+    );
+}
+
+/// What touching wall `w` does to a sphere of radius `r` at `x` moving at `v`: `None` when
+/// it does not touch; `Some(Ok((x', v')))` after a rebound; `Some(Err(model))` when it
+/// sticks or escapes.
+#[inline]
+pub fn impulse(
+    w: &ImpulseWall,
+    x: glam::DVec3,
+    v: glam::DVec3,
+    r: f64,
+) -> Option<Result<(glam::DVec3, glam::DVec3), PatchInteraction>> {
+    if w.wall.shape.surely_clear(x, r) {
+        return None;
+    }
+    let t = w.wall.shape.touch(x, r)?;
+    Some(match w.model {
+        // t.normal points from the wall to the centre: the wall's outward normal, as
+        // coulomb_rebound takes it, is −t.normal
+        PatchInteraction::Rebound { e, mu } => Ok((
+            x + t.overlap * t.normal,
+            coulomb_rebound(v, -t.normal, e, mu),
+        )),
+        m => Err(m),
+    })
+}
+
+/// Apply the impulse walls to every particle, in wall order; remove the ones that stick or
+/// escape in id order, counting them per wall and group.
+pub fn impulse_walls(
+    mut commands: Commands,
+    walls: Res<ImpulseWalls>,
+    mut log: ResMut<WallLog>,
+    mut q: Query<(
+        Entity,
+        &ParticleId,
+        &GroupId,
+        &mut Position,
+        &mut Velocity,
+        &Diameter,
+    )>,
+) {
+    let mut gone: Vec<(u32, u32, Entity, usize, PatchInteraction)> = Vec::new();
+    for (e, id, g, mut x, mut v, d) in q.iter_mut() {
+        let r = 0.5 * d.0;
+        for (k, w) in walls.0.iter().enumerate() {
+            match impulse(w, x.0, v.0, r) {
+                None => {}
+                Some(Ok((x1, v1))) => {
+                    x.0 = x1;
+                    v.0 = v1;
+                }
+                Some(Err(m)) => {
+                    gone.push((id.0, g.0, e, k, m));
+                    break;
+                }
+            }
+        }
+    }
+    gone.sort_unstable_by_key(|g| g.0);
+    for (_, g, e, k, m) in gone {
+        let list = if m == PatchInteraction::Stick {
+            &mut log.stuck
+        } else {
+            &mut log.escaped
+        };
+        if let Some(c) = list.get_mut(k).and_then(|w| w.get_mut(g as usize)) {
+            *c += 1;
+        }
+        commands.entity(e).despawn();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::wall_shape::WallShape;
+    use glam::DVec3;
+
+    fn floor(model: PatchInteraction) -> ImpulseWall {
+        ImpulseWall {
+            wall: Wall {
+                name: "floor".into(),
+                shape: WallShape::Plane {
+                    point: DVec3::ZERO,
+                    normal: DVec3::Z,
+                },
+            },
+            model,
+        }
+    }
+
+    /// A sphere overlapping a floor by 0.3 r leaves it at touching distance with the
+    /// impulse rebound's velocity; stick and escape report their model; a sphere clear of
+    /// the floor is left alone.
+    #[test]
+    fn a_touching_sphere_rebounds_to_touching_distance() {
+        let w = floor(PatchInteraction::Rebound { e: 0.5, mu: 0.2 });
+        let (x, v) = (DVec3::new(1.0, 2.0, 0.7e-3), DVec3::new(3.0, 0.0, -2.0));
+        let Some(Ok((x1, v1))) = impulse(&w, x, v, 1e-3) else {
+            panic!()
+        };
+        assert!((x1 - DVec3::new(1.0, 2.0, 1e-3)).length() < 1e-15);
+        assert_eq!(v1, coulomb_rebound(v, -DVec3::Z, 0.5, 0.2));
+        assert!((v1.z - 1.0).abs() < 1e-12);
+        assert_eq!(impulse(&w, DVec3::new(0.0, 0.0, 2e-3), v, 1e-3), None);
+        let s = floor(PatchInteraction::Stick);
+        assert_eq!(impulse(&s, x, v, 1e-3), Some(Err(PatchInteraction::Stick)));
+    }
+}
