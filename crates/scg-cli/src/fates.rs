@@ -165,6 +165,33 @@ pub fn render(fates: &[GroupFates]) -> String {
     s
 }
 
+/// The fates as CSV rows `group,fate,patch,count,share,mass_kg` (fate: `entered`,
+/// `escaped`, `stuck`, `drained`, `lost`, `airborne`; share of the entered; mass of the
+/// original powder), one row per group and fate (per patch for escaped and stuck).
+pub fn csv(fates: &[GroupFates]) -> String {
+    let mut s = String::from("group,fate,patch,count,share,mass_kg\n");
+    for f in fates {
+        let n = f.entered();
+        let mut row = |fate: &str, patch: &str, k: u64| {
+            let share = if n == 0 { 0.0 } else { k as f64 / n as f64 };
+            s += &format!(
+                "{},{fate},{patch},{k},{share:e},{:e}\n",
+                f.group,
+                k as f64 * f.represented_mass
+            );
+        };
+        row("entered", "", n);
+        for (patch, _, esc, stuck) in &f.patches {
+            row("escaped", patch, *esc);
+            row("stuck", patch, *stuck);
+        }
+        row("drained", "", f.drained);
+        row("lost", "", f.lost);
+        row("airborne", "", f.airborne);
+    }
+    s
+}
+
 /// The fates as JSON (for `summary.json`): per group, counts and masses.
 pub fn json(f: &GroupFates) -> serde_json::Value {
     let m = |k: u64| k as f64 * f.represented_mass;
@@ -220,6 +247,13 @@ mod tests {
         assert!(t.contains("60.0 %") && !t.contains("warning"), "{t}");
         let j = json(&f);
         assert_eq!(j["patches"][1]["stuck"], 3);
+        let c = csv(std::slice::from_ref(&f));
+        assert!(
+            c.starts_with("group,fate,patch,count,share,mass_kg\n"),
+            "{c}"
+        );
+        assert!(c.contains("d5,escaped,outlet,6,6e-1,1.2e-11\n"), "{c}");
+        assert!(c.contains("d5,stuck,walls,3,3e-1,6e-12\n"), "{c}");
         assert_eq!(j["conserved"], true);
         f.airborne = 0;
         assert!(render(&[f]).contains("warning: 9 accounted for, 10 entered"));

@@ -56,6 +56,10 @@ pub struct RunArgs {
     /// lost times; steps, dt, particle-steps and the wall time of the steps.
     #[arg(long, value_name = "FILE")]
     pub summary_json: Option<PathBuf>,
+    /// Write the fates of every group (entered, escaped and stuck per patch, lost,
+    /// airborne; counts, shares and the original powder's mass) as CSV to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub fates_csv: Option<PathBuf>,
 }
 
 impl Default for RunArgs {
@@ -73,6 +77,7 @@ impl Default for RunArgs {
             checkpoint: None,
             restart: None,
             summary_json: None,
+            fates_csv: None,
         }
     }
 }
@@ -327,6 +332,13 @@ pub fn run(args: RunArgs) -> i32 {
     }
     let fates = crate::fates::fates(&scene, &mut sim);
     eprint!("{}", crate::fates::render(&fates));
+    if let Some(path) = &args.fates_csv {
+        if let Err(e) = std::fs::write(path, crate::fates::csv(&fates)) {
+            eprintln!("error: cannot write {}: {e}", path.display());
+            return 1;
+        }
+        eprintln!("wrote {}", path.display());
+    }
     let resolved = sim.contact_resolution();
     for line in resolved.summary() {
         eprintln!("{line}");
