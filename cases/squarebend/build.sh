@@ -58,20 +58,11 @@ mkdir -p "$(dirname "$out")"
 out="$(cd "$(dirname "$out")" && pwd)/$(basename "$out")"
 
 # --- OpenFOAM ---------------------------------------------------------------------
-foam_etc=/usr/share/openfoam/etc/bashrc
-examples=/usr/share/doc/openfoam-examples/examples
+# shellcheck source=../foam-env.sh
+source "$here/../foam-env.sh"
+examples=$foam_examples
 tutorial="$examples/incompressible/simpleFoam/squareBend"
-if [ ! -f "$foam_etc" ] || [ ! -d "$tutorial" ]; then
-    echo "== installing OpenFOAM (Debian packages openfoam, openfoam-examples)"
-    sudo=""; [ "$(id -u)" -ne 0 ] && sudo=sudo
-    $sudo apt-get update
-    $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends \
-        openfoam openfoam-examples
-fi
-# The Debian bashrc refers to unset variables and to helper scripts it does not ship.
-# shellcheck disable=SC1090
-source "$foam_etc" >/dev/null 2>&1 || true
-command -v simpleFoam >/dev/null || { echo "build.sh: simpleFoam not found after sourcing $foam_etc" >&2; exit 1; }
+foam_env build.sh simpleFoam "$tutorial"
 
 # --- case ---------------------------------------------------------------------------
 work="$(mktemp -d "${TMPDIR:-/tmp}/scg-squarebend-$variant.XXXXXX")"
@@ -149,18 +140,7 @@ functions
 DICT
 
 cd "$work"
-step() { # step NAME CMD...: run, log to log.NAME, print the wall time
-    local name="$1"; shift
-    local t0; t0=$(date +%s.%N)
-    if ! "$@" > "log.$name" 2>&1; then
-        echo "build.sh: $name failed; the end of $work/log.$name:" >&2
-        tail -30 "log.$name" >&2
-        trap - EXIT
-        exit 1
-    fi
-    local t1; t1=$(date +%s.%N)
-    printf '   %-16s %7.1f s\n' "$name" "$(echo "$t1 - $t0" | bc)" | tee -a timings
-}
+step() { foam_step build.sh "$work" "$@"; }   # step NAME CMD...: cases/foam-env.sh
 echo "== mesh (uptime: $(uptime | sed 's/.*load/load/'))"
 grep -E "^ *hex" system/blockMeshDict | sed 's/^ */   /'
 step blockMesh blockMesh

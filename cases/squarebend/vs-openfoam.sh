@@ -62,17 +62,9 @@ mkdir -p "$out"
 out=$(realpath "$out")
 
 # --- OpenFOAM (as cases/squarebend/build.sh) ------------------------------------------------
-foam_etc=/usr/share/openfoam/etc/bashrc
-if [ ! -f "$foam_etc" ] || ! command -v uncoupledKinematicParcelFoam >/dev/null; then
-    echo "== installing OpenFOAM (Debian package openfoam)"
-    sudo=""; [ "$(id -u)" -ne 0 ] && sudo=sudo
-    $sudo apt-get update
-    $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends openfoam
-fi
-# The Debian bashrc refers to unset variables and to helper scripts it does not ship.
-# shellcheck disable=SC1090
-source "$foam_etc" >/dev/null 2>&1 || true
-command -v uncoupledKinematicParcelFoam >/dev/null || { echo "vs-openfoam.sh: uncoupledKinematicParcelFoam not found after sourcing $foam_etc" >&2; exit 1; }
+# shellcheck source=../foam-env.sh
+source "$(dirname "$self")/../foam-env.sh"
+foam_env vs-openfoam.sh uncoupledKinematicParcelFoam
 set -u
 
 if [ "$no_scg" = 0 ]; then
