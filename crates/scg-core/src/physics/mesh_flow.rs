@@ -318,7 +318,8 @@ pub struct Landing {
     /// [`MeshFlow::velocity`] gives for `x` from the cell `hint`, bit for bit (the same
     /// records).
     pub u: Option<DVec3>,
-    /// Next hint: the cell, or [`hint::DRAINED`] / [`hint::LOST`].
+    /// Next hint: the cell, or a departure marker ([`hint::escaped`], [`hint::stuck`],
+    /// [`hint::LOST`]).
     pub hint: u32,
 }
 
