@@ -102,9 +102,27 @@ fn migrated(report: &str) -> u64 {
         .sum()
 }
 
-/// The frames of the complete recording `<dir>/<stem>.mcap`.
+/// The frames of the complete recording `<dir>/<stem>….mcap`: the one recording of a run
+/// in `dir`, whose name adds the `--set` overrides that change the run to the stem
+/// (`scg::cli::run::set_suffix`).
 fn read_frames(dir: &Path, stem: &str) -> Vec<Frame> {
-    let rec = scg::record::read_mcap(&dir.join(format!("{stem}.mcap"))).unwrap();
+    let mut found: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.extension().is_some_and(|x| x == "mcap")
+                && p.file_name()
+                    .and_then(|n| n.to_str())
+                    .is_some_and(|n| n.starts_with(stem))
+        })
+        .collect();
+    assert_eq!(
+        found.len(),
+        1,
+        "{stem}: recordings in {}: {found:?}",
+        dir.display()
+    );
+    let rec = scg::record::read_mcap(&found.pop().unwrap()).unwrap();
     assert!(rec.complete);
     rec.frames
 }
@@ -140,7 +158,9 @@ fn same_bits(case: &str, axis: &str, set: &[&str], ranks: &[usize]) {
                 "{case} on {n} ranks: no particle migrated, the test shows nothing: {report}"
             );
         }
-        assert!(out.join(format!("{case}.rrd")).is_file());
+        let sets: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+        let stem = format!("{case}{}", scg::cli::run::set_suffix(&sets));
+        assert!(out.join(format!("{stem}.rrd")).is_file(), "{stem}.rrd");
     }
 }
 
