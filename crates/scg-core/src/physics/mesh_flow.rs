@@ -630,19 +630,6 @@ mod tests {
         );
         assert!((l.x - DVec3::new(0.5, 0.8, 0.1)).length() < 1e-12, "{l:?}");
         assert!((l.v - DVec3::new(0.0, -1.0, 1.0)).length() < 1e-12);
-        // markers are never cells, and decode back
-        for p in [0, 1, 7, hint::MAX_PATCHES - 1] {
-            assert_eq!(
-                hint::departure(hint::escaped(p)),
-                Some(hint::Departure::Escaped(p))
-            );
-            assert_eq!(
-                hint::departure(hint::stuck(p)),
-                Some(hint::Departure::Stuck(p))
-            );
-        }
-        assert_eq!(hint::departure(hint::UNLOCATED), None);
-        assert_eq!(hint::departure(12), None);
         // roles must match the patches
         let m = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [1, 1, 1])
             .build()

@@ -182,4 +182,22 @@ mod tests {
         let v = coulomb_rebound(2.0 * n + 3.0 * t, n, e, 0.0);
         assert!(close(v, -e * 2.0 * n + 3.0 * t));
     }
+
+    /// Departure markers decode back to their patch and fate, and are never a cell.
+    #[test]
+    fn markers_decode_back() {
+        // markers are never cells, and decode back
+        for p in [0, 1, 7, hint::MAX_PATCHES - 1] {
+            assert_eq!(
+                hint::departure(hint::escaped(p)),
+                Some(hint::Departure::Escaped(p))
+            );
+            assert_eq!(
+                hint::departure(hint::stuck(p)),
+                Some(hint::Departure::Stuck(p))
+            );
+        }
+        assert_eq!(hint::departure(hint::UNLOCATED), None);
+        assert_eq!(hint::departure(12), None);
+    }
 }
