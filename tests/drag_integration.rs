@@ -34,6 +34,7 @@ fn sim(dt: f64, integrator: Integrator, u: DVec3, v0: DVec3) -> Simulation {
         contacts: None,
         record_every: None,
         groups: vec!["p".into()],
+        carrier: None,
     });
     s.spawn(&ParticleSpec {
         group: 0,

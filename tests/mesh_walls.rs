@@ -110,6 +110,7 @@ fn run(
                 .map(|(i, shape)| Wall {
                     name: format!("w{i}"),
                     shape,
+                    motion: Default::default(),
                 })
                 .collect(),
             law: NormalLaw::hertz(mat.restitution),
@@ -117,6 +118,7 @@ fn run(
         }),
         record_every: None,
         groups: vec!["p".into()],
+        carrier: None,
     });
     sim.spawn(&ParticleSpec {
         group: 0,
@@ -451,6 +453,7 @@ fn history_keys_number_mesh_regions_after_the_walls() {
         .map(|shape| Wall {
             name: "w".into(),
             shape,
+            motion: Default::default(),
         })
         .collect();
     assert_eq!(history_keys(&walls), vec![0, 4, 2, 9]);
@@ -755,6 +758,7 @@ fn wall_cost_mesh_vs_analytic() {
                         .map(|shape| Wall {
                             name: "w".into(),
                             shape,
+                            motion: Default::default(),
                         })
                         .collect(),
                     law: NormalLaw::hertz(0.8),
@@ -762,6 +766,7 @@ fn wall_cost_mesh_vs_analytic() {
                 }),
                 record_every: None,
                 groups: vec!["p".into()],
+                carrier: None,
             });
             for (pos, vel) in &specs {
                 sim.spawn(&ParticleSpec {

@@ -48,12 +48,14 @@ fn bounce(
             walls: vec![Wall {
                 name: "w".into(),
                 shape: shape.clone(),
+                motion: Default::default(),
             }],
             law,
             material: mat,
         }),
         record_every: None,
         groups: vec!["p".into()],
+        carrier: None,
     });
     sim.spawn(&ParticleSpec {
         group: 0,

@@ -48,7 +48,7 @@ impl GroupFates {
 
 /// The fates of every group of `scene` in `sim` at its end.
 pub fn fates(scene: &Scene, sim: &mut Simulation) -> Vec<GroupFates> {
-    let counts = crate::run::GroupCounts::of(sim);
+    let counts = GroupCounts::of(sim);
     let log = sim.world.get_resource::<PatchLog>().cloned();
     let walls = sim.world.get_resource::<WallLog>().cloned();
     let mesh = scene.mesh_flow.as_ref().map(|m| m.flow.clone());
@@ -219,6 +219,43 @@ pub fn json(f: &GroupFates) -> serde_json::Value {
         "airborne_mass": m(f.airborne),
         "conserved": f.accounted() == f.entered(),
     })
+}
+
+/// Per-group counts at the end of a run, index = group.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GroupCounts {
+    /// Particles fed.
+    pub fed: Vec<u64>,
+    /// Times (s) at which particles drained through an outlet.
+    pub drained: Vec<Vec<f64>>,
+    /// Times (s) at which particles were lost (left the domain other than by an outlet).
+    pub lost: Vec<Vec<f64>>,
+    /// Particles still in the domain.
+    pub held: Vec<u64>,
+}
+
+impl GroupCounts {
+    /// Read from the simulation's `Tally`, `OutletLog` and particles.
+    pub fn of(sim: &mut scg_core::sim::Simulation) -> Self {
+        let world = &mut sim.world;
+        let mut c = GroupCounts::default();
+        if let Some(t) = world.get_resource::<scg_core::state::Tally>() {
+            c.fed.clone_from(&t.fed);
+        }
+        if let Some(l) = world.get_resource::<scg_core::stages::outlet::OutletLog>() {
+            c.drained.clone_from(&l.drained);
+            c.lost.clone_from(&l.lost);
+        }
+        let mut q = world.query::<&scg_core::components::GroupId>();
+        for g in q.iter(world) {
+            let i = g.0 as usize;
+            if c.held.len() <= i {
+                c.held.resize(i + 1, 0);
+            }
+            c.held[i] += 1;
+        }
+        c
+    }
 }
 
 #[cfg(test)]

@@ -418,42 +418,7 @@ pub fn extra_sinks(
     Ok(out)
 }
 
-/// Per-group counts at the end of a run, index = group.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct GroupCounts {
-    /// Particles fed.
-    pub fed: Vec<u64>,
-    /// Times (s) at which particles drained through an outlet.
-    pub drained: Vec<Vec<f64>>,
-    /// Times (s) at which particles were lost (left the domain other than by an outlet).
-    pub lost: Vec<Vec<f64>>,
-    /// Particles still in the domain.
-    pub held: Vec<u64>,
-}
-
-impl GroupCounts {
-    /// Read from the simulation's `Tally`, `OutletLog` and particles.
-    pub fn of(sim: &mut scg_core::sim::Simulation) -> Self {
-        let world = &mut sim.world;
-        let mut c = GroupCounts::default();
-        if let Some(t) = world.get_resource::<scg_core::state::Tally>() {
-            c.fed.clone_from(&t.fed);
-        }
-        if let Some(l) = world.get_resource::<scg_core::stages::outlet::OutletLog>() {
-            c.drained.clone_from(&l.drained);
-            c.lost.clone_from(&l.lost);
-        }
-        let mut q = world.query::<&scg_core::components::GroupId>();
-        for g in q.iter(world) {
-            let i = g.0 as usize;
-            if c.held.len() <= i {
-                c.held.resize(i + 1, 0);
-            }
-            c.held[i] += 1;
-        }
-        c
-    }
-}
+pub use crate::fates::GroupCounts;
 
 /// Figures of a whole run for [`summary_json`].
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -147,3 +147,11 @@ impl FlowAtCentre {
         same(self.at, x).then_some(self.u)
     }
 }
+
+/// Velocity added to the carrier velocity this particle sees, m/s: the slot of the
+/// carrier modifiers ([`crate::physics::carrier`]; turbulent dispersion writes its
+/// fluctuation here). Present only when the scene declares a carrier modifier; every
+/// integration scheme adds it to each fluid-velocity evaluation of the particle's step.
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq, TransparentWrapper)]
+#[repr(transparent)]
+pub struct CarrierOffset(pub DVec3);

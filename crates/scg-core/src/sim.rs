@@ -11,6 +11,7 @@ use crate::physics::drag::DragLaw;
 use crate::physics::flow::{FlowField, Fluid};
 use crate::physics::integrate::Integrator;
 use crate::spawn::{ParticleSpec, SpawnRules, spawn_particle};
+use crate::stages::carrier::CarrierModifier;
 use crate::stages::contacts::ContactConfig;
 use crate::stages::feeder::FeederSpec;
 use crate::stages::mesh_flow::MeshFlowSpec;
@@ -18,7 +19,9 @@ use crate::stages::motion::Motion;
 use crate::stages::outlet::OutletSpec;
 use crate::stages::recording::RecordingParams;
 use crate::stages::walls::{WallSet, WallTangential};
-use crate::stages::{contacts, feeder, guard, mesh_flow, motion, outlet, recording, walls};
+use crate::stages::{
+    carrier, contacts, feeder, guard, mesh_flow, motion, outlet, recording, walls,
+};
 use crate::state::{
     ContactCount, ContactResolution, Health, NextParticleId, NonFinite, SimClock, Tally,
 };
@@ -52,6 +55,8 @@ pub struct SimConfig {
     pub record_every: Option<u64>,
     /// Group names, indexed by [`GroupId`].
     pub groups: Vec<String>,
+    /// A carrier modifier (added to the fluid velocity every particle sees), if any.
+    pub carrier: Option<CarrierModifier>,
 }
 
 /// Feeders and outlet of a scene (the inlet/outlet stage).
@@ -185,6 +190,7 @@ impl Simulation {
             world.insert_resource(f);
         }
         world.insert_resource(Health::default());
+        world.insert_resource(crate::checkpoint::records::Persistence::default());
         world.insert_resource(StageTimers::default());
         world.insert_resource(NextParticleId::default());
         world.insert_resource(Recorders::default());
@@ -204,6 +210,7 @@ impl Simulation {
             buoyancy: cfg.buoyancy,
             fluid: cfg.fluid,
             mesh: cfg.mesh_flow.is_some(),
+            carrier_offset: cfg.carrier.is_some(),
         });
 
         let mut b = StepBuilder::new();
@@ -218,6 +225,9 @@ impl Simulation {
             rotation |= t.law.active();
             world.insert_resource(w);
             walls::plugin(&mut world, &mut b, Some(t));
+        }
+        if let Some(m) = cfg.carrier {
+            carrier::plugin(&mut world, &mut b, m);
         }
         motion::plugin(&mut b, &motion_res, rotation, cfg.mesh_flow.is_some());
         if let Some(m) = cfg.mesh_flow.clone() {

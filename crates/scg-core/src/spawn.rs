@@ -47,6 +47,8 @@ pub struct SpawnRules {
     pub fluid: Option<Fluid>,
     /// A flow on a mesh: every particle has a [`CellHint`] (spawned unlocated).
     pub mesh: bool,
+    /// A carrier modifier: every particle has a [`CarrierOffset`] (zero at spawn).
+    pub carrier_offset: bool,
 }
 
 /// The simulated quantities of an original particle coarse-grained by `law` with ratio
@@ -89,22 +91,41 @@ impl SpawnRules {
     }
 }
 
-/// `spawner.spawn(bundle)`, with the [`CellHint`] `$hint` and an unknown [`FlowAtCentre`]
-/// added when `mesh` (one bundle).
-macro_rules! spawn_opt {
-    ($spawner:expr, $mesh:expr, $hint:expr, $bundle:expr) => {
-        if $mesh {
-            $spawner
-                .spawn(($bundle, CellHint($hint), FlowAtCentre::UNKNOWN))
-                .id()
-        } else {
-            $spawner.spawn($bundle).id()
-        }
-    };
+/// Every per-particle component type, once: the particle layout. Spawning
+/// ([`SpawnRules`] decides which of the optional ones a scene's particles carry), the
+/// reordering of the particle table by mesh cell and the layout checks all visit this
+/// list, so a new component is added here (and to the spawn groups below) only.
+pub trait LayoutVisitor {
+    /// Visit component type `T`.
+    fn visit<T: Component<Mutability = bevy_ecs::component::Mutable> + Clone>(&mut self);
 }
 
-/// Spawn one particle with every component of the layout in a single bundle (no
-/// archetype moves), through a `World` or `Commands` (both have `spawn`).
+/// Visit every component of the particle layout, in a fixed order.
+pub fn visit_layout(v: &mut impl LayoutVisitor) {
+    v.visit::<ParticleId>();
+    v.visit::<GroupId>();
+    v.visit::<Position>();
+    v.visit::<Velocity>();
+    v.visit::<CoarseGrain>();
+    v.visit::<Diameter>();
+    v.visit::<Density>();
+    v.visit::<Mass>();
+    v.visit::<FluidCoupling>();
+    v.visit::<StokesFactors>();
+    v.visit::<Force>();
+    v.visit::<Torque>();
+    v.visit::<AngularVelocity>();
+    v.visit::<WallHistory>();
+    v.visit::<BodyAcceleration>();
+    v.visit::<CellHint>();
+    v.visit::<FlowAtCentre>();
+    v.visit::<CarrierOffset>();
+}
+
+/// Spawn one particle with every component of the layout: the base bundle, then each
+/// optional group the rules ask for, through a `World` or `Commands` (both have `spawn`
+/// and `insert`). A particle's inserts follow its spawn directly, so it ends in the one
+/// table of the layout, rows in spawn order.
 macro_rules! spawn_bundle {
     ($spawner:expr, $rules:expr, $spec:expr, $id:expr, $dt:expr) => {
         spawn_bundle!(
@@ -128,29 +149,30 @@ macro_rules! spawn_bundle {
         };
         let scaled = coarse_grained(&cg, rules.fluid.as_ref(), $dt);
         let gravity = BodyAcceleration(rules.body_acceleration(scaled.1.0));
-        let base = (
+        let mut e = $spawner.spawn((
             ParticleId($id),
             GroupId(spec.group),
             Position(spec.position),
             Velocity(spec.velocity),
             cg,
             scaled,
-        );
-        let walls = (
-            Force::default(),
-            Torque::default(),
-            AngularVelocity::default(),
-            WallHistory::default(),
-        );
-        let spin = AngularVelocity::default();
-        match (rules.forces, rules.spin, rules.gravity.is_some()) {
-            (true, _, false) => spawn_opt!($spawner, rules.mesh, hint, (base, walls)),
-            (true, _, true) => spawn_opt!($spawner, rules.mesh, hint, (base, walls, gravity)),
-            (false, true, false) => spawn_opt!($spawner, rules.mesh, hint, (base, spin)),
-            (false, true, true) => spawn_opt!($spawner, rules.mesh, hint, (base, spin, gravity)),
-            (false, false, false) => spawn_opt!($spawner, rules.mesh, hint, base),
-            (false, false, true) => spawn_opt!($spawner, rules.mesh, hint, (base, gravity)),
+        ));
+        if rules.forces {
+            e.insert((Force::default(), Torque::default(), WallHistory::default()));
         }
+        if rules.forces || rules.spin {
+            e.insert(AngularVelocity::default());
+        }
+        if rules.gravity.is_some() {
+            e.insert(gravity);
+        }
+        if rules.mesh {
+            e.insert((CellHint(hint), FlowAtCentre::UNKNOWN));
+        }
+        if rules.carrier_offset {
+            e.insert(CarrierOffset::default());
+        }
+        e.id()
     }};
 }
 
@@ -160,7 +182,7 @@ pub fn spawn_particle(world: &mut World, spec: &ParticleSpec) -> u32 {
     let rules = *world.resource::<SpawnRules>();
     let dt = world.resource::<SimClock>().dt;
     let id = world.resource_mut::<NextParticleId>().take();
-    spawn_bundle!(world, &rules, spec, id, dt);
+    let _ = spawn_bundle!(world, &rules, spec, id, dt);
     id
 }
 

@@ -257,3 +257,13 @@ impl StepDisplacement {
         reported.then(|| f64::from_bits(bits).sqrt())
     }
 }
+
+/// How particles move (resource): the integrator and the drag law (`None` without fluid
+/// drag); see [`crate::sim::SimConfig`] for the meaning.
+#[derive(Resource, Clone, Copy, Debug, PartialEq)]
+pub struct Motion {
+    /// Integrator.
+    pub integrator: crate::physics::integrate::Integrator,
+    /// Drag law, `None` without fluid drag.
+    pub drag: Option<crate::physics::drag::DragLaw>,
+}

@@ -85,6 +85,8 @@ pub enum StepSystem {
     WallContactForces,
     /// Contact forces and torques applied as kicks (contacts).
     ApplyContactKicks,
+    /// Write each particle's carrier offset (carrier modifiers).
+    ModifyCarrier,
     /// No fluid: kick, then the exact drift under gravity.
     IntegrateBallistic,
     /// Stokes drag, exponential scheme, precomputed factors.
@@ -124,6 +126,7 @@ impl StepSystem {
             StepSystem::WallNormalForces => "wall_normal_forces",
             StepSystem::WallContactForces => "wall_contact_forces",
             StepSystem::ApplyContactKicks => "apply_contact_kicks",
+            StepSystem::ModifyCarrier => "modify_carrier",
             StepSystem::IntegrateBallistic => "integrate_ballistic",
             StepSystem::IntegrateStokesExponential => "integrate_stokes_exponential",
             StepSystem::IntegrateDragExponential => "integrate_drag_exponential",
@@ -142,16 +145,66 @@ impl StepSystem {
     }
 }
 
+impl StepSystem {
+    /// The step table: every system with its set, in execution order. The builder places
+    /// each system by its row here (whatever order the plugins add them in) and refuses a
+    /// system added to another set; `scg run --plan` lists a scene's rows in this order.
+    pub const TABLE: [(StepSet, StepSystem); 20] = {
+        use StepSet::*;
+        use StepSystem::*;
+        [
+            (NeighbourSearch, MaintainNeighbourList),
+            (Forces, ParticleContactForces),
+            (Forces, WallNormalForces),
+            (Forces, WallContactForces),
+            // Contact kicks change the velocities the integrator starts from.
+            (Integration, ApplyContactKicks),
+            // The carrier offsets the integrator adds to the fluid velocity.
+            (Integration, ModifyCarrier),
+            (Integration, IntegrateBallistic),
+            (Integration, IntegrateStokesExponential),
+            (Integration, IntegrateDragExponential),
+            (Integration, IntegrateDragExplicit),
+            (Integration, IntegrateMeshFlow),
+            (Integration, IntegrateRotation),
+            (Integration, AdvanceClock),
+            // Departures first (mesh patches, impulse walls, the outlet), then arrivals.
+            (InletOutlet, MeshBoundary),
+            (InletOutlet, ImpulseWalls),
+            (InletOutlet, DrainParticles),
+            (InletOutlet, FeedParticles),
+            // After the feeders: the new particles are sorted in too.
+            (InletOutlet, SortByCell),
+            (InletOutlet, CheckFiniteState),
+            (Recording, RecordFrame),
+        ]
+    };
+
+    /// This system's row in [`StepSystem::TABLE`] and its set.
+    pub fn row(self) -> (usize, StepSet) {
+        let i = Self::TABLE
+            .iter()
+            .position(|r| r.1 == self)
+            .expect("every system has a row in StepSystem::TABLE");
+        (i, Self::TABLE[i].0)
+    }
+}
+
 impl std::fmt::Display for StepSystem {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name())
     }
 }
 
-/// One position inside a [`StepSet`]: systems added to the same set run in the order they
-/// were added (slot 0 is the set's timer mark).
+/// One position inside a [`StepSet`]: the set's timer mark, then its systems in the order
+/// of their rows in [`StepSystem::TABLE`].
 #[derive(SystemSet, Clone, Copy, Debug, PartialEq, Eq, Hash)]
-struct Slot(StepSet, usize);
+enum Slot {
+    /// The timer mark that opens a set.
+    Mark(StepSet),
+    /// A row of the step table.
+    Row(usize),
+}
 
 /// One system of the plan.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -243,11 +296,11 @@ impl StageTimers {
     }
 }
 
-/// Collects the systems of a scene into a [`Schedule`] in the fixed set order.
+/// Collects the systems of a scene into a [`Schedule`] in the fixed set order, each set's
+/// systems in the order of [`StepSystem::TABLE`].
 pub struct StepBuilder {
     schedule: Schedule,
     plan: Plan,
-    next_slot: [usize; StepSet::COUNT],
 }
 
 impl Default for StepBuilder {
@@ -267,39 +320,28 @@ impl StepBuilder {
         for pair in StepSet::ORDER.windows(2) {
             schedule.configure_sets(pair[1].after(pair[0]));
         }
-        let mut b = StepBuilder {
-            schedule,
-            plan: Plan::default(),
-            next_slot: [0; StepSet::COUNT],
-        };
         for set in StepSet::ORDER {
             let i = set.index();
-            b.add_internal(set, move |mut t: ResMut<StageTimers>| t.mark(Some(i)));
+            schedule.add_systems(
+                (move |mut t: ResMut<StageTimers>| t.mark(Some(i)))
+                    .in_set(set)
+                    .in_set(Slot::Mark(set)),
+            );
         }
         let last = StepSet::ORDER[StepSet::COUNT - 1];
-        b.schedule
-            .add_systems((|mut t: ResMut<StageTimers>| t.mark(None)).after(last));
-        b
-    }
-
-    fn add_internal<M>(
-        &mut self,
-        set: StepSet,
-        system: impl IntoScheduleConfigs<ScheduleSystem, M>,
-    ) {
-        let i = set.index();
-        let slot = self.next_slot[i];
-        self.next_slot[i] += 1;
-        let configs: ScheduleConfigs<ScheduleSystem> =
-            system.into_configs().in_set(set).in_set(Slot(set, slot));
-        self.schedule.add_systems(configs);
-        if slot > 0 {
-            self.schedule
-                .configure_sets(Slot(set, slot).after(Slot(set, slot - 1)));
+        schedule.add_systems((|mut t: ResMut<StageTimers>| t.mark(None)).after(last));
+        StepBuilder {
+            schedule,
+            plan: Plan::default(),
         }
     }
 
-    /// Add `system` (planned as `name`) for `effect` at the end of `set`.
+    /// Add `system` (planned as `name`) for `effect`, at its row of
+    /// [`StepSystem::TABLE`] in `set`.
+    ///
+    /// # Panics
+    /// When the table puts `name` in another set, or it was added already (a plugin
+    /// error, not a scene's).
     pub fn add<M>(
         &mut self,
         set: StepSet,
@@ -307,7 +349,18 @@ impl StepBuilder {
         name: StepSystem,
         system: impl IntoScheduleConfigs<ScheduleSystem, M>,
     ) {
-        self.add_internal(set, system);
+        let (row, table_set) = name.row();
+        assert_eq!(
+            table_set,
+            set,
+            "{name} belongs to the {} set (StepSystem::TABLE), not {}",
+            table_set.name(),
+            set.name()
+        );
+        assert!(!self.plan.contains(name), "{name} was added twice");
+        let configs: ScheduleConfigs<ScheduleSystem> =
+            system.into_configs().in_set(set).in_set(Slot::Row(row));
+        self.schedule.add_systems(configs);
         self.plan.systems.push(PlannedSystem {
             set,
             effect,
@@ -315,16 +368,65 @@ impl StepBuilder {
         });
     }
 
-    /// The plan so far.
+    /// The plan so far (in the order the systems were added).
     pub fn plan(&self) -> &Plan {
         &self.plan
     }
 
-    /// Finish: the schedule and its plan, systems listed in execution order.
+    /// Finish: the schedule and its plan, systems listed in execution order (the sets in
+    /// order, each set's systems by their table rows after its timer mark).
     pub fn build(self) -> (Schedule, Plan) {
-        let mut plan = self.plan;
-        // Stable sort by set keeps the insertion order inside a set.
-        plan.systems.sort_by_key(|s| s.set);
-        (self.schedule, plan)
+        let (mut schedule, mut plan) = (self.schedule, self.plan);
+        plan.systems.sort_by_key(|s| s.system.row().0);
+        for set in StepSet::ORDER {
+            let mut prev = Slot::Mark(set);
+            for s in plan.in_set(set) {
+                let slot = Slot::Row(s.system.row().0);
+                schedule.configure_sets(slot.after(prev));
+                prev = slot;
+            }
+        }
+        (schedule, plan)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every system has exactly one row, and the rows run through the sets in order.
+    #[test]
+    fn the_step_table_is_complete_and_ordered() {
+        let rows = StepSystem::TABLE;
+        for (i, (_, s)) in rows.iter().enumerate() {
+            assert_eq!(s.row().0, i, "{s} has one row");
+        }
+        assert!(rows.windows(2).all(|w| w[0].0 <= w[1].0), "sets in order");
+    }
+
+    /// The plan lists a set's systems by their table rows, whatever order they were added
+    /// in; a system added to another set than its row's is refused.
+    #[test]
+    fn the_builder_orders_by_the_table() {
+        let mut b = StepBuilder::new();
+        let set = StepSet::Integration;
+        b.add(set, "clock", StepSystem::AdvanceClock, || {});
+        b.add(set, "motion", StepSystem::IntegrateBallistic, || {});
+        b.add(set, "contacts", StepSystem::ApplyContactKicks, || {});
+        let (_, plan) = b.build();
+        let names: Vec<_> = plan.systems.iter().map(|s| s.system).collect();
+        assert_eq!(
+            names,
+            [
+                StepSystem::ApplyContactKicks,
+                StepSystem::IntegrateBallistic,
+                StepSystem::AdvanceClock
+            ]
+        );
+        let wrong = std::panic::catch_unwind(|| {
+            let mut b = StepBuilder::new();
+            b.add(StepSet::Forces, "clock", StepSystem::AdvanceClock, || {});
+        });
+        assert!(wrong.is_err());
     }
 }

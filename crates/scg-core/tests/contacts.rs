@@ -64,6 +64,7 @@ fn config(dt: f64, contacts: Option<ContactConfig>, walls: Option<WallSet>) -> S
         contacts,
         record_every: None,
         groups: vec!["p".into()],
+        carrier: None,
     }
 }
 
@@ -193,6 +194,7 @@ fn oblique(e: f64, mu: f64, vt: f64, vn: f64, steps_per_contact: f64) -> (DVec3,
                 point: DVec3::ZERO,
                 normal: DVec3::Z,
             },
+            motion: Default::default(),
         }],
         law: NormalLaw::hertz(e),
         material: material(e, mu),
@@ -746,6 +748,7 @@ fn rolling_resistance_decelerates_a_rolling_sphere() {
                 point: DVec3::ZERO,
                 normal: DVec3::Z,
             },
+            motion: Default::default(),
         }],
         law: NormalLaw::hertz(0.5),
         material: material(0.5, 0.5),
@@ -1000,6 +1003,7 @@ fn walled_packing() -> (Simulation, usize) {
                     point: DVec3::ZERO,
                     normal: DVec3::Z,
                 },
+                motion: Default::default(),
             },
             Wall {
                 name: "vessel".into(),
@@ -1009,10 +1013,12 @@ fn walled_packing() -> (Simulation, usize) {
                     radius: rc,
                     extent: None,
                 },
+                motion: Default::default(),
             },
             Wall {
                 name: "lid".into(),
                 shape: WallShape::Mesh(std::sync::Arc::new(lid)),
+                motion: Default::default(),
             },
         ],
         law: NormalLaw::hertz(0.7),

@@ -5,6 +5,7 @@ use mpi::Count;
 use mpi::datatype::{Partition, PartitionMut};
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
+use serde::{Deserialize, Serialize};
 
 /// The ranks of a run.
 pub struct Comm {
@@ -148,4 +149,14 @@ impl Comm {
             None
         }
     }
+}
+
+/// `v` as a message to another rank (postcard).
+pub(crate) fn encode<T: Serialize>(v: &T) -> Vec<u8> {
+    postcard::to_stdvec(v).expect("serialising to memory")
+}
+
+/// A message of another rank ([`encode`]).
+pub(crate) fn decode<'a, T: Deserialize<'a>>(b: &'a [u8]) -> T {
+    postcard::from_bytes(b).expect("a message of another rank of the same build")
 }

@@ -161,9 +161,8 @@ mod exchange {
     use scg_core::stages::contacts::ghosts::{Ghosts, table_rows_where};
 
     use super::{Migrants, ghost_targets, peers, reach};
-    use crate::comm::Comm;
+    use crate::comm::{Comm, decode, encode};
     use crate::decomp::Owners;
-    use crate::run::{decode, encode};
 
     /// The ghost exchange of a run with contacts, and what it did.
     #[derive(Debug, Default)]

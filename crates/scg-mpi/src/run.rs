@@ -36,7 +36,7 @@ use scg_core::state::{NextParticleId, Tally};
 use scg_core::{SimError, Simulation};
 use serde::{Deserialize, Serialize};
 
-use crate::comm::Comm;
+use crate::comm::{Comm, decode, encode};
 use crate::decomp::{Owners, Slabs, longest_axis, merge_tally, needs_rebalance};
 
 /// The slabs are cut again when the fullest rank holds more than this many times the
@@ -62,14 +62,6 @@ struct Times {
     migrate: Duration,
     record: Duration,
     rebalance: Duration,
-}
-
-pub(crate) fn encode<T: Serialize>(v: &T) -> Vec<u8> {
-    postcard::to_stdvec(v).expect("serialising to memory")
-}
-
-pub(crate) fn decode<'a, T: Deserialize<'a>>(b: &'a [u8]) -> T {
-    postcard::from_bytes(b).expect("a message of another rank of the same build")
 }
 
 /// Whether every rank is fine (`ok` on this one); a collective.

@@ -25,6 +25,7 @@ fn sim() -> Simulation {
         contacts: None,
         record_every: None,
         groups: vec!["g".into()],
+        carrier: None,
     })
 }
 

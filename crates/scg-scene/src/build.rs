@@ -128,6 +128,7 @@ impl Scene {
             contacts: self.contacts,
             record_every: record.then_some(self.record_every),
             groups: self.groups.iter().map(|g| g.name.clone()).collect(),
+            carrier: None,
         }
     }
 

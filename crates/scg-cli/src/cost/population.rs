@@ -28,7 +28,7 @@ use glam::DVec3;
 
 use scg_scene::{Placement, Scene};
 
-use super::sweep::{Point, original_group};
+use scg_core::physics::scaling::CoarseGrainLaw;
 
 /// Originals represented by default.
 pub const REPRESENTED_DEFAULT: usize = 10_000;
@@ -38,15 +38,24 @@ pub const REPRESENTED_DEFAULT: usize = 10_000;
 /// every point runs on the calling thread (below the parallel threshold of 4096).
 pub const REPRESENTED_QUICK: usize = 2_000;
 
-/// Simulated particles of point `p` standing for `n_orig` originals: `n_orig / α³`,
-/// rounded, at least 1, for the laws that replace α³ originals by one particle (`scg`,
-/// `none`, `parcel`); `n_orig` for `mass`, whose particles keep one original's mass and so
-/// stand for one original each.
-pub fn simulated_count(p: &Point, n_orig: usize) -> usize {
-    if p.law == Some(scg_core::physics::scaling::CoarseGrainLaw::Mass) {
+/// Simulated particles of a point coarse-grained by `law` (`None`: scg) with ratio `alpha`
+/// standing for `n_orig` originals: `n_orig / α³`, rounded, at least 1, for the laws that
+/// replace α³ originals by one particle (`scg`, `none`, `parcel`); `n_orig` for `mass`,
+/// whose particles keep one original's mass and so stand for one original each.
+pub fn simulated_count(law: Option<CoarseGrainLaw>, alpha: f64, n_orig: usize) -> usize {
+    if law == Some(CoarseGrainLaw::Mass) {
         return n_orig;
     }
-    ((n_orig as f64) / p.alpha.powi(3)).round().max(1.0) as usize
+    ((n_orig as f64) / alpha.powi(3)).round().max(1.0) as usize
+}
+
+/// Index of the scene's original group: the first with α = 1, else the first.
+pub fn original_group(scene: &Scene) -> usize {
+    scene
+        .groups
+        .iter()
+        .position(|g| g.alpha == 1.0)
+        .unwrap_or(0)
 }
 
 fn frac(x: f64) -> f64 {
@@ -141,9 +150,9 @@ pub fn placement(base: &Scene, n: usize) -> Placement {
 
 #[cfg(test)]
 mod tests {
+    use super::super::sweep::Point;
     use super::*;
     use scg_core::physics::integrate::Integrator;
-    use scg_core::physics::scaling::CoarseGrainLaw;
 
     fn scene(name: &str) -> Scene {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -164,16 +173,16 @@ mod tests {
 
     #[test]
     fn counts_divide_by_alpha_cubed() {
-        assert_eq!(simulated_count(&point(1.0), 2000), 2000);
-        assert_eq!(simulated_count(&point(2.0), 2000), 250);
-        assert_eq!(simulated_count(&point(4.0), 2000), 31);
-        assert_eq!(simulated_count(&point(8.0), 2000), 4);
-        assert_eq!(simulated_count(&point(8.0), 100), 1);
+        assert_eq!(simulated_count(Some(CoarseGrainLaw::Scg), 1.0, 2000), 2000);
+        assert_eq!(simulated_count(Some(CoarseGrainLaw::Scg), 2.0, 2000), 250);
+        assert_eq!(simulated_count(Some(CoarseGrainLaw::Scg), 4.0, 2000), 31);
+        assert_eq!(simulated_count(Some(CoarseGrainLaw::Scg), 8.0, 2000), 4);
+        assert_eq!(simulated_count(Some(CoarseGrainLaw::Scg), 8.0, 100), 1);
         let mass = Point {
             law: Some(scg_core::physics::scaling::CoarseGrainLaw::Mass),
             ..point(4.0)
         };
-        assert_eq!(simulated_count(&mass, 2000), 2000);
+        assert_eq!(simulated_count(mass.law, mass.alpha, 2000), 2000);
     }
 
     /// Vortex: particle 0 is the original; all at its radius, spread in angle and height,

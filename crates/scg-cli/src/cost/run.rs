@@ -294,7 +294,7 @@ fn reference_plan(
 /// alone; population scenes: 1/α³ of the scene's).
 fn point_cost(base: &Scene, p: &Point, represented: usize) -> f64 {
     let n = if single_particle(base) {
-        super::population::simulated_count(p, represented) as f64 + 1.0
+        super::population::simulated_count(p.law, p.alpha, represented) as f64 + 1.0
     } else {
         p.alpha.powi(-3)
     };

@@ -105,14 +105,7 @@ pub fn points(
     out
 }
 
-/// Index of the scene's original group: the first with α = 1, else the first.
-pub fn original_group(scene: &Scene) -> usize {
-    scene
-        .groups
-        .iter()
-        .position(|g| g.alpha == 1.0)
-        .unwrap_or(0)
-}
+pub use super::population::original_group;
 
 /// True when the sweep runs in single-particle mode.
 pub fn single_particle(scene: &Scene) -> bool {
@@ -130,7 +123,8 @@ pub fn point_scene(base: &Scene, p: &Point, represented: Option<usize>) -> Scene
         g.alpha = p.alpha;
         g.law = law;
         if let Some(n) = represented {
-            g.placement = population::placement(base, population::simulated_count(p, n));
+            g.placement =
+                population::placement(base, population::simulated_count(p.law, p.alpha, n));
         }
         s.groups = vec![g];
     } else {

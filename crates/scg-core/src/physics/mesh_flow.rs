@@ -16,6 +16,14 @@ use scg_mesh::{
 
 pub use super::patch_interaction::{PatchInteraction, coulomb_rebound, hint, rebound};
 
+/// The mesh flow as the carrier of its particles ([`MeshFlow::velocity`]).
+impl super::carrier::Carrier for MeshFlow {
+    #[inline(always)]
+    fn at(&self, cell: u32, x: DVec3) -> (DVec3, u32) {
+        self.velocity(cell, x)
+    }
+}
+
 /// What a particle meeting a boundary patch does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PatchRole {

@@ -4,14 +4,18 @@
 //! * [`scaling`] — coarse-graining laws (SCG, none, mass-equivalent, parcel);
 //! * [`drag`] — drag laws (Stokes, Schiller–Naumann) and response times;
 //! * [`flow`] — the prescribed fluid flow fields;
+//! * [`carrier`] — the carrier-velocity seam (the fluid velocity a particle sees, its
+//!   modifiers) and the one per-particle step of every scheme;
 //! * [`mesh_flow`] — flow fields on CFD meshes (location, interpolation, patch roles);
 //! * [`inlet`] — feeding on a mesh patch: uniform-by-area sampling, the flow through it;
 //! * [`integrate`] — the exponential and explicit schemes, kicks;
 //! * [`contact`] — normal, tangential and rolling laws, and the pair kernel;
 //! * [`wall_shape`] — wall geometry (planes, cylinders, meshes) and touch tests;
+//! * [`wall_motion`] — prescribed rigid wall motion: pose at t, surface velocity;
 //! * [`trimesh`] — triangle-mesh walls: closest points, topology, bin grid, contacts;
 //! * [`neighbour`] — the Verlet neighbour list;
 //! * [`periodic`] — orthogonal periodic boxes (minimum image).
+pub mod carrier;
 pub mod contact;
 pub mod drag;
 pub mod flow;
@@ -23,4 +27,5 @@ pub mod patch_interaction;
 pub mod periodic;
 pub mod scaling;
 pub mod trimesh;
+pub mod wall_motion;
 pub mod wall_shape;

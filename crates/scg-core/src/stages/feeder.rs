@@ -17,6 +17,7 @@ use glam::DVec3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
+use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
 use crate::physics::inlet::{PatchSampler, settle};
 use crate::physics::mesh_flow::hint;
 use crate::physics::scaling::{CoarseGrainLaw, coarse_grain};
@@ -142,10 +143,10 @@ impl Feeders {
 
 impl Feeders {
     /// Each feeder's count and random stream (checkpoints).
-    pub fn records(&self) -> Vec<crate::checkpoint::FeederRecord> {
+    pub fn records(&self) -> Vec<crate::checkpoint::records::FeederRecord> {
         self.list
             .iter()
-            .map(|f| crate::checkpoint::FeederRecord {
+            .map(|f| crate::checkpoint::records::FeederRecord {
                 fed: f.fed,
                 seed: f.rng.get_seed(),
                 stream: f.rng.get_stream(),
@@ -155,7 +156,10 @@ impl Feeders {
     }
 
     /// Restore the counts and random streams saved by [`Feeders::records`].
-    pub fn restore(&mut self, records: &[crate::checkpoint::FeederRecord]) -> Result<(), String> {
+    pub fn restore(
+        &mut self,
+        records: &[crate::checkpoint::records::FeederRecord],
+    ) -> Result<(), String> {
         if records.len() != self.list.len() {
             return Err(format!(
                 "the checkpoint has {} feeders, the scene {}",
@@ -174,12 +178,30 @@ impl Feeders {
     }
 }
 
+/// The feeders' part of a checkpoint: counts and random streams.
+struct FeedersPart;
+
+impl Persist for FeedersPart {
+    fn part(&self) -> Option<Part> {
+        Some(Part::Feeders)
+    }
+
+    fn save(&self, world: &World, c: &mut Checkpoint) {
+        c.feeders = world.resource::<Feeders>().records();
+    }
+
+    fn restore(&self, world: &mut World, c: &Checkpoint) -> Result<(), String> {
+        world.resource_mut::<Feeders>().restore(&c.feeders)
+    }
+}
+
 /// Add the feeder system (only when the scene has feeders).
 pub fn plugin(world: &mut World, b: &mut StepBuilder, specs: &[FeederSpec], seed: u64) {
     if specs.is_empty() {
         return;
     }
     world.insert_resource(Feeders::new(specs, seed));
+    Persistence::register(world, FeedersPart);
     b.add(
         StepSet::InletOutlet,
         "feeders",

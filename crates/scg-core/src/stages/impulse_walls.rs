@@ -8,6 +8,7 @@
 
 use bevy_ecs::prelude::*;
 
+use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
 use crate::components::*;
 use crate::physics::patch_interaction::{PatchInteraction, coulomb_rebound};
 use crate::stages::walls::Wall;
@@ -36,10 +37,37 @@ pub struct WallLog {
     pub stuck: Vec<Vec<u64>>,
 }
 
+/// The impulse walls' log's part of a checkpoint.
+struct WallLogPart;
+
+impl Persist for WallLogPart {
+    fn part(&self) -> Option<Part> {
+        Some(Part::ImpulseWalls)
+    }
+
+    fn save(&self, world: &World, c: &mut Checkpoint) {
+        let l = world.resource::<WallLog>();
+        c.impulse_walls = Some([l.escaped.clone(), l.stuck.clone()]);
+    }
+
+    fn restore(&self, world: &mut World, c: &Checkpoint) -> Result<(), String> {
+        let mut log = world.resource_mut::<WallLog>();
+        match &c.impulse_walls {
+            Some([e, s]) if e.len() == log.escaped.len() => {
+                log.escaped.clone_from(e);
+                log.stuck.clone_from(s);
+                Ok(())
+            }
+            _ => Err(Part::ImpulseWalls.mismatch()),
+        }
+    }
+}
+
 /// Add the impulse-wall system (inlet/outlet stage, before the outlets) and its resources.
 pub fn plugin(world: &mut World, b: &mut StepBuilder, walls: Vec<ImpulseWall>, groups: usize) {
     let n = walls.len();
     world.insert_resource(ImpulseWalls(walls));
+    Persistence::register(world, WallLogPart);
     world.insert_resource(WallLog {
         escaped: vec![vec![0; groups]; n],
         stuck: vec![vec![0; groups]; n],
@@ -137,6 +165,7 @@ mod tests {
                     point: DVec3::ZERO,
                     normal: DVec3::Z,
                 },
+                motion: Default::default(),
             },
             model,
         }

@@ -20,19 +20,16 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 
-use super::outlet::{OutletLog, remove_departed};
+use super::outlet::{OutletLog, OutletPart, remove_departed};
 use super::table::{bypass, columns_mut};
+use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
 use crate::components::*;
 use crate::exec::par::for_each_piece_heavy;
-use crate::physics::drag::DragLaw;
+use crate::physics::carrier::{Body, Carrier, Scheme, WithOffset, advance};
 use crate::physics::flow::Fluid;
-use crate::physics::integrate::{
-    Integrator, explicit_euler, explicit_substeps, exponential_drift, exponential_factors,
-    linear_kick,
-};
 use crate::physics::mesh_flow::{MeshFlow, PatchInteraction, PatchRole, hint, land};
-use crate::stages::motion::{Motion, effective_tau};
-use crate::state::{Health, SimClock, StepDisplacement, Tally};
+use crate::spawn::{LayoutVisitor, visit_layout};
+use crate::state::{Health, Motion, SimClock, StepDisplacement, Tally};
 use crate::step::{StepBuilder, StepSet, StepSystem};
 
 /// A mesh flow as a scene declares it.
@@ -68,10 +65,38 @@ impl MeshFlowState {
     }
 }
 
-/// Add the mesh-flow boundary system (inlet/outlet stage) and its resources; the
-/// integration system is added by [`crate::stages::motion::plugin`].
+/// The patch log's part of a checkpoint.
+struct PatchesPart;
+
+impl Persist for PatchesPart {
+    fn part(&self) -> Option<Part> {
+        Some(Part::Patches)
+    }
+
+    fn save(&self, world: &World, c: &mut Checkpoint) {
+        let l = world.resource::<PatchLog>();
+        c.patches = Some([l.escaped.clone(), l.stuck.clone()]);
+    }
+
+    fn restore(&self, world: &mut World, c: &Checkpoint) -> Result<(), String> {
+        let mut log = world.resource_mut::<PatchLog>();
+        match &c.patches {
+            Some([e, s]) if e.len() == log.escaped.len() => {
+                log.escaped.clone_from(e);
+                log.stuck.clone_from(s);
+                Ok(())
+            }
+            _ => Err(Part::Patches.mismatch()),
+        }
+    }
+}
+
+/// Add the mesh-flow integration and boundary systems and their resources.
 pub fn plugin(world: &mut World, b: &mut StepBuilder, spec: MeshFlowSpec, groups: usize) {
+    add_integration(b);
     world.insert_resource(PatchLog::new(spec.flow.mesh().patches.len(), groups));
+    Persistence::register(world, PatchesPart);
+    Persistence::register(world, OutletPart);
     world.insert_resource(MeshFlowState::new(spec));
     if !world.contains_resource::<OutletLog>() {
         world.insert_resource(OutletLog {
@@ -88,7 +113,7 @@ pub fn plugin(world: &mut World, b: &mut StepBuilder, spec: MeshFlowSpec, groups
 }
 
 /// Add the integration system of a mesh flow.
-pub(crate) fn add_integration(b: &mut StepBuilder) {
+fn add_integration(b: &mut StepBuilder) {
     b.add(
         StepSet::Integration,
         "mesh_flow",
@@ -108,6 +133,7 @@ type MeshMoveQuery<'w, 's> = Query<
         Option<&'static Force>,
         Option<&'static BodyAcceleration>,
         (&'static mut CellHint, &'static mut FlowAtCentre),
+        Option<&'static CarrierOffset>,
     ),
 >;
 
@@ -122,15 +148,15 @@ pub struct MeshInputs<'w> {
     state: Res<'w, MeshFlowState>,
 }
 
-/// Move every particle through the mesh flow (see the module documentation): exponential
-/// midpoint (Stokes with the precomputed factors, other laws with τ from the slip at the
-/// start of the step), or the sub-stepped explicit scheme, with the wall kick and body
-/// acceleration as in [`crate::stages::motion`]; without a drag law, ballistic.
+/// Move every particle through the mesh flow (see the module documentation): the one
+/// per-particle step of every scheme ([`advance`]) with the mesh flow as the carrier (plus
+/// each particle's [`CarrierOffset`] when the scene has a carrier modifier), then the
+/// landing on the mesh ([`land`]).
 pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
     let disp = d.disp.as_deref();
     let departures = &d.state.departures;
     departures.store(0, Ordering::Relaxed);
-    let Some((xs, vs, drag, ms, fs, gs, (hs, us))) = columns_mut(&mut q) else {
+    let Some((xs, vs, drag, ms, fs, gs, (hs, us), offs)) = columns_mut(&mut q) else {
         if let Some(dd) = disp {
             dd.mark_reported();
         }
@@ -144,25 +170,36 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
         fs,
         gs,
         (bypass(hs), bypass(us)),
+        offs,
     );
     let flow: &MeshFlow = &d.state.spec.flow;
-    let step = MeshStep {
+    let scheme = Scheme {
         dt: d.clock.dt,
         law: d.motion.drag,
         integrator: d.motion.integrator,
-        fluid: d.fluid.as_deref().copied(),
+        fluid: d.fluid.as_deref().copied().unwrap_or(Scheme::NO_FLUID),
+    };
+    let step = MeshStep {
+        scheme,
         flow,
         models: &d.state.spec.interactions,
         n_cells: flow.mesh().n_cells as u32,
         health: &d.health,
     };
     // The schemes that never read the start's fluid velocity run a loop without it.
-    let keep_start = keeps_start(&d.motion);
+    let keep_start = scheme.reads_start();
     for_each_piece_heavy(columns, |piece| {
-        let (d2max, gone) = if keep_start {
-            step.advance::<true>(piece)
-        } else {
-            step.advance::<false>(piece)
+        let (d2max, gone) = match (keep_start, piece.7) {
+            (true, None) => step.advance::<true, _>(piece, |_| flow),
+            (false, None) => step.advance::<false, _>(piece, |_| flow),
+            (true, Some(offs)) => step.advance::<true, _>(piece, |i| WithOffset {
+                inner: flow,
+                du: offs[i].0,
+            }),
+            (false, Some(offs)) => step.advance::<false, _>(piece, |i| WithOffset {
+                inner: flow,
+                du: offs[i].0,
+            }),
         };
         if gone > 0 {
             departures.fetch_add(gone, Ordering::Relaxed);
@@ -185,15 +222,13 @@ type MeshPiece<'a> = (
     Option<&'a [Force]>,
     Option<&'a [BodyAcceleration]>,
     (&'a mut [CellHint], &'a mut [FlowAtCentre]),
+    Option<&'a [CarrierOffset]>,
 );
 
 /// One step of the mesh integration: what every particle's step reads besides its own
 /// state.
 struct MeshStep<'a> {
-    dt: f64,
-    law: Option<DragLaw>,
-    integrator: Integrator,
-    fluid: Option<Fluid>,
+    scheme: Scheme,
     flow: &'a MeshFlow,
     models: &'a [PatchInteraction],
     n_cells: u32,
@@ -201,18 +236,21 @@ struct MeshStep<'a> {
 }
 
 impl MeshStep<'_> {
-    /// Advance the particles of a piece; the largest squared displacement and the number
-    /// of particles that left the mesh. `KEEP`: the scheme reads the fluid velocity at the
-    /// start of the step ([`keeps_start`]), so it is read from and written to
-    /// [`FlowAtCentre`]; otherwise that column is left alone.
+    /// Advance the particles of a piece in the carrier `carrier(i)` gives row `i`; the
+    /// largest squared displacement and the number of particles that left the mesh.
+    /// `KEEP`: the scheme reads the fluid velocity at the start of the step
+    /// ([`Scheme::reads_start`]), so it is read from and written to [`FlowAtCentre`];
+    /// otherwise that column is left alone. (With an offset, the value kept is the mean
+    /// flow's and the offset is added to it.)
     #[inline(always)]
-    fn advance<const KEEP: bool>(&self, piece: MeshPiece) -> (f64, u64) {
-        let (xs, vs, (sfs, fcs), ms, fs, gs, (hs, us)) = piece;
+    fn advance<const KEEP: bool, C: Carrier>(
+        &self,
+        piece: MeshPiece,
+        carrier: impl Fn(usize) -> C,
+    ) -> (f64, u64) {
+        let (xs, vs, (sfs, fcs), ms, fs, gs, (hs, us), offs) = piece;
         let MeshStep {
-            dt,
-            law,
-            integrator,
-            fluid,
+            scheme,
             flow,
             models,
             n_cells,
@@ -245,63 +283,22 @@ impl MeshStep<'_> {
                     }
                 }
             }
-            let (m, fc, sf) = (ms[i].0, &fcs[i], &sfs[i]);
+            let body = Body {
+                x: x0,
+                v: vs[i].0,
+                m: ms[i].0,
+                force: fs.map(|f| f[i].0),
+                a: gs.map_or(DVec3::ZERO, |g| g[i].0),
+                fc: &fcs[i],
+                sf: &sfs[i],
+            };
             // The fluid velocity at the start, from the last landing when it found it.
-            let u_start = |h: u32, x: DVec3| {
-                let known = if KEEP { us[i].at(x) } else { None };
-                known.unwrap_or_else(|| flow.velocity(h, x).0)
+            let start = if KEEP {
+                us[i].at(x0).map(|u| offs.map_or(u, |o| u + o[i].0))
+            } else {
+                None
             };
-            let force = fs.map(|f| f[i].0);
-            let a = gs.map_or(DVec3::ZERO, |g| g[i].0);
-            let v0 = vs[i].0;
-            let (x1, v1, h_end) = match (law, integrator) {
-                (Some(law), Integrator::Explicit) => {
-                    let mut acc = a;
-                    if let Some(f) = force {
-                        acc += f / m;
-                    }
-                    let fl = fluid.unwrap_or(Fluid {
-                        density: 0.0,
-                        viscosity: 1.0,
-                    });
-                    let (mut xi, mut vi, mut h) = (x0, v0, h0);
-                    let u0 = u_start(h, xi);
-                    let tau0 = effective_tau(law, fc, &fl, (u0 - vi).length());
-                    let n = explicit_substeps(tau0, dt);
-                    let step = dt / n as f64;
-                    for _ in 0..n {
-                        let (u, hu) = flow.velocity(h, xi);
-                        h = hu;
-                        let tau = effective_tau(law, fc, &fl, (u - vi).length());
-                        (xi, vi) = explicit_euler(xi, vi, u, acc, tau, step);
-                    }
-                    (xi, vi, h)
-                }
-                _ => {
-                    let vk = match force {
-                        Some(f) => linear_kick(v0, f, m, dt),
-                        None => v0,
-                    };
-                    let (u, hm) = flow.velocity(h0, x0 + vk * (0.5 * dt));
-                    let (x1, v1) = match law {
-                        None => exponential_drift(x0, vk, u, a, f64::INFINITY, 0.0, dt, dt),
-                        Some(DragLaw::Stokes) => {
-                            exponential_drift(x0, vk, u, a, fc.tau, sf.gain, sf.relax, dt)
-                        }
-                        Some(law) => {
-                            let fl = fluid.unwrap_or(Fluid {
-                                density: 0.0,
-                                viscosity: 1.0,
-                            });
-                            let u0 = u_start(h0, x0);
-                            let tau = effective_tau(law, fc, &fl, (u0 - vk).length());
-                            let (gain, relax) = exponential_factors(tau, dt);
-                            exponential_drift(x0, vk, u, a, tau, gain, relax, dt)
-                        }
-                    };
-                    (x1, v1, hm)
-                }
-            };
+            let (x1, v1, h_end) = advance(&scheme, &carrier(i), &body, h0, start);
             if !(x1 + v1).element_sum().is_finite() {
                 health.raise();
                 xs[i].0 = x1;
@@ -333,15 +330,16 @@ impl MeshStep<'_> {
     }
 }
 
-/// True when a step reads the fluid velocity at its start (the explicit scheme, the
-/// Reynolds-dependent laws), so that [`FlowAtCentre`] is kept; the other schemes leave it
-/// unknown rather than write (and reorder) it.
+/// True when a step reads the fluid velocity at its start, so that [`FlowAtCentre`] is
+/// kept ([`Scheme::reads_start`]).
 fn keeps_start(m: &Motion) -> bool {
-    match (m.drag, m.integrator) {
-        (Some(_), Integrator::Explicit) => true,
-        (None | Some(DragLaw::Stokes), _) => false,
-        (Some(_), _) => true,
+    Scheme {
+        dt: 0.0,
+        law: m.drag,
+        integrator: m.integrator,
+        fluid: Scheme::NO_FLUID,
     }
+    .reads_start()
 }
 
 /// Default steps between two reorderings of the particle table by mesh cell
@@ -382,25 +380,16 @@ pub fn sort_by_cell(world: &mut World) {
         return;
     }
     // Every component of the particle layout, checked against the table's.
-    let known = [
-        world.register_component::<ParticleId>(),
-        world.register_component::<GroupId>(),
-        world.register_component::<Position>(),
-        world.register_component::<Velocity>(),
-        world.register_component::<CoarseGrain>(),
-        world.register_component::<Diameter>(),
-        world.register_component::<Density>(),
-        world.register_component::<Mass>(),
-        world.register_component::<FluidCoupling>(),
-        world.register_component::<StokesFactors>(),
-        world.register_component::<Force>(),
-        world.register_component::<Torque>(),
-        world.register_component::<AngularVelocity>(),
-        world.register_component::<WallHistory>(),
-        world.register_component::<BodyAcceleration>(),
-        world.register_component::<CellHint>(),
-        world.register_component::<FlowAtCentre>(),
-    ];
+    struct Ids<'a>(&'a mut World, Vec<bevy_ecs::component::ComponentId>);
+    impl LayoutVisitor for Ids<'_> {
+        fn visit<T: Component<Mutability = bevy_ecs::component::Mutable> + Clone>(&mut self) {
+            let id = self.0.register_component::<T>();
+            self.1.push(id);
+        }
+    }
+    let mut ids = Ids(world, Vec::new());
+    visit_layout(&mut ids);
+    let known = ids.1;
     let layouts = world
         .archetypes()
         .iter()
@@ -432,25 +421,27 @@ pub fn sort_by_cell(world: &mut World) {
     }
     let mut perm: Vec<u32> = (0..keys.len() as u32).collect();
     perm.sort_unstable_by_key(|&i| keys[i as usize]);
-    permute::<ParticleId>(world, &perm);
-    permute::<GroupId>(world, &perm);
-    permute::<Position>(world, &perm);
-    permute::<Velocity>(world, &perm);
-    permute::<CoarseGrain>(world, &perm);
-    permute::<Diameter>(world, &perm);
-    permute::<Density>(world, &perm);
-    permute::<Mass>(world, &perm);
-    permute::<FluidCoupling>(world, &perm);
-    permute::<StokesFactors>(world, &perm);
-    permute::<Force>(world, &perm);
-    permute::<Torque>(world, &perm);
-    permute::<AngularVelocity>(world, &perm);
-    permute::<WallHistory>(world, &perm);
-    permute::<BodyAcceleration>(world, &perm);
-    permute::<CellHint>(world, &perm);
-    if keeps_start(world.resource::<Motion>()) {
-        permute::<FlowAtCentre>(world, &perm);
+    // Every column of the layout (the start's fluid velocity only where it is kept).
+    struct Permute<'a> {
+        world: &'a mut World,
+        perm: &'a [u32],
+        keep_start: bool,
     }
+    impl LayoutVisitor for Permute<'_> {
+        fn visit<T: Component<Mutability = bevy_ecs::component::Mutable> + Clone>(&mut self) {
+            if self.keep_start
+                || std::any::TypeId::of::<T>() != std::any::TypeId::of::<FlowAtCentre>()
+            {
+                permute::<T>(self.world, self.perm);
+            }
+        }
+    }
+    let keep_start = keeps_start(world.resource::<Motion>());
+    visit_layout(&mut Permute {
+        world,
+        perm: &perm,
+        keep_start,
+    });
 }
 
 /// Row i of the particles' `T` column takes the value of row `perm[i]` (no effect when

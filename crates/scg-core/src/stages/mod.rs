@@ -2,6 +2,7 @@
 //! systems to the step ([`crate::step`]) only when the scene declares the effect; the
 //! systems stay thin and call the pure laws of [`crate::physics`]. They reach the
 //! particles' columns through [`table`], which keeps every particle in one storage table.
+pub mod carrier;
 pub mod contacts;
 pub mod feeder;
 pub mod guard;

@@ -20,32 +20,24 @@ use super::table::{bypass, columns_mut};
 use super::walls::WallCandidates;
 use crate::components::*;
 use crate::exec::par::{Rows, Split, for_each_piece};
-use crate::physics::drag::{DragLaw, particle_reynolds};
+use crate::physics::carrier::{Body, Scheme, WithOffset, advance};
+use crate::physics::drag::DragLaw;
 use crate::physics::flow::{Affine, FlowField, Fluid};
-use crate::physics::integrate::{
-    Integrator, angular_kick, explicit_euler, explicit_substeps, exponential_factors,
-    exponential_midpoint,
-};
+use crate::physics::integrate::{Integrator, angular_kick};
 use crate::state::{Health, SimClock, StepDisplacement};
 use crate::step::{StepBuilder, StepSet, StepSystem};
 
-/// How particles move (resource); see [`crate::sim::SimConfig`] for the meaning.
-#[derive(Resource, Clone, Copy, Debug, PartialEq)]
-pub struct Motion {
-    /// Integrator.
-    pub integrator: Integrator,
-    /// Drag law, `None` without fluid drag.
-    pub drag: Option<DragLaw>,
-}
+pub use crate::state::Motion;
 
 /// Add the motion systems the scene needs (with `rotation`, the angular velocity is
 /// integrated from the wall torques), and the clock. With `mesh`, the flow is on a CFD
-/// mesh and [`super::mesh_flow`]'s system moves the particles whatever the drag law.
+/// mesh and [`super::mesh_flow`]'s plugin adds the system that moves the particles
+/// whatever the drag law.
 pub fn plugin(b: &mut StepBuilder, motion: &Motion, rotation: bool, mesh: bool) {
     use StepSystem::*;
     let set = StepSet::Integration;
     match (motion.drag, motion.integrator) {
-        _ if mesh => super::mesh_flow::add_integration(b),
+        _ if mesh => {}
         (None, _) => b.add(set, "motion", IntegrateBallistic, integrate_ballistic),
         (Some(DragLaw::Stokes), Integrator::Exponential) => b.add(
             set,
@@ -172,17 +164,49 @@ fn piece_pass<'a, S: Split + 'a>(
     }
 }
 
-/// [`piece_pass`] one particle at a time: `advance` gives each particle's new position
-/// and velocity from its [`Mover`] and fluid coupling.
-fn move_pass<'a>(
-    columns: Option<Columns<'a, &'a [FluidCoupling]>>,
+/// The drag columns of the schemes that take the carrier through [`advance`]: Stokes
+/// factors, fluid couplings and, with a carrier modifier, the particles' offsets.
+type CarrierColumns<'a> = (
+    &'a [StokesFactors],
+    &'a [FluidCoupling],
+    Option<&'a [CarrierOffset]>,
+);
+
+/// [`piece_pass`] one particle at a time through the carrier-velocity seam: each
+/// particle's step is [`advance`] under `scheme` in `flow`, plus the particle's
+/// [`CarrierOffset`] when the scene has a carrier modifier.
+fn carrier_pass<'a>(
+    columns: Option<Columns<'a, CarrierColumns<'a>>>,
     health: &Health,
     disp: Option<&StepDisplacement>,
-    advance: impl Fn(Mover, &FluidCoupling) -> (DVec3, DVec3) + Sync,
+    scheme: &Scheme,
+    flow: &FlowField,
 ) {
-    piece_pass(columns, health, disp, |mut p, fcs| {
+    piece_pass(columns, health, disp, |mut p, (sfs, fcs, offs)| {
         let n = p.x.len();
-        scalar_rows(&mut p, 0..n, |i, mover| advance(mover, &fcs[i]))
+        let body = |i: usize, m: Mover| Body {
+            x: m.x,
+            v: m.v,
+            m: m.m,
+            force: m.force,
+            a: m.a,
+            fc: &fcs[i],
+            sf: &sfs[i],
+        };
+        match offs {
+            None => scalar_rows(&mut p, 0..n, |i, m| {
+                let (x, v, _) = advance(scheme, flow, &body(i, m), 0, None);
+                (x, v)
+            }),
+            Some(offs) => scalar_rows(&mut p, 0..n, |i, m| {
+                let carrier = WithOffset {
+                    inner: flow,
+                    du: offs[i].0,
+                };
+                let (x, v, _) = advance(scheme, &carrier, &body(i, m), 0, None);
+                (x, v)
+            }),
+        }
     });
 }
 
@@ -356,17 +380,24 @@ fn drag_only_planar_avx2<const TRACK: bool>(
 
 /// Stokes drag, exponential scheme, precomputed factors: the fast path. One tight loop
 /// per piece of the particle table, on every core, with the flow in affine form where it
-/// has one.
+/// has one. With a carrier modifier, the general step through the carrier seam.
 pub fn integrate_stokes_exponential(
-    clock: Res<SimClock>,
-    flow: Res<FlowField>,
-    health: Res<Health>,
-    disp: Option<Res<StepDisplacement>>,
-    q: MoveQuery<(&'static StokesFactors, &'static FluidCoupling)>,
+    d: DragInputs,
+    mut q: MoveQuery<(
+        &'static StokesFactors,
+        &'static FluidCoupling,
+        Option<&'static CarrierOffset>,
+    )>,
 ) {
-    let flow = *flow;
-    let disp = disp.as_deref();
-    let dt = clock.dt;
+    let flow = *d.flow;
+    let disp = d.disp.as_deref();
+    let health = &*d.health;
+    let dt = d.clock.dt;
+    let columns = move_columns(&mut q);
+    if columns.as_ref().is_some_and(|c| c.2.2.is_some()) {
+        let scheme = d.scheme();
+        return carrier_pass(columns, health, disp, &scheme, &flow);
+    }
     match flow.affine() {
         // A flow in the x–y plane that does not depend on z (e.g. a vortex about z): 2×2.
         Some(aff) if aff.is_planar_z() => {
@@ -379,32 +410,31 @@ pub fn integrate_stokes_exponential(
                 ],
                 b: [aff.b.x, aff.b.y],
             };
-            stokes_kernel(q, dt, &health, disp, planar)
+            stokes_kernel(columns, dt, health, disp, planar)
         }
-        Some(aff) => stokes_kernel(q, dt, &health, disp, aff),
+        Some(aff) => stokes_kernel(columns, dt, health, disp, aff),
         // Only the classifier is not affine (its nozzle makes it piecewise).
         None => match ClassifierFlow::of(&flow) {
-            Some(c) => stokes_kernel(q, dt, &health, disp, c),
-            None => stokes_kernel(q, dt, &health, disp, flow),
+            Some(c) => stokes_kernel(columns, dt, health, disp, c),
+            None => stokes_kernel(columns, dt, health, disp, flow),
         },
     }
 }
 
 /// The fast-path loop for a flow given as a function of position.
 fn stokes_kernel<U: StokesFlow>(
-    mut q: MoveQuery<(&'static StokesFactors, &'static FluidCoupling)>,
+    columns: Option<Columns<'_, CarrierColumns<'_>>>,
     dt: f64,
     health: &Health,
     disp: Option<&StepDisplacement>,
     flow: U,
 ) {
-    let columns = move_columns(&mut q);
     let drag_only = columns
         .as_ref()
         .is_some_and(|c| c.4.is_none() && c.5.is_none());
     if !drag_only {
         // No particle, or wall forces or gravity: the general step, four at a time.
-        return lanes_pass(columns, health, disp, dt, |(factors, couplings)| {
+        return lanes_pass(columns, health, disp, dt, |(factors, couplings, _)| {
             StokesDrift {
                 flow,
                 factors,
@@ -414,7 +444,7 @@ fn stokes_kernel<U: StokesFlow>(
     }
     let Some(columns) = columns else { return };
     // Drag only: the common case, kept free of per-particle branches.
-    for_each_piece(columns, move |(xs, vs, (sfs, _), ..)| {
+    for_each_piece(columns, move |(xs, vs, (sfs, _, _), ..)| {
         // Any NaN or infinity makes the running sum non-finite: one test per piece.
         let (sum, d2max) = match disp {
             Some(_) => flow.drag_only::<true>(xs, vs, sfs, dt),
@@ -432,76 +462,50 @@ fn stokes_kernel<U: StokesFlow>(
     }
 }
 
-/// Response time under `law` for the slip speed `slip` (m/s), s.
-#[inline]
-pub(crate) fn effective_tau(law: DragLaw, fc: &FluidCoupling, fluid: &Fluid, slip: f64) -> f64 {
-    let re = particle_reynolds(fc.drag_diameter, slip, fluid.density, fluid.viscosity);
-    fc.tau / law.correction(re)
-}
-
 /// What the Reynolds-dependent drag systems read besides the particles.
 #[derive(bevy_ecs::system::SystemParam)]
 pub struct DragInputs<'w> {
     clock: Res<'w, SimClock>,
     motion: Res<'w, Motion>,
     flow: Res<'w, FlowField>,
-    fluid: Res<'w, Fluid>,
+    fluid: Option<Res<'w, Fluid>>,
     health: Res<'w, Health>,
     disp: Option<Res<'w, StepDisplacement>>,
 }
 
 impl DragInputs<'_> {
-    /// dt (s), the drag law, the flow and the fluid.
-    fn constants(&self) -> (f64, DragLaw, FlowField, Fluid) {
-        let law = self.motion.drag.unwrap_or_default();
-        (self.clock.dt, law, *self.flow, *self.fluid)
+    /// The per-particle scheme: dt, the drag law, the integrator and the fluid.
+    fn scheme(&self) -> Scheme {
+        Scheme {
+            dt: self.clock.dt,
+            law: Some(self.motion.drag.unwrap_or_default()),
+            integrator: self.motion.integrator,
+            fluid: self.fluid.as_deref().copied().unwrap_or(Scheme::NO_FLUID),
+        }
     }
 }
 
+/// The drag columns of the Reynolds-dependent schemes' query.
+type CarrierQuery = (
+    &'static StokesFactors,
+    &'static FluidCoupling,
+    Option<&'static CarrierOffset>,
+);
+
 /// Reynolds-dependent drag (e.g. Schiller–Naumann), exponential scheme: τ is evaluated
-/// from the slip at the start of the step and held over it.
-pub fn integrate_drag_exponential(d: DragInputs, mut q: MoveQuery<&'static FluidCoupling>) {
-    let (dt, law, flow, fluid) = d.constants();
+/// from the slip at the start of the step and held over it ([`advance`]).
+pub fn integrate_drag_exponential(d: DragInputs, mut q: MoveQuery<CarrierQuery>) {
+    let scheme = d.scheme();
     let columns = move_columns(&mut q);
-    move_pass(
-        columns,
-        &d.health,
-        d.disp.as_deref(),
-        |p, fc: &FluidCoupling| {
-            let vk = p.kicked(dt);
-            let slip = (flow.velocity(p.x) - vk).length();
-            let tau = effective_tau(law, fc, &fluid, slip);
-            let (gain, relax) = exponential_factors(tau, dt);
-            exponential_midpoint(&flow, p.x, vk, p.a, tau, gain, relax, dt)
-        },
-    );
+    carrier_pass(columns, &d.health, d.disp.as_deref(), &scheme, &d.flow);
 }
 
-/// Any drag law, semi-implicit Euler; sub-stepped so that every sub-step has dt ≤ τ/2.
-pub fn integrate_drag_explicit(d: DragInputs, mut q: MoveQuery<&'static FluidCoupling>) {
-    let (dt, law, flow, fluid) = d.constants();
+/// Any drag law, semi-implicit Euler; sub-stepped so that every sub-step has dt ≤ τ/2
+/// ([`advance`]).
+pub fn integrate_drag_explicit(d: DragInputs, mut q: MoveQuery<CarrierQuery>) {
+    let scheme = d.scheme();
     let columns = move_columns(&mut q);
-    move_pass(
-        columns,
-        &d.health,
-        d.disp.as_deref(),
-        |p, fc: &FluidCoupling| {
-            let mut a = p.a;
-            if let Some(f) = p.force {
-                a += f / p.m;
-            }
-            let (mut xi, mut vi) = (p.x, p.v);
-            let slip0 = (flow.velocity(xi) - vi).length();
-            let n = explicit_substeps(effective_tau(law, fc, &fluid, slip0), dt);
-            let h = dt / n as f64;
-            for _ in 0..n {
-                let u = flow.velocity(xi);
-                let tau = effective_tau(law, fc, &fluid, (u - vi).length());
-                (xi, vi) = explicit_euler(xi, vi, u, a, tau, h);
-            }
-            (xi, vi)
-        },
-    );
+    carrier_pass(columns, &d.health, d.disp.as_deref(), &scheme, &d.flow);
 }
 
 /// No fluid: wall kick, then the exact drift under gravity (free fall is exact; with

@@ -5,6 +5,7 @@
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 
+use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
 use crate::components::*;
 use crate::state::{SimClock, Tally};
 use crate::step::{StepBuilder, StepSet, StepSystem};
@@ -83,9 +84,34 @@ pub struct OutletLog {
 #[derive(Resource, Clone, Copy, Debug, PartialEq)]
 pub struct Outlet(pub OutletSpec);
 
+/// The outlet log's part of a checkpoint (also a mesh flow's: it drains through patches).
+pub(crate) struct OutletPart;
+
+impl Persist for OutletPart {
+    fn part(&self) -> Option<Part> {
+        Some(Part::Outlet)
+    }
+
+    fn save(&self, world: &World, c: &mut Checkpoint) {
+        let l = world.resource::<OutletLog>();
+        c.outlet = Some([l.drained.clone(), l.lost.clone()]);
+    }
+
+    fn restore(&self, world: &mut World, c: &Checkpoint) -> Result<(), String> {
+        let Some([d, l]) = &c.outlet else {
+            return Err(Part::Outlet.mismatch());
+        };
+        let mut log = world.resource_mut::<OutletLog>();
+        log.drained.clone_from(d);
+        log.lost.clone_from(l);
+        Ok(())
+    }
+}
+
 /// Add the outlet system.
 pub fn plugin(world: &mut World, b: &mut StepBuilder, spec: OutletSpec, groups: usize) {
     world.insert_resource(Outlet(spec));
+    Persistence::register(world, OutletPart);
     world.insert_resource(OutletLog {
         drained: vec![Vec::new(); groups],
         lost: vec![Vec::new(); groups],

@@ -17,11 +17,13 @@ use glam::DVec3;
 
 use super::contacts::ContactState;
 use super::table::{bypass, columns_mut};
+use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
 use crate::components::*;
 use crate::exec::par::{Rows, for_each_listed_piece};
-use crate::physics::contact::tangential::{rolling_torque, tangential_force};
+use crate::physics::contact::model::{ContactModel, wall_geometry};
 use crate::physics::contact::{Material, NormalLaw, TangentialLaw};
 use crate::physics::trimesh::{MeshContact, MeshScratch};
+use crate::physics::wall_motion::{Pose, WallMotion};
 use crate::physics::wall_shape::{WallShape, WallTouch};
 use crate::state::{ContactResolution, SimClock};
 use crate::step::{StepBuilder, StepSet, StepSystem};
@@ -31,8 +33,35 @@ use crate::step::{StepBuilder, StepSet, StepSystem};
 pub struct Wall {
     /// Name (for recordings and messages).
     pub name: String,
-    /// Geometry.
+    /// Geometry (where the wall is at t = 0: its rest frame).
     pub shape: WallShape,
+    /// Its prescribed motion ([`WallMotion::FIXED`] for a wall at rest).
+    pub motion: WallMotion,
+}
+
+impl WallSet {
+    /// True when some wall moves.
+    pub fn any_moving(&self) -> bool {
+        self.walls.iter().any(|w| !w.motion.is_fixed())
+    }
+
+    /// Each wall's pose at time `t` (s); `None` for a wall at rest.
+    pub fn poses(&self, t: f64) -> Vec<Option<Pose>> {
+        self.walls
+            .iter()
+            .map(|w| (!w.motion.is_fixed()).then(|| w.motion.pose(t)))
+            .collect()
+    }
+
+    /// True when the sphere at `x` (m) of radius `r` (m) is surely clear of every wall
+    /// (posed by `poses`, [`WallSet::poses`]).
+    #[inline(always)]
+    fn surely_clear(&self, poses: &[Option<Pose>], x: DVec3, r: f64) -> bool {
+        self.walls.iter().zip(poses).all(|(w, p)| match p {
+            None => w.shape.surely_clear(x, r),
+            Some(p) => w.shape.surely_clear(p.to_rest(x), r),
+        })
+    }
 }
 
 /// The scene's walls and their contact law (resource).
@@ -81,7 +110,8 @@ impl WallTangential {
 /// its mesh walls.
 ///
 /// Between two builds of the neighbour list no particle moves more than half its skin
-/// (the list's rebuild rule), and the walls do not move. So a particle whose sphere,
+/// (the list's rebuild rule), and walls at rest do not move (with a moving wall no rows
+/// are listed: every particle is visited every step). So a particle whose sphere,
 /// grown by half the skin, was surely clear of every wall when the list was built, and
 /// whose wall history was empty, touches no wall until the next build: its wall force,
 /// torque and history stay zero and empty, and the wall stage passes it by. At the first
@@ -119,7 +149,8 @@ impl WallCandidates {
         let Some(list) = contacts.map(|c| &c.list) else {
             return;
         };
-        if self.built_at == Some(list.builds) {
+        // Moving walls come to the particles: every particle is visited every step.
+        if self.built_at == Some(list.builds) || walls.any_moving() {
             return;
         }
         let half = 0.5 * list.skin;
@@ -141,9 +172,27 @@ impl WallCandidates {
     }
 }
 
+/// On a restore the wall candidates are listed again at the first step (the restored
+/// neighbour list's build count may equal the one they were listed at); nothing is saved.
+struct CandidatesReset;
+
+impl Persist for CandidatesReset {
+    fn part(&self) -> Option<Part> {
+        None
+    }
+
+    fn save(&self, _: &World, _: &mut Checkpoint) {}
+
+    fn restore(&self, world: &mut World, _: &Checkpoint) -> Result<(), String> {
+        *world.resource_mut::<WallCandidates>() = WallCandidates::default();
+        Ok(())
+    }
+}
+
 /// Add the wall systems: normal forces only, or with the tangential law when given.
 pub fn plugin(world: &mut World, b: &mut StepBuilder, tangential: Option<WallTangential>) {
     world.insert_resource(WallCandidates::default());
+    Persistence::register(world, CandidatesReset);
     match tangential {
         Some(t) if t.law.active() => {
             world.insert_resource(t);
@@ -180,6 +229,7 @@ pub fn wall_normal_forces(
         return;
     };
     let keys = history_keys(&walls.walls);
+    let poses = walls.poses(clock.time());
     let contacts = contacts.as_deref();
     let current = candidates.current(contacts);
     let columns = (xs, vs, ds, ms, bypass(fs), Rows(0..xs.len()));
@@ -188,8 +238,13 @@ pub fn wall_normal_forces(
         let visit = |i: usize| {
             let (x, v, r, m) = (xs[i].0, vs[i].0, 0.5 * ds[i].0, ms[i].0);
             let mut sum = DVec3::ZERO;
-            for_each_touch(walls, &keys, x, r, &mut scratch, &mut found, |t, _| {
-                let vn = v.dot(t.normal);
+            let touches = Touches {
+                walls,
+                keys: &keys,
+                poses: &poses,
+            };
+            touches.each(x, r, &mut scratch, &mut found, |t, _, wall_velocity| {
+                let vn = (v - wall_velocity).dot(t.normal);
                 if vn < 0.0 && t.overlap <= -vn * dt {
                     // No history here: the contact started within the last step (one
                     // step ago, at this speed, the sphere was clear of the wall).
@@ -209,37 +264,69 @@ pub fn wall_normal_forces(
     candidates.refresh(contacts, walls, xs, ds, |_| false);
 }
 
-/// Every touch of the sphere at `x` (m) of radius `r` (m) with the walls, with its history
-/// key (`keys` from [`history_keys`]): one per touched analytic wall, one per touched
-/// feature of a mesh wall. Always inlined: the wall stages' loops are mostly this.
-#[inline(always)]
-fn for_each_touch(
-    walls: &WallSet,
-    keys: &[u32],
-    x: DVec3,
-    r: f64,
-    scratch: &mut MeshScratch,
-    found: &mut Vec<MeshContact>,
-    mut f: impl FnMut(WallTouch, u32),
-) {
-    for (wall, &key) in walls.walls.iter().zip(keys) {
-        match &wall.shape {
-            WallShape::Mesh(mesh) => {
-                if mesh.surely_clear(x, r) {
-                    continue;
+/// The walls as the force systems visit them: their history keys ([`history_keys`]) and
+/// poses at this step ([`WallSet::poses`]).
+struct Touches<'a> {
+    walls: &'a WallSet,
+    keys: &'a [u32],
+    poses: &'a [Option<Pose>],
+}
+
+impl Touches<'_> {
+    /// Every touch of the sphere at `x` (m) of radius `r` (m) with the walls, with its
+    /// history key and the wall's surface velocity at the contact point (m/s; zero at
+    /// rest): one per touched analytic wall, one per touched feature of a mesh wall. A
+    /// moving wall is touched in its rest frame and the touch turned back into the world.
+    /// Always inlined: the wall stages' loops are mostly this.
+    #[inline(always)]
+    fn each(
+        &self,
+        x: DVec3,
+        r: f64,
+        scratch: &mut MeshScratch,
+        found: &mut Vec<MeshContact>,
+        mut f: impl FnMut(WallTouch, u32, DVec3),
+    ) {
+        for ((wall, &key), pose) in self.walls.walls.iter().zip(self.keys).zip(self.poses) {
+            let xr = match pose {
+                None => x,
+                Some(p) => p.to_rest(x),
+            };
+            // A touch in the rest frame, in the world: its normal turned, the surface
+            // velocity at the contact point (−r·n from the centre).
+            let mut world = |t: WallTouch, key: u32| match pose {
+                None => f(t, key, DVec3::ZERO),
+                Some(p) => {
+                    let normal = p.to_world_direction(t.normal);
+                    let v = p.velocity_at(x - r * normal);
+                    f(
+                        WallTouch {
+                            overlap: t.overlap,
+                            normal,
+                        },
+                        key,
+                        v,
+                    )
                 }
-                mesh.contacts(x, r, scratch, found);
-                for c in found.iter() {
-                    let t = WallTouch {
-                        overlap: c.overlap,
-                        normal: c.normal,
-                    };
-                    f(t, key + c.region);
+            };
+            match &wall.shape {
+                WallShape::Mesh(mesh) => {
+                    if mesh.surely_clear(xr, r) {
+                        continue;
+                    }
+                    mesh.contacts(xr, r, scratch, found);
+                    for c in found.iter() {
+                        let t = WallTouch {
+                            overlap: c.overlap,
+                            normal: c.normal,
+                        };
+                        world(t, key + c.region);
+                    }
                 }
-            }
-            shape => {
-                if let Some(t) = shape.touch(x, r) {
-                    f(t, key);
+                shape => {
+                    if let Some(t) = shape.touch(xr, r) {
+                        world(t, key);
+                    }
                 }
             }
         }
@@ -290,13 +377,22 @@ pub fn wall_contact_forces(
     mut q: WallQuery,
 ) {
     let walls = &*walls;
-    let tl = tangential.law;
-    let g_eff = tangential.g_eff;
     let dt = clock.dt;
     let resolution = &*resolution;
-    let e_eff = walls.material.effective_modulus();
+    let model = ContactModel {
+        law: walls.law,
+        tangential: tangential.law,
+        e_eff: walls.material.effective_modulus(),
+        g_eff: tangential.g_eff,
+    };
     let keys = history_keys(&walls.walls);
-    let keys = &keys;
+    let poses = walls.poses(clock.time());
+    let touches = Touches {
+        walls,
+        keys: &keys,
+        poses: &poses,
+    };
+    let touches = &touches;
     // One particle: its wall forces and torque, its history updated in place.
     let one = move |x: DVec3,
                     v: DVec3,
@@ -310,40 +406,36 @@ pub fn wall_contact_forces(
         let r = 0.5 * d;
         let (mut fsum, mut tsum) = (DVec3::ZERO, DVec3::ZERO);
         let old_len = hist.len();
-        // One contact (history key `key`).
-        let mut contact = |t: WallTouch, key: u32, hist: &mut Vec<(u32, DVec3)>| {
-            let n = t.normal; // from the wall toward the centre
-            // Velocity of the contact point (at −r·n from the centre); the wall is at rest.
-            let vc = v + w.cross(-r * n);
-            let vn = vc.dot(n);
-            let (fn_, kn) = walls.law.force(t.overlap, vn, e_eff, r, m);
-            fsum += fn_ * n;
+        // One contact (history key `key`) with a wall whose surface moves at
+        // `wall_velocity` there: the geometry, then the model (normal → damping →
+        // tangential → rolling).
+        let mut contact = |t: WallTouch,
+                           key: u32,
+                           wall_velocity: DVec3,
+                           hist: &mut Vec<(u32, DVec3)>| {
+            let g = wall_geometry(t.normal, t.overlap, r, m, v, w, wall_velocity);
             let prev = match hist[..old_len].iter().find(|h| h.0 == key) {
                 Some(h) => h.1,
                 None => {
                     // The contact starts: its duration at this approach speed.
-                    resolution.note_wall(walls.law.contact_time(m, r, e_eff, -vn));
+                    resolution.note_wall(model.law.contact_time(m, r, model.e_eff, -g.separation));
                     DVec3::ZERO
                 }
             };
+            let resp = model.response(&g, None, prev, dt);
+            fsum += resp.normal * g.normal;
             let mut xi = DVec3::ZERO;
-            if tl.friction > 0.0 {
-                let vt = vc - vn * n;
-                let kt = tl.stiffness(g_eff, r, t.overlap, kn);
-                let eta = tl.damping * (m * kt).sqrt();
-                let u = tangential_force(prev, n, vt, kt, eta, tl.friction * fn_.abs(), dt);
+            if let Some(u) = resp.tangential {
                 xi = u.history;
                 fsum += u.force;
-                tsum += (-r * n).cross(u.force);
+                tsum += (-r * g.normal).cross(u.force);
             }
-            if tl.rolling > 0.0 {
-                tsum += rolling_torque(tl.rolling, fn_.abs(), r, w);
+            if model.tangential.rolling > 0.0 {
+                tsum += model.rolling(resp.normal, r, w);
             }
             hist.push((key, xi));
         };
-        for_each_touch(walls, keys, x, r, scratch, found, |t, key| {
-            contact(t, key, hist)
-        });
+        touches.each(x, r, scratch, found, |t, key, vw| contact(t, key, vw, hist));
         // Keep only the contacts of this step (appended after the old entries).
         if old_len > 0 {
             hist.drain(..old_len);
@@ -373,9 +465,7 @@ pub fn wall_contact_forces(
             let (mut scratch, mut found) = (MeshScratch::default(), Vec::new());
             let visit = |i: usize| {
                 let r = 0.5 * ds[i].0;
-                if hs[i].0.is_empty()
-                    && walls.walls.iter().all(|w| w.shape.surely_clear(xs[i].0, r))
-                {
+                if hs[i].0.is_empty() && walls.surely_clear(&poses, xs[i].0, r) {
                     return;
                 }
                 let (f, t) = one(

@@ -7,6 +7,8 @@
 //! binary data: header and data encoded together when uncompressed, separately when
 //! compressed.
 
+use super::guard::{attr, find};
+
 /// The file with raw appended data moved inline, or the same bytes when there is none.
 pub fn inline_raw_appended(bytes: &[u8]) -> Result<Vec<u8>, String> {
     let Some(start) = find(bytes, b"<AppendedData") else {
@@ -99,30 +101,6 @@ pub fn inline_raw_appended(bytes: &[u8]) -> Result<Vec<u8>, String> {
     out.push_str(rest);
     out.push_str("</VTKFile>\n");
     Ok(out.into_bytes())
-}
-
-pub(super) fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
-    hay.windows(needle.len()).position(|w| w == needle)
-}
-
-/// The value of attribute `name` in a tag (`name="v"` or `name='v'`).
-pub(super) fn attr(tag: &str, name: &str) -> Option<String> {
-    let mut from = 0;
-    while let Some(i) = tag[from..].find(name) {
-        let at = from + i;
-        from = at + name.len();
-        let before_ok = at == 0 || tag.as_bytes()[at - 1].is_ascii_whitespace();
-        let rest = tag[from..].trim_start();
-        if before_ok && let Some(rest) = rest.strip_prefix('=') {
-            let rest = rest.trim_start();
-            let q = rest.chars().next()?;
-            if q == '"' || q == '\'' {
-                let end = rest[1..].find(q)?;
-                return Some(rest[1..1 + end].to_string());
-            }
-        }
-    }
-    None
 }
 
 /// Standard base64 with padding (RFC 4648).

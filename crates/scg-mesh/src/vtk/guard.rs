@@ -47,16 +47,15 @@ pub fn check_legacy(bytes: &[u8]) -> Result<(), String> {
 /// the headers of every compressed data array (inline or appended base64).
 pub fn check_xml(bytes: &[u8]) -> Result<(), String> {
     let limit = RATIO.saturating_mul(bytes.len()).saturating_add(1024);
-    let (head, appended) = match super::appended::find(bytes, b"<AppendedData") {
+    let (head, appended) = match find(bytes, b"<AppendedData") {
         Some(at) => {
             let rest = &bytes[at..];
-            let data = super::appended::find(rest, b"_").map_or(&b""[..], |u| &rest[u + 1..]);
+            let data = find(rest, b"_").map_or(&b""[..], |u| &rest[u + 1..]);
             (&bytes[..at], data)
         }
         None => (bytes, &b""[..]),
     };
     let head = std::str::from_utf8(head).map_err(|_| "the XML is not UTF-8".to_string())?;
-    let attr = super::appended::attr;
     let mut rest = head;
     while let Some(i) = rest.find("<Piece") {
         let end = rest[i..].find('>').map_or(rest.len(), |e| e + i);
@@ -211,6 +210,31 @@ fn b64_decode(t: &[u8]) -> Option<Vec<u8>> {
         out.extend_from_slice(&bytes[..(chunk.len() * 3 / 4).saturating_sub(pad)]);
     }
     Some(out)
+}
+
+/// The first position of `needle` in `hay`.
+pub(super) fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
+    hay.windows(needle.len()).position(|w| w == needle)
+}
+
+/// The value of attribute `name` in a tag (`name="v"` or `name='v'`).
+pub(super) fn attr(tag: &str, name: &str) -> Option<String> {
+    let mut from = 0;
+    while let Some(i) = tag[from..].find(name) {
+        let at = from + i;
+        from = at + name.len();
+        let before_ok = at == 0 || tag.as_bytes()[at - 1].is_ascii_whitespace();
+        let rest = tag[from..].trim_start();
+        if before_ok && let Some(rest) = rest.strip_prefix('=') {
+            let rest = rest.trim_start();
+            let q = rest.chars().next()?;
+            if q == '"' || q == '\'' {
+                let end = rest[1..].find(q)?;
+                return Some(rest[1..1 + end].to_string());
+            }
+        }
+    }
+    None
 }
 
 #[cfg(test)]

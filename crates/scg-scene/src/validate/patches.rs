@@ -167,6 +167,7 @@ pub(super) fn patch_walls(
         wall: Wall {
             name: PatchWalls::NAME.to_string(),
             shape: WallShape::Mesh(std::sync::Arc::new(mesh)),
+            motion: Default::default(),
         },
         per_patch: walls.into_iter().zip(s.per_patch).collect(),
     }))

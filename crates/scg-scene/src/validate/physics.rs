@@ -326,6 +326,7 @@ pub(super) fn wall(w: &RawWall, i: usize, cx: &Ctx) -> Result<Wall, SceneError> 
     Ok(Wall {
         name: w.name.clone().unwrap_or_else(|| format!("wall{i}")),
         shape,
+        motion: Default::default(),
     })
 }
 

@@ -1,6 +1,7 @@
-//! Contact mechanics: pure kernels (normal, tangential, the pair kernel) and the contact
-//! material.
+//! Contact mechanics: pure kernels (normal, tangential, the one contact model of pairs
+//! and walls, the pair kernel) and the contact material.
 pub mod lanes;
+pub mod model;
 pub mod normal;
 pub mod pair;
 pub mod tangential;

@@ -7,9 +7,8 @@
 
 use glam::DVec3;
 
-use super::tangential::{
-    HertzPair, TangentialStiffness, hertz_mindlin_pair, rolling_torque, tangential_force,
-};
+use super::model::{ContactModel, Geometry};
+use super::tangential::{HertzPair, rolling_torque};
 use super::{NormalLaw, TangentialLaw};
 use crate::physics::periodic::PeriodicBox;
 
@@ -28,6 +27,19 @@ pub struct PairParams {
     pub periodic: Option<PeriodicBox>,
     /// √(6·G*/E*), for [`super::tangential::hertz_mindlin_pair`].
     pub mindlin_c: f64,
+}
+
+impl PairParams {
+    /// The contact model of these constants.
+    #[inline(always)]
+    pub fn model(&self) -> ContactModel {
+        ContactModel {
+            law: self.law,
+            tangential: self.tangential,
+            e_eff: self.e_eff,
+            g_eff: self.g_eff,
+        }
+    }
 }
 
 /// What a candidate pair carries besides its two indices, its minimum-image shift and
@@ -271,26 +283,19 @@ pub fn pair_kernel(
     let v_rel = b.vel[i] - b.vel[j] + (ri * b.omega[i] + rj * b.omega[j]).cross(n);
     let vn_approach = v_rel.dot(n);
     let tl = &par.tangential;
-    let (fn_, kt, eta) = match (par.law, tl.stiffness) {
-        // The common case in one pass (shared square roots, per-pair constants).
-        (NormalLaw::Hertz { gamma }, TangentialStiffness::Mindlin) => hertz_mindlin_pair(
-            delta,
-            -vn_approach,
-            pc,
-            par.e_eff,
-            par.g_eff,
-            gamma,
-            tl.damping,
-            par.mindlin_c,
-        ),
-        _ => {
-            let (fn_, kn) = par
-                .law
-                .force(delta, -vn_approach, par.e_eff, pc.r_eff, pc.m_eff);
-            let kt = tl.stiffness(par.g_eff, pc.r_eff, delta, kn);
-            (fn_, kt, tl.damping * (pc.m_eff * kt).sqrt())
-        }
+    let g = Geometry {
+        normal: n,
+        overlap: delta,
+        separation: -vn_approach,
+        slip: v_rel - vn_approach * n,
+        r_eff: pc.r_eff,
+        m_eff: pc.m_eff,
     };
+    // The common case (Hertz–Mindlin) in one pass from the pair's constants.
+    let r = par
+        .model()
+        .response(&g, Some((pc, par.mindlin_c)), p.history, dt);
+    let fn_ = r.normal;
     let mut c = PairContact {
         i: pi,
         j: pj,
@@ -299,9 +304,7 @@ pub fn pair_kernel(
         force: -fn_ * n,
         ..Default::default()
     };
-    if tl.friction > 0.0 {
-        let vt = v_rel - vn_approach * n;
-        let u = tangential_force(p.history, n, vt, kt, eta, tl.friction * fn_.abs(), dt);
+    if let Some(u) = r.tangential {
         p.history = u.history;
         c.force += u.force;
         // Torque about each centre from the force at its contact point (r·n × F_t).

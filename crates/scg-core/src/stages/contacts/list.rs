@@ -143,9 +143,9 @@ fn fresh_pairs(st: &ContactState, pos: &[DVec3]) -> PairArrays {
 
 impl ContactState {
     /// The arrays that carry over between steps (checkpoints).
-    pub fn record(&self) -> crate::checkpoint::ContactRecord {
+    pub fn record(&self) -> crate::checkpoint::records::ContactRecord {
         let (reference, drift_bound) = self.list.carried();
-        crate::checkpoint::ContactRecord {
+        crate::checkpoint::records::ContactRecord {
             ids: self.ids.clone(),
             list_pairs: self.list.pairs.clone(),
             reference: reference.to_vec(),
@@ -153,7 +153,7 @@ impl ContactState {
             checks: self.list.checks,
             drift_bound,
             pairs: (self.list.pairs.iter().enumerate())
-                .map(|(k, &[i, j])| crate::checkpoint::PairRecord {
+                .map(|(k, &[i, j])| crate::checkpoint::records::PairRecord {
                     i,
                     j,
                     touching: self.pairs.touching[k],
@@ -172,7 +172,7 @@ impl ContactState {
     #[allow(clippy::too_many_arguments)]
     pub fn restore(
         &mut self,
-        r: &crate::checkpoint::ContactRecord,
+        r: &crate::checkpoint::records::ContactRecord,
         ids: &[ParticleId],
         groups: &[GroupId],
         ds: &[Diameter],

@@ -24,6 +24,9 @@ pub mod list;
 pub mod slots;
 
 use bevy_ecs::prelude::*;
+
+use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
+use crate::components::{Diameter, GroupId, Mass, ParticleId};
 use glam::DVec3;
 
 use crate::physics::contact::pair::{PairArrays, PairParams};
@@ -169,11 +172,43 @@ impl ContactState {
     }
 }
 
+/// The contacts' part of a checkpoint: the arrays that carry over between steps and the
+/// last step's displacement bound.
+struct ContactsPart;
+
+impl Persist for ContactsPart {
+    fn part(&self) -> Option<Part> {
+        Some(Part::Contacts)
+    }
+
+    fn save(&self, world: &World, c: &mut Checkpoint) {
+        c.contacts = Some(world.resource::<ContactState>().record());
+        c.displacement = world.resource::<StepDisplacement>().raw();
+    }
+
+    fn restore(&self, w: &mut World, c: &Checkpoint) -> Result<(), String> {
+        let Some(rec) = &c.contacts else {
+            return Err(Part::Contacts.mismatch());
+        };
+        w.resource::<StepDisplacement>().restore(c.displacement);
+        let mut q = w.query::<(&ParticleId, &GroupId, &Diameter, &Mass)>();
+        let rows: Vec<(ParticleId, GroupId, Diameter, Mass)> =
+            q.iter(w).map(|(a, b, d, m)| (*a, *b, *d, *m)).collect();
+        let ids: Vec<ParticleId> = rows.iter().map(|r| r.0).collect();
+        let groups: Vec<GroupId> = rows.iter().map(|r| r.1).collect();
+        let ds: Vec<Diameter> = rows.iter().map(|r| r.2).collect();
+        let ms: Vec<Mass> = rows.iter().map(|r| r.3).collect();
+        w.resource_mut::<ContactState>()
+            .restore(rec, &ids, &groups, &ds, &ms, c.dt)
+    }
+}
+
 /// Insert the contact resources and add the systems (called only when the scene declares
 /// contacts).
 pub fn plugin(world: &mut World, b: &mut StepBuilder, cfg: &ContactConfig) {
     world.insert_resource(StepDisplacement::default());
     world.insert_resource(ContactState::new(cfg));
+    Persistence::register(world, ContactsPart);
     use StepSystem::*;
     b.add(
         StepSet::NeighbourSearch,

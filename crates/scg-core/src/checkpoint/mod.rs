@@ -11,132 +11,17 @@
 //! Scratch buffers, timers and recorders are not state. Reading and writing files is
 //! `scg-record`'s job.
 
-use glam::DVec3;
-use serde::{Deserialize, Serialize};
+pub mod records;
 
-use crate::spawn::ParticleSpec;
-
-/// One particle.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ParticleRecord {
-    /// Id.
-    pub id: u32,
-    /// The original particle and its scaling, with the current position and velocity (the
-    /// coarse-grained properties are derived from it again, exactly, by the spawn path).
-    pub spec: ParticleSpec,
-    /// Angular velocity, rad/s (when the scene has it).
-    pub omega: Option<DVec3>,
-    /// Force, N, and torque, N·m (when the scene has walls or contacts).
-    pub force_torque: Option<(DVec3, DVec3)>,
-    /// Wall contact history (wall key, displacement in m), when the scene has walls.
-    pub wall_history: Option<Vec<(u32, DVec3)>>,
-    /// The mesh cell found last step, when the flow is on a mesh.
-    pub cell: Option<u32>,
-}
-
-/// One feeder's state.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct FeederRecord {
-    /// Particles fed so far.
-    pub fed: u64,
-    /// ChaCha8 seed, stream and word position of its random stream.
-    pub seed: [u8; 32],
-    /// Stream.
-    pub stream: u64,
-    /// Word position.
-    pub word_pos: u128,
-}
-
-/// One candidate pair of the contact list.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct PairRecord {
-    /// Rows i < j.
-    pub i: u32,
-    /// Second row.
-    pub j: u32,
-    /// In contact after the last step.
-    pub touching: bool,
-    /// Periodic image shift, m.
-    pub shift: DVec3,
-    /// Tangential history, m.
-    pub history: DVec3,
-}
-
-/// The contact arrays that carry over between steps.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ContactRecord {
-    /// Ids of the rows the arrays were gathered for.
-    pub ids: Vec<u32>,
-    /// Verlet list pairs.
-    pub list_pairs: Vec<[u32; 2]>,
-    /// Positions at the last list build, m.
-    pub reference: Vec<DVec3>,
-    /// Builds and exact checks so far.
-    pub builds: u64,
-    /// Exact displacement checks so far.
-    pub checks: u64,
-    /// Bound on the displacement since the last build, m.
-    pub drift_bound: f64,
-    /// Pair states aligned with `list_pairs`.
-    pub pairs: Vec<PairRecord>,
-    /// Whether the last step summed sparsely, and its contacts in touch.
-    pub sparse: bool,
-    /// Pairs in contact after the last step.
-    pub active: usize,
-}
-
-/// Contacts measured so far, per kind: shortest (s), started, under-resolved.
-pub type ResolutionRecord = [(Option<f64>, u64, u64); 2];
-
-/// The state of a run between two steps.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Checkpoint {
-    /// The scene's TOML text (after overrides), so a restart needs nothing else.
-    pub scene: String,
-    /// Where the scene came from (`scg run` writes the file's absolute path: its folder
-    /// resolves the scene's relative paths on a restart).
-    pub scene_file: String,
-    /// Steps done.
-    pub step: u64,
-    /// Time step, s (a restart refuses a scene with another).
-    pub dt: f64,
-    /// Particle-steps done.
-    pub particle_steps: u64,
-    /// Next free particle id.
-    pub next_id: u32,
-    /// Tally: drained, fed and collisions per group.
-    pub tally: [Vec<u64>; 3],
-    /// Contact resolution measured so far (wall, pair).
-    pub resolution: ResolutionRecord,
-    /// The last step's largest squared displacement (bits) and whether it was reported.
-    pub displacement: (u64, bool),
-    /// Particles in table order.
-    pub particles: Vec<ParticleRecord>,
-    /// Feeders, in scene order.
-    pub feeders: Vec<FeederRecord>,
-    /// Outlet log: drain and loss times per group, s.
-    pub outlet: Option<[Vec<Vec<f64>>; 2]>,
-    /// Patch log of a mesh flow: escaped and stuck counts per patch and group.
-    pub patches: Option<[Vec<Vec<u64>>; 2]>,
-    /// Impulse walls' log: escaped and stuck counts per wall and group.
-    pub impulse_walls: Option<[Vec<Vec<u64>>; 2]>,
-    /// Contact arrays, when the scene has particle contacts.
-    pub contacts: Option<ContactRecord>,
-}
+pub use records::*;
 
 use bevy_ecs::prelude::*;
+use glam::DVec3;
 
 use crate::components::*;
 use crate::sim::Simulation;
-use crate::spawn::spawn_particle_with_id;
-use crate::stages::contacts::ContactState;
-use crate::stages::feeder::Feeders;
-use crate::stages::impulse_walls::WallLog;
-use crate::stages::mesh_flow::PatchLog;
-use crate::stages::outlet::OutletLog;
-use crate::state::{
-    ContactCount, ContactResolution, NextParticleId, SimClock, StepDisplacement, Tally,
-};
+use crate::spawn::{ParticleSpec, spawn_particle_with_id};
+use crate::state::{ContactCount, ContactResolution, NextParticleId, SimClock, Tally};
 
 type RecordQuery<'a> = (
     &'a ParticleId,
@@ -263,7 +148,7 @@ impl Simulation {
         let tally = w.resource::<Tally>();
         let res = w.resource::<ContactResolution>();
         let kind = |c: ContactCount| (c.shortest, c.contacts, c.under_resolved);
-        Checkpoint {
+        let mut c = Checkpoint {
             scene: String::new(),
             scene_file: String::new(),
             step: clock.step,
@@ -276,24 +161,20 @@ impl Simulation {
                 tally.collisions.clone(),
             ],
             resolution: [kind(res.wall()), kind(res.pair())],
-            displacement: w
-                .get_resource::<StepDisplacement>()
-                .map_or((0, false), |d| d.raw()),
+            displacement: (0, false),
             particles,
-            feeders: w
-                .get_resource::<Feeders>()
-                .map_or_else(Vec::new, |f| f.records()),
-            outlet: w
-                .get_resource::<OutletLog>()
-                .map(|l| [l.drained.clone(), l.lost.clone()]),
-            patches: w
-                .get_resource::<PatchLog>()
-                .map(|l| [l.escaped.clone(), l.stuck.clone()]),
-            impulse_walls: w
-                .get_resource::<WallLog>()
-                .map(|l| [l.escaped.clone(), l.stuck.clone()]),
-            contacts: w.get_resource::<ContactState>().map(|c| c.record()),
+            feeders: Vec::new(),
+            outlet: None,
+            patches: None,
+            impulse_walls: None,
+            contacts: None,
+        };
+        if let Some(reg) = w.get_resource::<Persistence>() {
+            for p in reg.iter() {
+                p.save(w, &mut c);
+            }
         }
+        c
     }
 
     /// Put the state of `c` into this simulation, built from the same scene: the
@@ -319,16 +200,17 @@ impl Simulation {
         if c.particles.iter().any(|p| p.spec.group as usize >= groups) {
             return Err("a particle of the checkpoint has no group in the scene".into());
         }
-        if c.contacts.is_some() != w.contains_resource::<ContactState>() {
-            return Err("the scene and the checkpoint differ in particle contacts".into());
-        }
-        if c.outlet.is_some() != w.contains_resource::<OutletLog>() {
-            return Err("the scene and the checkpoint differ in the outlet".into());
-        }
-        if let Some(f) = w.get_resource_mut::<Feeders>().as_deref_mut() {
-            f.restore(&c.feeders)?;
-        } else if !c.feeders.is_empty() {
-            return Err("the checkpoint has feeders, the scene none".into());
+        // Every part the checkpoint holds has a stage in this scene to take it (and each
+        // stage's restore refuses a checkpoint without its part).
+        let registered: Vec<Option<Part>> = w
+            .get_resource::<Persistence>()
+            .map_or_else(Vec::new, |r| r.iter().map(|p| p.part()).collect());
+        if let Some(p) = c
+            .held_parts()
+            .into_iter()
+            .find(|p| !registered.contains(&Some(*p)))
+        {
+            return Err(p.mismatch());
         }
         // Replace the particles, in the checkpoint's (table) order.
         let old: Vec<Entity> = w
@@ -359,50 +241,8 @@ impl Simulation {
         };
         w.resource::<ContactResolution>()
             .restore(kind(c.resolution[0]), kind(c.resolution[1]));
-        if let Some(d) = w.get_resource::<StepDisplacement>() {
-            d.restore(c.displacement);
-        }
-        // The wall candidates are listed again at the first step (the restored neighbour
-        // list's build count may equal the one they were listed at).
-        if let Some(mut wc) = w.get_resource_mut::<crate::stages::walls::WallCandidates>() {
-            *wc = Default::default();
-        }
-        if let (Some([d, l]), Some(mut log)) = (&c.outlet, w.get_resource_mut::<OutletLog>()) {
-            log.drained.clone_from(d);
-            log.lost.clone_from(l);
-        }
-        match (&c.patches, w.get_resource_mut::<PatchLog>()) {
-            (Some([e, s]), Some(mut log)) if e.len() == log.escaped.len() => {
-                log.escaped.clone_from(e);
-                log.stuck.clone_from(s);
-            }
-            (None, None) => {}
-            _ => {
-                return Err(
-                    "the scene and the checkpoint differ in the mesh flow's patches".into(),
-                );
-            }
-        }
-        match (&c.impulse_walls, w.get_resource_mut::<WallLog>()) {
-            (Some([e, s]), Some(mut log)) if e.len() == log.escaped.len() => {
-                log.escaped.clone_from(e);
-                log.stuck.clone_from(s);
-            }
-            (None, None) => {}
-            _ => return Err("the scene and the checkpoint differ in the impulse walls".into()),
-        }
-        if let Some(rec) = &c.contacts {
-            let dt = c.dt;
-            let mut q = w.query::<(&ParticleId, &GroupId, &Diameter, &Mass)>();
-            let rows: Vec<(ParticleId, GroupId, Diameter, Mass)> =
-                q.iter(w).map(|(a, b, d, m)| (*a, *b, *d, *m)).collect();
-            let ids: Vec<ParticleId> = rows.iter().map(|r| r.0).collect();
-            let groups: Vec<GroupId> = rows.iter().map(|r| r.1).collect();
-            let ds: Vec<Diameter> = rows.iter().map(|r| r.2).collect();
-            let ms: Vec<Mass> = rows.iter().map(|r| r.3).collect();
-            w.resource_mut::<ContactState>()
-                .restore(rec, &ids, &groups, &ds, &ms, dt)?;
-        }
+        // Each stage's part (the particles are in place).
+        w.resource_scope(|w, reg: Mut<Persistence>| reg.iter().try_for_each(|p| p.restore(w, c)))?;
         Ok(())
     }
 }

@@ -1,0 +1,165 @@
+//! Walls with a velocity: the wall's surface velocity at the contact point enters the one
+//! contact model, so a wall translating at constant velocity gives the contact a resting
+//! wall gives in the wall's frame (Galilean invariance, to round-off), with and without
+//! friction; a turntable drags a resting sphere along its surface velocity.
+//!
+//! Run: `cargo test --release --test moving_walls`.
+
+use glam::DVec3;
+use scg::core::components::AngularVelocity;
+use scg::core::physics::contact::{Material, NormalLaw};
+use scg::core::physics::flow::FlowField;
+use scg::core::physics::integrate::Integrator;
+use scg::core::physics::scaling::CoarseGrainLaw;
+use scg::core::physics::wall_motion::WallMotion;
+use scg::core::physics::wall_shape::WallShape;
+use scg::core::stages::walls::{Wall, WallSet};
+use scg::core::{ParticleSpec, SimConfig, Simulation};
+
+const D: f64 = 1e-3;
+const RHO: f64 = 2500.0;
+const DT: f64 = 2e-7;
+
+fn sim(
+    motion: WallMotion,
+    friction: f64,
+    gravity: Option<DVec3>,
+    x0: DVec3,
+    v0: DVec3,
+) -> Simulation {
+    let mut s = Simulation::new(SimConfig {
+        dt: DT,
+        integrator: Integrator::Exponential,
+        drag: None,
+        fluid: None,
+        flow: FlowField::Still,
+        mesh_flow: None,
+        gravity,
+        buoyancy: false,
+        contacts: None,
+        walls: Some(WallSet {
+            walls: vec![Wall {
+                name: "floor".into(),
+                shape: WallShape::Plane {
+                    point: DVec3::ZERO,
+                    normal: DVec3::Z,
+                },
+                motion,
+            }],
+            law: NormalLaw::hertz(0.7),
+            material: Material {
+                youngs_modulus: 1e8,
+                poisson_ratio: 0.3,
+                restitution: 0.7,
+                friction,
+            },
+        }),
+        record_every: None,
+        groups: vec!["p".into()],
+        carrier: None,
+    });
+    s.spawn(&ParticleSpec {
+        group: 0,
+        diameter: D,
+        density: RHO,
+        alpha: 1.0,
+        law: CoarseGrainLaw::Scg,
+        position: x0,
+        velocity: v0,
+    });
+    s
+}
+
+/// (x, v, ω) of the one particle.
+fn state(s: &mut Simulation) -> (DVec3, DVec3, DVec3) {
+    let p = s.particles()[0];
+    let w = s
+        .world
+        .query::<&AngularVelocity>()
+        .iter(&s.world)
+        .next()
+        .map_or(DVec3::ZERO, |w| w.0);
+    (p.position, p.velocity, w)
+}
+
+/// A floor moving at V (toward the sphere and along it) against a floor at rest met by a
+/// sphere moving at v0 − V: at every step x − V·t, v − V and ω agree to round-off
+/// (positions to 1e-13 m, velocities and spins to 1e-11 of their scale), through the
+/// approach, an oblique frictional contact (sliding, then rolling) and the rebound; the
+/// wall's velocity really acts (a floor at rest gives another rebound).
+#[test]
+fn a_translating_wall_is_a_resting_wall_in_its_frame() {
+    let v_wall = DVec3::new(0.3, -0.2, 0.25);
+    let x0 = DVec3::new(1e-3, 2e-3, 0.52e-3);
+    let v0 = DVec3::new(0.4, 0.1, -0.5);
+    for friction in [0.0, 0.4] {
+        let moving = WallMotion {
+            velocity: v_wall,
+            ..WallMotion::FIXED
+        };
+        let mut a = sim(moving, friction, None, x0, v0);
+        let mut b = sim(WallMotion::FIXED, friction, None, x0, v0 - v_wall);
+        let mut c = sim(WallMotion::FIXED, friction, None, x0, v0);
+        let (mut touched, mut worst) = (0, [0.0_f64; 3]);
+        for k in 1..=20_000u32 {
+            a.step().unwrap();
+            b.step().unwrap();
+            c.step().unwrap();
+            let t = k as f64 * DT;
+            let ((xa, va, wa), (xb, vb, wb)) = (state(&mut a), state(&mut b));
+            let dx = (xa - v_wall * t - xb).length();
+            let dv = (va - v_wall - vb).length() / v0.length();
+            let dw = (wa - wb).length() / (v0.length() / D);
+            worst = [worst[0].max(dx), worst[1].max(dv), worst[2].max(dw)];
+            if xb.z < 0.5 * D {
+                touched += 1;
+            }
+        }
+        println!(
+            "friction {friction}: {touched} steps in contact, worst |Δx| {:.2e} m, |Δv|/v {:.2e}, |Δω|/(v/d) {:.2e}",
+            worst[0], worst[1], worst[2]
+        );
+        assert!(touched > 50, "the sphere met the floor ({touched} steps)");
+        assert!(
+            worst[0] < 1e-13 && worst[1] < 1e-11 && worst[2] < 1e-11,
+            "{worst:?}"
+        );
+        let ((_, vb, _), (_, vc, _)) = (state(&mut b), state(&mut c));
+        assert!(
+            (vb + v_wall - vc).length() > 0.05,
+            "the wall's velocity acted"
+        );
+    }
+}
+
+/// A sphere resting on a turntable (a floor spinning about z through the origin) under
+/// gravity, with friction: the surface under it drags it along ω × r, and it moves in that
+/// direction, not radially; without friction it stays put.
+#[test]
+fn a_turntable_drags_a_resting_sphere_along_its_surface() {
+    let g = DVec3::new(0.0, 0.0, -9.81);
+    let turntable = WallMotion {
+        angular_velocity: DVec3::new(0.0, 0.0, 20.0),
+        ..WallMotion::FIXED
+    };
+    let x0 = DVec3::new(0.01, 0.0, 0.5 * D - 1e-7);
+    for friction in [0.0, 0.5] {
+        let mut s = sim(turntable, friction, Some(g), x0, DVec3::ZERO);
+        for _ in 0..5_000 {
+            s.step().unwrap();
+        }
+        let (x, v, _) = state(&mut s);
+        let surface = DVec3::new(0.0, 20.0 * 0.01, 0.0); // ω × r at x0: +y
+        let along = v.dot(surface.normalize());
+        println!("friction {friction}: v = {v}, x = {x}");
+        if friction > 0.0 {
+            assert!(along > 1e-3, "dragged along the surface: {v}");
+            assert!(v.x.abs() < 0.2 * along, "not radially: {v}");
+        } else {
+            assert!(
+                along.abs() < 1e-9 && v.x.abs() < 1e-9,
+                "no friction, no drag: {v}"
+            );
+        }
+    }
+}
