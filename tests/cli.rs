@@ -20,6 +20,36 @@ fn help_describes_the_tool_and_shows_examples() {
     assert!(text.contains("--threads"), "{text}");
 }
 
+/// `SCG_PORTABLE=1` forces the portable kernels (the CI leg that checks their bits runs
+/// with it); without it a CPU with AVX2 runs the four-lane ones.
+#[test]
+fn portable_switch_forces_the_portable_kernels() {
+    let run = |portable: Option<&str>| {
+        let mut c = scg();
+        c.args(["bench", "drag", "--particles", "1000", "--steps", "5"]);
+        c.env_remove("SCG_PORTABLE");
+        if let Some(v) = portable {
+            c.env("SCG_PORTABLE", v);
+        }
+        let out = c.output().unwrap();
+        assert!(out.status.success());
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    assert!(
+        run(Some("1")).contains("; portable kernels)"),
+        "{}",
+        run(Some("1"))
+    );
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        assert!(
+            run(None).contains("four-lane AVX2 kernels"),
+            "{}",
+            run(None)
+        );
+    }
+}
+
 #[test]
 fn threads_option_sets_the_team_and_overrides_the_environment() {
     for (arg, env, want) in [("1", "2", "on 1 threads"), ("2", "1", "on 2 threads")] {

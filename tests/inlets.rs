@@ -320,14 +320,8 @@ fn inlet_restart_is_bit_identical() {
     }
 }
 
-/// Child side of the thread test: a digest of the inlet run's final state.
-#[test]
-#[ignore = "run by inlet_same_bits_on_one_and_two_threads in a child process"]
-fn child_inlet_digest() {
-    if std::env::var("SCG_INLET_CHILD").is_err() {
-        return;
-    }
-    scg::core::exec::configure(scg::core::exec::ExecSettings::from_env());
+/// A digest of the inlet run's final state (ids, positions, velocities) and the count.
+fn inlet_digest() -> String {
     let dir = tempfile::tempdir().unwrap();
     let scene = setup(dir.path(), shear, 0.006);
     let mut sim = scene.build(false);
@@ -339,24 +333,19 @@ fn child_inlet_digest() {
             h = (h ^ b.to_bits()).wrapping_mul(0x100000001b3);
         }
     }
-    println!("INLET_DIGEST={h:016x} n={}", sim.particles().len());
+    format!("{h:016x} n={}", sim.particles().len())
 }
 
+/// One thread, two threads with every pass split, and two with the portable kernels: the
+/// same bits.
 #[test]
 fn inlet_same_bits_on_one_and_two_threads() {
-    let digest = |threads: &str, parallel_min: &str| {
-        common::child_digest(
-            "child_inlet_digest",
-            "SCG_INLET_CHILD",
-            "INLET_DIGEST=",
-            threads,
-            parallel_min,
-        )
-    };
-    let a = digest("1", "100000000");
-    let b = digest("2", "1");
-    println!("{a} (1 thread), {b} (2 threads, every pass split)");
+    let a = common::digest_with(1, 100_000_000, false, inlet_digest);
+    let b = common::digest_with(2, 1, false, inlet_digest);
+    let c = common::digest_with(2, 1, true, inlet_digest);
+    println!("{a} (1 thread), {b} (2 threads, every pass split), {c} (portable)");
     assert_eq!(a, b);
+    assert_eq!(a, c);
 }
 
 fn check(dir: &Path, text: &str) -> (i32, String, String) {

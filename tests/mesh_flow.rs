@@ -541,34 +541,22 @@ fn mesh_flow_restart_is_bit_identical() {
     assert!(second.checkpoint() == end, "mesh-flow restart diverged");
 }
 
-/// Child side of the thread test: a digest of the closed box's final state.
-#[test]
-#[ignore = "run by same_bits_on_one_and_two_threads in a child process"]
-fn child_mesh_digest() {
-    if std::env::var("SCG_MESH_CHILD").is_err() {
-        return;
-    }
-    scg::core::exec::configure(scg::core::exec::ExecSettings::from_env());
+/// A digest of the closed box's final state.
+fn mesh_digest() -> String {
     let (ps, ..) = run_closed_box(3000, 60);
-    let h = common::state_digest(&ps);
-    println!("MESH_DIGEST={h:016x}");
+    format!("{:016x}", common::state_digest(&ps))
 }
 
+/// One thread, two threads with every pass split, and two with the portable kernels: the
+/// same bits.
 #[test]
 fn same_bits_on_one_and_two_threads() {
-    let digest = |threads: &str, parallel_min: &str| {
-        common::child_digest(
-            "child_mesh_digest",
-            "SCG_MESH_CHILD",
-            "MESH_DIGEST=",
-            threads,
-            parallel_min,
-        )
-    };
-    let a = digest("1", "100000000");
-    let b = digest("2", "1");
-    println!("{a} (1 thread), {b} (2 threads, every pass split)");
+    let a = common::digest_with(1, 100_000_000, false, mesh_digest);
+    let b = common::digest_with(2, 1, false, mesh_digest);
+    let c = common::digest_with(2, 1, true, mesh_digest);
+    println!("{a} (1 thread), {b} (2 threads, every pass split), {c} (portable)");
     assert_eq!(a, b);
+    assert_eq!(a, c);
 }
 
 #[test]

@@ -381,34 +381,22 @@ fn box_of_wall_patches_with_contacts_keeps_every_particle() {
     assert!(deepest < 0.05 * r, "overlap {deepest} m");
 }
 
-/// Child side of the thread test: a digest of the crowded box's final state.
-#[test]
-#[ignore = "run by patch_walls_same_bits_on_one_and_two_threads in a child process"]
-fn child_patch_walls_digest() {
-    if std::env::var("SCG_PATCH_CHILD").is_err() {
-        return;
-    }
-    scg::core::exec::configure(scg::core::exec::ExecSettings::from_env());
+/// A digest of the crowded box's final state.
+fn patch_walls_digest() -> String {
     let (ps, ..) = run_crowded_box(1000);
-    let h = common::state_digest(&ps);
-    println!("PATCH_DIGEST={h:016x}");
+    format!("{:016x}", common::state_digest(&ps))
 }
 
+/// One thread, two threads with every pass split, and two with the portable kernels: the
+/// same bits.
 #[test]
 fn patch_walls_same_bits_on_one_and_two_threads() {
-    let digest = |threads: &str, parallel_min: &str| {
-        common::child_digest(
-            "child_patch_walls_digest",
-            "SCG_PATCH_CHILD",
-            "PATCH_DIGEST=",
-            threads,
-            parallel_min,
-        )
-    };
-    let a = digest("1", "100000000");
-    let b = digest("2", "1");
-    println!("{a} (1 thread), {b} (2 threads, every pass split)");
+    let a = common::digest_with(1, 100_000_000, false, patch_walls_digest);
+    let b = common::digest_with(2, 1, false, patch_walls_digest);
+    let c = common::digest_with(2, 1, true, patch_walls_digest);
+    println!("{a} (1 thread), {b} (2 threads, every pass split), {c} (portable)");
     assert_eq!(a, b);
+    assert_eq!(a, c);
 }
 
 fn scg_cmd(dir: &Path, args: &[&str], text: &str) -> (i32, String, String) {

@@ -52,34 +52,24 @@ pub fn state_digest(ps: &[scg::core::sim::ParticleState]) -> u64 {
     h
 }
 
-/// Run the ignored test `child` of this test binary in a child process with
-/// `SCG_THREADS = threads`, `SCG_PARALLEL_MIN = parallel_min` and `flag = 1`, and return
-/// what it printed after `marker` (e.g. `"MESH_DIGEST="`) on its line.
-pub fn child_digest(
-    child: &str,
-    flag: &str,
-    marker: &str,
-    threads: &str,
-    parallel_min: &str,
+/// `digest()` run in this process with `threads` workers, the parallel threshold
+/// `parallel_min` and, with `portable`, the portable kernels forced
+/// (`scg::core::exec::with_settings`): how the thread tests compare 1 and 2 threads, and
+/// the four-lane kernels with the portable ones, in one process.
+#[allow(dead_code)]
+pub fn digest_with(
+    threads: usize,
+    parallel_min: usize,
+    portable: bool,
+    digest: impl FnOnce() -> String,
 ) -> String {
-    let exe = std::env::current_exe().unwrap();
-    let out = std::process::Command::new(&exe)
-        .args([
-            child,
-            "--exact",
-            "--ignored",
-            "--nocapture",
-            "--test-threads=1",
-        ])
-        .env("SCG_THREADS", threads)
-        .env("SCG_PARALLEL_MIN", parallel_min)
-        .env(flag, "1")
-        .output()
-        .unwrap();
-    let s = String::from_utf8_lossy(&out.stdout).into_owned();
-    s.lines()
-        .find_map(|l| l.find(marker).map(|k| l[k..].to_string()))
-        .unwrap_or_else(|| panic!("no digest from child: {s}"))
+    let s = scg::core::exec::ExecSettings {
+        threads,
+        parallel_min,
+        portable,
+        ..scg::core::exec::ExecSettings::default()
+    };
+    scg::core::exec::with_settings(s, digest)
 }
 
 /// A scene on the 27-cell blockMesh fixture (patches walls, inlet, outlet): inlet-patch

@@ -372,13 +372,18 @@ pub fn bench(a: BenchArgs) -> i32 {
     let ps = (sim.particle_steps() - ps0) as f64;
     let threads = scg_core::exec::settings().team_size();
     println!(
-        "bench {:?}: {} particles × {} steps in {:.3} s on {} threads ({:.3e} s per particle-step)",
+        "bench {:?}: {} particles × {} steps in {:.3} s on {} threads ({:.3e} s per particle-step; {} kernels)",
         a.kind,
         a.particles,
         a.steps,
         wall,
         threads,
-        wall / ps
+        wall / ps,
+        if scg_core::exec::lanes() {
+            "four-lane AVX2"
+        } else {
+            "portable"
+        }
     );
     if std::env::var_os("SCG_BENCH_PLAN").is_some() {
         print!("{}", sim.plan().render());

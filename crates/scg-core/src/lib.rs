@@ -19,7 +19,7 @@ pub mod frame;
 pub mod physics;
 pub mod region;
 pub mod sim;
-pub mod simd;
+mod simd;
 pub mod spawn;
 pub mod stages;
 pub mod state;

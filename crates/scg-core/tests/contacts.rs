@@ -632,69 +632,55 @@ fn particles_split_over_two_tables_are_refused() {
     assert!(msg.contains("more than one storage table"), "{msg}");
 }
 
-/// Child side of the thread test: prints a digest of the final state of the dilute box,
-/// of the dense packing and of the walled packing (wall candidates cut into pieces).
-#[test]
-#[ignore]
-fn child_state_digest() {
-    if std::env::var("SCG_CONTACTS_CHILD").is_err() {
-        return;
-    }
-    scg_core::exec::configure(scg_core::exec::ExecSettings::from_env());
+/// Digests of the final state of the dilute box, of the dense packing and of the walled
+/// packing (wall candidates cut into pieces), as `STATE_DIGEST_<name>=<hex>`.
+fn state_digests() -> Vec<String> {
     let walled = {
         let (mut sim, _) = walled_packing();
         sim.run(400, |_| true).unwrap();
         state_bits(&mut sim)
     };
-    for (name, bits) in [
+    [
         ("box", run_box_bits(300)),
         ("dense", run_dense_bits(60)),
         ("walled", walled),
-    ] {
+    ]
+    .into_iter()
+    .map(|(name, bits)| {
         let mut h: u64 = 0xcbf29ce484222325;
         for b in bits {
             h = (h ^ b).wrapping_mul(0x100000001b3);
         }
-        println!("STATE_DIGEST_{name}={h:016x}");
-    }
+        format!("STATE_DIGEST_{name}={h:016x}")
+    })
+    .collect()
 }
 
 #[test]
 fn one_and_two_threads_give_identical_results() {
-    // The compute pool is process-wide and set once, so each thread count runs in a child
-    // process of this test binary (the child reads SCG_THREADS and SCG_PARALLEL_MIN into its exec settings).
-    let exe = std::env::current_exe().unwrap();
-    let digests = |threads: &str, parallel_min: &str| {
-        let out = std::process::Command::new(&exe)
-            .args([
-                "child_state_digest",
-                "--exact",
-                "--ignored",
-                "--nocapture",
-                "--test-threads=1",
-            ])
-            .env("SCG_THREADS", threads)
-            .env("SCG_PARALLEL_MIN", parallel_min)
-            .env("SCG_CONTACTS_CHILD", "1")
-            .output()
-            .unwrap();
-        let s = String::from_utf8_lossy(&out.stdout).into_owned();
-        let found: Vec<String> = s
-            .lines()
-            .filter_map(|l| l.find("STATE_DIGEST_").map(|k| l[k..].to_string()))
-            .collect();
-        assert_eq!(found.len(), 3, "digests from child: {s}");
-        found
+    // Each thread count runs in this process with its own team
+    // (`scg_core::exec::with_settings`).
+    let digests = |threads: usize, parallel_min: usize, portable: bool| {
+        let s = scg_core::exec::ExecSettings {
+            threads,
+            parallel_min,
+            portable,
+            ..Default::default()
+        };
+        scg_core::exec::with_settings(s, state_digests)
     };
     // Two threads twice: with the default threshold, and with every per-particle pass
-    // split over the threads (SCG_PARALLEL_MIN=1: the test scenes are small).
-    let default_min = scg_core::exec::par::PARALLEL_THRESHOLD.to_string();
-    let a = digests("1", &default_min);
-    let b = digests("2", &default_min);
-    let c = digests("2", "1");
+    // split over the threads (parallel_min = 1: the test scenes are small); and the
+    // portable kernels (no AVX2 lanes) on two threads.
+    let default_min = scg_core::exec::par::PARALLEL_THRESHOLD;
+    let a = digests(1, default_min, false);
+    let b = digests(2, default_min, false);
+    let c = digests(2, 1, false);
+    let d = digests(2, 1, true);
     eprintln!("{a:?}");
     assert_eq!(a, b);
     assert_eq!(a, c);
+    assert_eq!(a, d, "portable kernels");
     // Same physics, same bits: the digests pin the contact stages. They held unchanged
     // (box 11c6cbcb6723b63e, dense 6827178b20903004) through the new core layout; they
     // changed once since, on purpose, when the Tsuji damping became its exact closed form

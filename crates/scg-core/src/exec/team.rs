@@ -207,12 +207,29 @@ fn worker(s: &'static Shared, me: usize, workers: usize) {
 
 static TEAM: OnceLock<Team> = OnceLock::new();
 
-/// The process-wide team, sized by [`super::settings`] when first used.
+/// The team in force: the process-wide one, sized by [`super::settings`] when first used,
+/// or inside [`super::with_settings`] the team of that size (started once and kept).
 pub fn team() -> &'static Team {
+    if let Some(s) = super::scoped() {
+        return sized(s.team_size(), s.block_time);
+    }
     TEAM.get_or_init(|| {
         let s = super::settings();
         Team::new(s.team_size(), s.block_time)
     })
+}
+
+/// The kept team of `workers` and `block_time`.
+fn sized(workers: usize, block_time: std::time::Duration) -> &'static Team {
+    type Teams = Vec<(usize, std::time::Duration, &'static Team)>;
+    static TEAMS: Mutex<Teams> = Mutex::new(Vec::new());
+    let mut teams = TEAMS.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(t) = teams.iter().find(|t| t.0 == workers && t.1 == block_time) {
+        return t.2;
+    }
+    let t: &'static Team = Box::leak(Box::new(Team::new(workers, block_time)));
+    teams.push((workers, block_time, t));
+    t
 }
 
 /// A pointer that may cross threads (each task touches a distinct element).
@@ -235,6 +252,32 @@ pub fn for_each_item<T: Send>(items: &mut [T], f: impl Fn(usize, &mut T) + Sync)
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Inside `with_settings` the team has the size asked for (the machine's cores
+    /// permitting), and the process's team again after it.
+    #[test]
+    fn scoped_settings_choose_the_team() {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let one = crate::exec::ExecSettings {
+            threads: 1,
+            ..Default::default()
+        };
+        let two = crate::exec::ExecSettings { threads: 2, ..one };
+        assert_eq!(crate::exec::with_settings(one, || team().workers()), 1);
+        assert_eq!(
+            crate::exec::with_settings(two, || team().workers()),
+            2.min(cores)
+        );
+        assert!(crate::exec::with_settings(one, || {
+            let portable = crate::exec::ExecSettings {
+                portable: true,
+                ..one
+            };
+            crate::exec::with_settings(portable, || !crate::exec::lanes())
+                && crate::exec::settings().threads == 1
+        }));
+        assert!(crate::exec::scoped().is_none());
+    }
 
     #[test]
     fn every_index_once() {

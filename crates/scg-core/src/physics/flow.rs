@@ -3,6 +3,8 @@
 use bevy_ecs::prelude::Resource;
 use glam::{DMat3, DVec3};
 
+use super::lane::{Lane3, Real};
+
 /// Fluid properties (resource).
 #[derive(Resource, Clone, Copy, Debug, PartialEq)]
 pub struct Fluid {
@@ -30,15 +32,42 @@ impl Vortex {
     /// Component of `x − center` perpendicular to the axis (the radial vector), m.
     #[inline(always)]
     pub fn radial(&self, x: DVec3) -> DVec3 {
-        let rel = x - self.center;
-        rel - rel.dot(self.axis) * self.axis
+        self.radial_of(x)
     }
 
     /// Fluid velocity at `x`, m/s. Linear in the radial vector, so r = 0 gives exactly zero.
     #[inline]
     pub fn velocity(&self, x: DVec3) -> DVec3 {
-        let r = self.radial(x);
-        self.omega * (self.axis.cross(r) - self.inflow_ratio * r)
+        self.velocity_of(x)
+    }
+
+    /// [`Vortex::radial`] of one point or four lanes ([`Lane3`]): rel − (rel·a)·a.
+    #[inline(always)]
+    pub fn radial_of<V: Lane3>(&self, x: V) -> V {
+        let rel = x - V::splat(self.center);
+        let axis = V::splat(self.axis);
+        rel - axis.scale(rel.dot(axis))
+    }
+
+    /// [`Vortex::velocity`] of one point or four lanes: ω·(a × r − k·r).
+    #[inline(always)]
+    pub fn velocity_of<V: Lane3>(&self, x: V) -> V {
+        let r = self.radial_of(x);
+        let axis = V::splat(self.axis);
+        (axis.cross(r) - r.scale(V::R::splat(self.inflow_ratio))).scale(V::R::splat(self.omega))
+    }
+
+    /// The paper's classifier (Section 5) of one point or four lanes: this vortex, plus
+    /// `axial_speed` (m/s, along the axis) where the distance from the axis is below
+    /// `nozzle_radius` (m).
+    #[inline(always)]
+    pub fn classifier_of<V: Lane3>(&self, nozzle_radius: f64, axial_speed: f64, x: V) -> V {
+        let r = self.radial_of(x);
+        let axis = V::splat(self.axis);
+        let u = (axis.cross(r) - r.scale(V::R::splat(self.inflow_ratio)))
+            .scale(V::R::splat(self.omega));
+        let inside = V::R::splat(nozzle_radius * nozzle_radius).gt(r.dot(r));
+        u.or_where(inside, u + V::splat(axial_speed * self.axis))
     }
 }
 
@@ -75,23 +104,22 @@ impl FlowField {
     /// Fluid velocity at `x`, m/s. Finite for every finite `x`, including on an axis.
     #[inline(always)]
     pub fn velocity(&self, x: DVec3) -> DVec3 {
+        self.velocity_of(x)
+    }
+
+    /// [`FlowField::velocity`] of one point or four lanes ([`Lane3`]): the one formula
+    /// of every analytic flow, for the scalar step and the four-lane kernels alike.
+    #[inline(always)]
+    pub fn velocity_of<V: Lane3>(&self, x: V) -> V {
         match self {
-            FlowField::Still => DVec3::ZERO,
-            FlowField::Uniform(u) => *u,
-            FlowField::Vortex(v) => v.velocity(x),
+            FlowField::Still => V::splat(DVec3::ZERO),
+            FlowField::Uniform(u) => V::splat(*u),
+            FlowField::Vortex(v) => v.velocity_of(x),
             FlowField::Classifier {
                 vortex,
                 nozzle_radius,
                 axial_speed,
-            } => {
-                let r = vortex.radial(x);
-                let u = vortex.omega * (vortex.axis.cross(r) - vortex.inflow_ratio * r);
-                if r.length_squared() < nozzle_radius * nozzle_radius {
-                    u + *axial_speed * vortex.axis
-                } else {
-                    u
-                }
-            }
+            } => vortex.classifier_of(*nozzle_radius, *axial_speed, x),
         }
     }
 
@@ -156,7 +184,18 @@ impl Affine {
     /// Fluid velocity at `x`, m/s.
     #[inline(always)]
     pub fn velocity(&self, x: DVec3) -> DVec3 {
-        self.m * x + self.b
+        self.velocity_of(x)
+    }
+
+    /// [`Affine::velocity`] of one point or four lanes: as glam's `DMat3 * DVec3`,
+    /// ((X·x + Y·y) + Z·z), then + b.
+    #[inline(always)]
+    pub fn velocity_of<V: Lane3>(&self, x: V) -> V {
+        let [px, py, pz] = x.xyz();
+        V::splat(self.m.x_axis).scale(px)
+            + V::splat(self.m.y_axis).scale(py)
+            + V::splat(self.m.z_axis).scale(pz)
+            + V::splat(self.b)
     }
 }
 

@@ -9,6 +9,7 @@
 //! * [`mesh_flow`] — flow fields on CFD meshes (location, interpolation, patch roles);
 //! * [`inlet`] — feeding on a mesh patch: uniform-by-area sampling, the flow through it;
 //! * [`integrate`] — the exponential and explicit schemes, kicks;
+//! * [`lane`] — one formula for one particle or four AVX2 lanes (the flows use it);
 //! * [`contact`] — normal, tangential and rolling laws, and the pair kernel;
 //! * [`wall_shape`] — wall geometry (planes, cylinders, meshes) and touch tests;
 //! * [`wall_motion`] — prescribed rigid wall motion: pose at t, surface velocity;
@@ -21,6 +22,7 @@ pub mod drag;
 pub mod flow;
 pub mod inlet;
 pub mod integrate;
+pub mod lane;
 pub mod mesh_flow;
 pub mod neighbour;
 pub mod patch_interaction;

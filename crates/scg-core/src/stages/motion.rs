@@ -306,8 +306,8 @@ fn drag_only_planar<const TRACK: bool>(
     flow: PlanarZ,
 ) -> (DVec3, f64) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2, checked just above.
+    if crate::exec::lanes() {
+        // SAFETY: the CPU supports AVX2 (`exec::lanes` checked it).
         return unsafe { drag_only_planar_avx2::<TRACK>(xs, vs, sfs, dt, flow) };
     }
     drag_only_loop::<TRACK, _>(xs, vs, sfs, dt, move |x| flow.velocity(x))

@@ -19,10 +19,12 @@ use glam::DVec3;
 use crate::components::*;
 use crate::physics::flow::{Affine, FlowField, Vortex};
 use crate::physics::integrate::{exponential_drift, linear_kick};
+use crate::physics::lane::{Lane3, Real};
 #[cfg(target_arch = "x86_64")]
 use crate::simd::{F4, V4};
 
-/// A flow field with a scalar and a four-lane velocity that give the same bits.
+/// A flow field with a scalar and a four-lane velocity that give the same bits (one
+/// formula, [`Lane3`], instantiated twice).
 pub(super) trait Lanes: Copy + Send + Sync {
     /// Fluid velocity at `x`, m/s.
     fn velocity(&self, x: DVec3) -> DVec3;
@@ -42,47 +44,49 @@ pub(super) struct PlanarZ {
     pub b: [f64; 2],
 }
 
-impl Lanes for PlanarZ {
+impl PlanarZ {
+    /// The velocity of one point or four lanes (one formula).
     #[inline(always)]
-    fn velocity(&self, x: DVec3) -> DVec3 {
-        let [m00, m01, m10, m11] = self.m;
-        let [b0, b1] = self.b;
-        DVec3::new(m00 * x.x + m01 * x.y + b0, m10 * x.x + m11 * x.y + b1, 0.0)
+    fn velocity_of<V: Lane3>(&self, x: V) -> V {
+        let [m00, m01, m10, m11] = self.m.map(V::R::splat);
+        let [b0, b1] = self.b.map(V::R::splat);
+        let [px, py, _] = x.xyz();
+        V::from_xyz(
+            m00 * px + m01 * py + b0,
+            m10 * px + m11 * py + b1,
+            V::R::splat(0.0),
+        )
     }
+}
 
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    fn velocity4(&self, x: V4) -> V4 {
-        let [m00, m01, m10, m11] = self.m.map(F4::splat);
-        let [b0, b1] = self.b.map(F4::splat);
-        V4 {
-            x: m00 * x.x + m01 * x.y + b0,
-            y: m10 * x.x + m11 * x.y + b1,
-            z: F4::zero(),
+/// A flow whose one formula (`velocity_of`, generic over [`Lane3`]) gives [`Lanes`].
+macro_rules! lanes_from_formula {
+    ($t:ty, |$s:ident, $x:ident| $body:expr) => {
+        impl Lanes for $t {
+            #[inline(always)]
+            fn velocity(&self, $x: DVec3) -> DVec3 {
+                let $s = self;
+                $body
+            }
+
+            #[cfg(target_arch = "x86_64")]
+            #[inline(always)]
+            fn velocity4(&self, $x: V4) -> V4 {
+                let $s = self;
+                $body
+            }
         }
-    }
+    };
 }
 
-/// Any affine flow, u = M·x + b.
-impl Lanes for Affine {
-    #[inline(always)]
-    fn velocity(&self, x: DVec3) -> DVec3 {
-        Affine::velocity(self, x)
-    }
-
-    /// glam's `DMat3 * DVec3`: ((X·x + Y·y) + Z·z), then + b.
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    fn velocity4(&self, x: V4) -> V4 {
-        let (mx, my, mz, b) = (
-            V4::splat(self.m.x_axis),
-            V4::splat(self.m.y_axis),
-            V4::splat(self.m.z_axis),
-            V4::splat(self.b),
-        );
-        mx.scale(x.x) + my.scale(x.y) + mz.scale(x.z) + b
-    }
-}
+lanes_from_formula!(PlanarZ, |s, x| s.velocity_of(x));
+lanes_from_formula!(Affine, |s, x| s.velocity_of(x));
+lanes_from_formula!(FlowField, |s, x| s.velocity_of(x));
+lanes_from_formula!(ClassifierFlow, |s, x| s.vortex.classifier_of(
+    s.nozzle_radius,
+    s.axial_speed,
+    x
+));
 
 /// The paper's classifier flow ([`crate::physics::flow::FlowField::Classifier`]): the
 /// vortex, plus the axial speed inside the nozzle radius.
@@ -111,55 +115,6 @@ impl ClassifierFlow {
             }),
             _ => None,
         }
-    }
-}
-
-/// Any flow field, its lanes one lane at a time (for a field none of the other flows here
-/// covers).
-impl Lanes for FlowField {
-    #[inline(always)]
-    fn velocity(&self, x: DVec3) -> DVec3 {
-        FlowField::velocity(self, x)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    fn velocity4(&self, x: V4) -> V4 {
-        let (px, py, pz) = (x.x.to_array(), x.y.to_array(), x.z.to_array());
-        let u: [DVec3; 4] =
-            std::array::from_fn(|l| FlowField::velocity(self, DVec3::new(px[l], py[l], pz[l])));
-        V4 {
-            x: F4::from_array(u.map(|u| u.x)),
-            y: F4::from_array(u.map(|u| u.y)),
-            z: F4::from_array(u.map(|u| u.z)),
-        }
-    }
-}
-
-impl Lanes for ClassifierFlow {
-    #[inline(always)]
-    fn velocity(&self, x: DVec3) -> DVec3 {
-        FlowField::Classifier {
-            vortex: self.vortex,
-            nozzle_radius: self.nozzle_radius,
-            axial_speed: self.axial_speed,
-        }
-        .velocity(x)
-    }
-
-    /// [`FlowField::velocity`]'s classifier arm, operation for operation.
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    fn velocity4(&self, x: V4) -> V4 {
-        let v = &self.vortex;
-        let (centre, axis) = (V4::splat(v.center), V4::splat(v.axis));
-        // `Vortex::radial`: rel − (rel·a)·a.
-        let rel = x - centre;
-        let r = rel - axis.scale(rel.dot(axis));
-        let u = (axis.cross(r) - r.scale(F4::splat(v.inflow_ratio))).scale(F4::splat(v.omega));
-        let inside = F4::splat(self.nozzle_radius * self.nozzle_radius).gt(r.dot(r));
-        let axial = V4::splat(self.axial_speed * v.axis);
-        u.or_where(inside, u + axial)
     }
 }
 
@@ -323,8 +278,8 @@ fn drift_rows<D: Drift>(
 pub(super) fn move_piece<D: Drift>(mut p: MovePiece, drift: D, dt: f64) -> (f64, bool) {
     let n = p.x.len();
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2, checked just above.
+    if crate::exec::lanes() {
+        // SAFETY: the CPU supports AVX2 (`exec::lanes` checked it).
         return unsafe { move_piece_avx2(&mut p, drift, dt) };
     }
     drift_rows(&mut p, 0..n, &drift, dt)

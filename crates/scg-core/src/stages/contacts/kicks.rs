@@ -119,8 +119,8 @@ struct KickChunk<'a> {
 /// Kick a chunk with the sums of its parts (slot order), zeroing the rows read.
 fn kick_rows(c: &mut KickChunk) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU supports AVX2, checked just above.
+    if crate::exec::lanes() {
+        // SAFETY: the CPU supports AVX2 (`exec::lanes` checked it).
         unsafe { kick_rows_avx2(c) };
         return;
     }
