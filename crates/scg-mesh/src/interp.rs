@@ -434,10 +434,10 @@ impl<'a> Interpolator<'a> {
     #[inline]
     pub fn prefetch(&self, hit: &Hit) {
         self.loc.prefetch(hit);
-        crate::locate::prefetch(&self.cells, hit.cell);
+        crate::prefetch::element(&self.cells, hit.cell as usize);
         if !self.nodes.is_empty() {
             for &n in &hit.nodes {
-                crate::locate::prefetch(&self.nodes, n);
+                crate::prefetch::element(&self.nodes, n as usize);
             }
         }
     }

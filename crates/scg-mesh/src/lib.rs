@@ -34,6 +34,7 @@ pub mod geometry;
 pub mod interp;
 pub mod locate;
 pub mod polymesh;
+pub mod prefetch;
 pub mod shared;
 pub mod surface;
 pub mod table;

@@ -516,12 +516,12 @@ impl<'a> Locator<'a> {
     /// results; a no-op off x86-64.
     #[inline]
     pub fn prefetch(&self, hit: &Hit) {
-        prefetch(&self.geom.cell_centres, hit.cell);
+        crate::prefetch::element(&self.geom.cell_centres, hit.cell as usize);
         for &n in &hit.nodes {
             if n < self.n_points {
-                prefetch(&self.mesh.points, n);
+                crate::prefetch::element(&self.mesh.points, n as usize);
             } else {
-                prefetch(&self.geom.face_centres, n - self.n_points);
+                crate::prefetch::element(&self.geom.face_centres, (n - self.n_points) as usize);
             }
         }
     }
@@ -547,22 +547,6 @@ impl Locator<'static> {
     pub fn owned(mesh: Arc<PolyMesh>, geom: Arc<MeshGeometry>) -> Result<Self, MeshError> {
         Self::from_shared(Shared::Owned(mesh), Shared::Owned(geom))
     }
-}
-
-/// Prefetch `v[i]` into the caches (x86-64 only; an index out of range is ignored).
-#[inline(always)]
-pub(crate) fn prefetch<T>(v: &[T], i: u32) {
-    #[cfg(target_arch = "x86_64")]
-    if let Some(x) = v.get(i as usize) {
-        // SAFETY: a prefetch is a hint that never faults; the pointer is to a live element.
-        unsafe {
-            core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>(
-                (x as *const T).cast::<i8>(),
-            )
-        };
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (v, i);
 }
 
 #[cfg(test)]

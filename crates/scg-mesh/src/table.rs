@@ -470,12 +470,12 @@ impl CellTable {
             return;
         };
         if !deep {
-            prefetch_bytes(rec, 1);
+            crate::prefetch::lines(rec, 1);
             return;
         }
         if rec.simple != 0 {
             if let Some(f) = self.simple.get(rec.face as usize) {
-                prefetch_bytes(
+                crate::prefetch::lines(
                     f,
                     (rec.n_faces as usize * size_of::<SimpleFace>()).div_ceil(64),
                 );
@@ -483,7 +483,7 @@ impl CellTable {
             return;
         }
         if let Some(f) = self.faces.get(rec.face as usize) {
-            prefetch_bytes(
+            crate::prefetch::lines(
                 f,
                 (rec.n_faces as usize * size_of::<FaceRec>()).div_ceil(64),
             );
@@ -513,7 +513,7 @@ impl CellTable {
         {
             // every tetrahedron of the exit face's fan: the scan may end in any of them
             let bytes = faces[best].n_tets as usize * size_of::<TetRec>();
-            prefetch_bytes(t, bytes.div_ceil(64));
+            crate::prefetch::lines(t, bytes.div_ceil(64));
         }
     }
 }
@@ -556,163 +556,5 @@ fn huge_pages<T>(v: &Vec<T>) {
     let _ = v;
 }
 
-/// Prefetch `lines` cache lines from `x` on (x86-64 only; hints never fault).
-#[inline(always)]
-fn prefetch_bytes<T>(x: &T, lines: usize) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        let p = (x as *const T).cast::<i8>();
-        for k in 0..lines.min(12) {
-            // SAFETY: a prefetch is a hint that never faults, whatever the address.
-            unsafe {
-                core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>(
-                    p.wrapping_add(64 * k),
-                )
-            };
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (x, lines);
-}
-
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::build::{BoxMesh, CellShape};
-    use crate::interp::Interpolation;
-    use crate::locate::{Location, Locator};
-    use crate::{CellField, MeshGeometry};
-    use rand::{Rng, SeedableRng};
-
-    /// A unit box of n³ perturbed cells of `shape`, its geometry and a smooth field.
-    fn perturbed_box(shape: CellShape, n: usize) -> (crate::PolyMesh, MeshGeometry, CellField) {
-        let m = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [n, n, n])
-            .shape(shape)
-            .perturbed(0.2, 4)
-            .build()
-            .unwrap();
-        let g = MeshGeometry::new(&m).unwrap();
-        let field = CellField::at_cell_centres(&m, &g, |c| {
-            DVec3::new(c.y * c.z, (3.0 * c.x).sin(), c.x * c.x)
-        });
-        (m, g, field)
-    }
-
-    /// At random points of perturbed hex, tet and polyhedral boxes, the table finds the
-    /// point in the cell the locator finds (or declines) and interpolates the locator's
-    /// value to rounding, for every scheme; it declines for another cell.
-    #[test]
-    fn table_agrees_with_the_locator_and_interpolator() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        for shape in [
-            CellShape::Hex,
-            CellShape::Tet,
-            CellShape::Poly { refine: 0.3 },
-        ] {
-            let (m, g, field) = perturbed_box(shape, 5);
-            let loc = Locator::new(&m, &g).unwrap();
-            for scheme in [
-                Interpolation::CellPoint,
-                Interpolation::CellPointIdw,
-                Interpolation::CellValue,
-            ] {
-                let it = crate::Interpolator::new(&loc, &field, scheme).unwrap();
-                let t = CellTable::new(&it).unwrap();
-                let (simple, none) = t.counts();
-                assert_eq!(none, 0);
-                if shape == CellShape::Tet {
-                    assert_eq!(simple, m.n_cells);
-                } else {
-                    assert_eq!(simple, 0);
-                }
-                let (mut found, mut n) = (0, 0);
-                for _ in 0..2000 {
-                    let x = DVec3::new(rng.random(), rng.random(), rng.random());
-                    let Location::Inside(h) = loc.track(0, x) else {
-                        continue;
-                    };
-                    n += 1;
-                    if let Some(u) = t.velocity_in(h.cell, x) {
-                        found += 1;
-                        let want = it.at(&h);
-                        assert!(
-                            (u - want).length() <= 1e-12 * (1.0 + want.length()),
-                            "{shape:?} {scheme:?}: {u} vs {want}"
-                        );
-                    }
-                    // another cell (far enough): declines
-                    let other = (h.cell + m.n_cells as u32 / 2) % m.n_cells as u32;
-                    if (g.cell_centres[other as usize] - x).length() > 0.5 {
-                        assert!(t.velocity_in(other, x).is_none());
-                    }
-                }
-                println!("{shape:?} {scheme:?}: table found {found} of {n}");
-                assert!(
-                    found as f64 >= 0.999 * n as f64,
-                    "{shape:?}: {found} of {n}"
-                );
-                assert!(t.velocity_in(u32::MAX, DVec3::ZERO).is_none());
-            }
-        }
-    }
-
-    /// Walking on the table from a cell near x ends in the locator's cell with the
-    /// interpolator's value, or declines; toward a point outside the mesh it meets the
-    /// boundary face the ray crosses, or declines.
-    #[test]
-    fn table_walk_ends_where_the_locator_does() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-        for shape in [
-            CellShape::Tet,
-            CellShape::Hex,
-            CellShape::Poly { refine: 0.3 },
-        ] {
-            let (m, g, field) = perturbed_box(shape, 6);
-            let loc = Locator::new(&m, &g).unwrap();
-            let it = crate::Interpolator::new(&loc, &field, Interpolation::CellPoint).unwrap();
-            let t = CellTable::new(&it).unwrap();
-            let (mut walked, mut n, mut boundary) = (0, 0, 0);
-            for _ in 0..4000 {
-                let x = DVec3::new(rng.random(), rng.random(), rng.random());
-                // start from the cell of a point up to ~1.5 cells away
-                let off = DVec3::new(rng.random(), rng.random(), rng.random()) - 0.5;
-                let Location::Inside(s) = loc.track(0, x + off * 0.5) else {
-                    continue;
-                };
-                let Location::Inside(h) = loc.track(0, x) else {
-                    continue;
-                };
-                n += 1;
-                match t.walk(s.cell, x, 4) {
-                    TableWalk::Inside { cell, value } => {
-                        if cell != s.cell {
-                            walked += 1;
-                        }
-                        assert_eq!(cell, h.cell, "{shape:?}: x {x}");
-                        let want = it.at(&h);
-                        assert!((value - want).length() <= 1e-12 * (1.0 + want.length()));
-                    }
-                    TableWalk::Boundary { .. } => panic!("{shape:?}: x {x} is inside"),
-                    TableWalk::Unknown => {}
-                }
-                // beyond the box's x = 1 side: never inside, and the boundary face met
-                // is one of that side's (its centre at x = 1)
-                let out = DVec3::new(1.0 + 0.1 * rng.random::<f64>(), x.y, x.z);
-                match t.walk(h.cell, out, 64) {
-                    TableWalk::Inside { .. } => panic!("{shape:?}: {out} is outside"),
-                    TableWalk::Boundary { cell, face } => {
-                        boundary += 1;
-                        assert_eq!(m.owner[face as usize], cell);
-                        assert!((g.face_centres[face as usize].x - 1.0).abs() < 1e-9);
-                        assert_ne!(loc.patch_of(face), u32::MAX);
-                        assert!(face as usize >= m.n_internal_faces());
-                    }
-                    TableWalk::Unknown => {}
-                }
-            }
-            println!("{shape:?}: walked to another cell for {walked} of {n}");
-            assert!(walked as f64 > 0.2 * n as f64, "{walked} of {n}");
-            assert!(boundary as f64 > 0.5 * n as f64, "{boundary} of {n}");
-        }
-    }
-}
+mod tests;

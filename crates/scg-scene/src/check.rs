@@ -16,10 +16,14 @@ use crate::{Placement, Scene};
 use slip::{fluid_velocity, terminal_slip};
 
 mod dt;
+mod mesh;
+mod overlaps;
 mod render;
 mod slip;
 
 pub use dt::auto_dt;
+use mesh::mesh_flow_findings;
+pub use overlaps::initial_overlaps;
 pub use render::render;
 
 /// Derived quantities of one group.
@@ -401,41 +405,6 @@ pub fn stokes_number(scene: &Scene, reports: &[GroupReport]) -> f64 {
 /// α from which `scg check` calls coarse graining extreme.
 pub const EXTREME_ALPHA: f64 = 16.0;
 
-/// Listed (explicit) positions checked for initial overlaps; larger scenes skip the check.
-const OVERLAP_CHECK_LIMIT: usize = 4096;
-
-/// Pairs of listed particles (spawn indices) that overlap at the start, with the overlap as
-/// a fraction of the smaller simulated diameter (at most 20 pairs reported).
-pub fn initial_overlaps(scene: &Scene) -> Vec<(usize, usize, f64)> {
-    let mut ps: Vec<(usize, DVec3, f64)> = Vec::new();
-    let mut index = 0;
-    for g in &scene.groups {
-        let d = coarse_grain(g.law, g.alpha, g.diameter, g.density).diameter;
-        match &g.placement {
-            Placement::Explicit { positions, .. } => {
-                for p in positions {
-                    ps.push((index, *p, d));
-                    index += 1;
-                }
-            }
-            Placement::Random { count, .. } => index += count,
-        }
-    }
-    let mut out = Vec::new();
-    if ps.len() > OVERLAP_CHECK_LIMIT {
-        return out;
-    }
-    for (i, a) in ps.iter().enumerate() {
-        for b in &ps[i + 1..] {
-            let delta = 0.5 * (a.2 + b.2) - (a.1 - b.1).length();
-            if delta > 0.0 && out.len() < 20 {
-                out.push((a.0, b.0, delta / a.2.min(b.2)));
-            }
-        }
-    }
-    out
-}
-
 /// Check a scene.
 pub fn check(scene: &Scene) -> Report {
     let groups: Vec<GroupReport> = scene
@@ -616,93 +585,4 @@ pub fn check(scene: &Scene) -> Report {
         steps: scene.steps(),
         findings,
     }
-}
-
-/// Feeder-region points sampled per feeder to test them against a mesh flow.
-const FEEDER_SAMPLES: usize = 1000;
-
-/// Warnings of a mesh flow: initial particles outside the mesh (they are lost at the first
-/// step) and feeder regions reaching outside it (sampled: [`FEEDER_SAMPLES`] points each,
-/// seeded, so the report is deterministic).
-fn mesh_flow_findings(scene: &Scene) -> Vec<Finding> {
-    use rand::SeedableRng;
-    let Some(m) = &scene.mesh_flow else {
-        return Vec::new();
-    };
-    let mut out = Vec::new();
-    let mesh = m.flow.mesh();
-    let empty: Vec<&str> = mesh
-        .patches
-        .iter()
-        .filter(|p| p.kind == "empty")
-        .map(|p| p.name.as_str())
-        .collect();
-    if !empty.is_empty() {
-        out.push(Finding {
-            level: Level::Note,
-            message: format!(
-                "a 2-D case: patch(es) {} are `empty` (the direction the case does not resolve); particles reflect specularly there, so their motion stays in the slab, and the fates are of the slab's depth",
-                empty.join(", ")
-            ),
-        });
-    }
-    if mesh.patches.iter().any(|p| p.kind == "wedge") {
-        out.push(Finding {
-            level: Level::Warning,
-            message: "an axisymmetric (wedge) case: particles reflect at the wedge faces instead of moving round the axis; their azimuthal motion is not represented".into(),
-        });
-    }
-    let particles = scene.initial_particles();
-    let outside: Vec<&scg_core::ParticleSpec> = particles
-        .iter()
-        .filter(|p| m.flow.find_cell(p.position).is_none())
-        .collect();
-    if let Some(first) = outside.first() {
-        out.push(Finding {
-            level: Level::Warning,
-            message: format!(
-                "{} of {} initial particles start outside the flow mesh (first: group `{}` at {:?} m); they are removed as lost at the first step",
-                outside.len(),
-                particles.len(),
-                scene.groups[first.group as usize].name,
-                first.position.to_array()
-            ),
-        });
-    }
-    for (i, f) in scene.feeders.iter().enumerate() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(i as u64);
-        let region = match &f.source {
-            FeedSource::Region(r) => r,
-            FeedSource::Patch(p) => {
-                // the centres, one simulated radius inward, must be inside the mesh
-                let g = &scene.groups[f.group];
-                let r = 0.5 * coarse_grain(g.law, g.alpha, g.diameter, g.density).diameter;
-                let n = (0..FEEDER_SAMPLES)
-                    .filter(|_| m.flow.find_cell(p.sample(&mut rng, r).centre).is_none())
-                    .count();
-                if n > 0 {
-                    out.push(Finding {
-                        level: Level::Warning,
-                        message: format!(
-                            "feeders[{i}]: {n} of {FEEDER_SAMPLES} sampled starts on patch `{}` (one radius, {r:.4e} m, inward) lie outside the flow mesh; particles fed there are removed as lost",
-                            p.name
-                        ),
-                    });
-                }
-                continue;
-            }
-        };
-        let n = (0..FEEDER_SAMPLES)
-            .filter(|_| m.flow.find_cell(region.sample(&mut rng)).is_none())
-            .count();
-        if n > 0 {
-            out.push(Finding {
-                level: Level::Warning,
-                message: format!(
-                    "feeders[{i}]: {n} of {FEEDER_SAMPLES} sampled points of the feed region lie outside the flow mesh; particles fed there are removed as lost"
-                ),
-            });
-        }
-    }
-    out
 }

@@ -260,18 +260,18 @@ impl MeshFlow {
         if ci >= g.cell_centres.len() {
             return;
         }
-        prefetch(&g.cell_centres, ci);
-        prefetch(&g.cell_face_offsets, ci);
+        scg_mesh::prefetch::element(&g.cell_centres, ci);
+        scg_mesh::prefetch::element(&g.cell_face_offsets, ci);
         if deep {
             let (a, b) = (
                 g.cell_face_offsets[ci] as usize,
                 g.cell_face_offsets[ci + 1] as usize,
             );
-            prefetch(&g.cell_faces, a);
+            scg_mesh::prefetch::element(&g.cell_faces, a);
             for &f in g.cell_faces.get(a..b).unwrap_or(&[]) {
-                prefetch(&g.face_areas, f as usize);
-                prefetch(&g.face_centres, f as usize);
-                prefetch(&m.face_offsets, f as usize);
+                scg_mesh::prefetch::element(&g.face_areas, f as usize);
+                scg_mesh::prefetch::element(&g.face_centres, f as usize);
+                scg_mesh::prefetch::element(&m.face_offsets, f as usize);
             }
         }
     }
@@ -293,22 +293,6 @@ impl MeshFlow {
         let n = g.face_areas[f as usize].normalize_or_zero();
         (n, g.face_centres[f as usize])
     }
-}
-
-/// Prefetch `v[i]` into the caches (x86-64 only; out of range is ignored).
-#[inline(always)]
-fn prefetch<T>(v: &[T], i: usize) {
-    #[cfg(target_arch = "x86_64")]
-    if let Some(x) = v.get(i) {
-        // SAFETY: a prefetch is a hint that never faults; the pointer is to a live element.
-        unsafe {
-            core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>(
-                (x as *const T).cast::<i8>(),
-            )
-        };
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (v, i);
 }
 
 /// Most interior faces [`MeshFlow::walk_table`] crosses before it leaves the search to the

@@ -1,0 +1,93 @@
+//! `scg check` on a mesh flow: 2-D and wedge cases, initial particles and feeder
+//! regions outside the mesh.
+
+use super::*;
+
+/// Feeder-region points sampled per feeder to test them against a mesh flow.
+const FEEDER_SAMPLES: usize = 1000;
+
+/// Warnings of a mesh flow: initial particles outside the mesh (they are lost at the first
+/// step) and feeder regions reaching outside it (sampled: [`FEEDER_SAMPLES`] points each,
+/// seeded, so the report is deterministic).
+pub(super) fn mesh_flow_findings(scene: &Scene) -> Vec<Finding> {
+    use rand::SeedableRng;
+    let Some(m) = &scene.mesh_flow else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    let mesh = m.flow.mesh();
+    let empty: Vec<&str> = mesh
+        .patches
+        .iter()
+        .filter(|p| p.kind == "empty")
+        .map(|p| p.name.as_str())
+        .collect();
+    if !empty.is_empty() {
+        out.push(Finding {
+            level: Level::Note,
+            message: format!(
+                "a 2-D case: patch(es) {} are `empty` (the direction the case does not resolve); particles reflect specularly there, so their motion stays in the slab, and the fates are of the slab's depth",
+                empty.join(", ")
+            ),
+        });
+    }
+    if mesh.patches.iter().any(|p| p.kind == "wedge") {
+        out.push(Finding {
+            level: Level::Warning,
+            message: "an axisymmetric (wedge) case: particles reflect at the wedge faces instead of moving round the axis; their azimuthal motion is not represented".into(),
+        });
+    }
+    let particles = scene.initial_particles();
+    let outside: Vec<&scg_core::ParticleSpec> = particles
+        .iter()
+        .filter(|p| m.flow.find_cell(p.position).is_none())
+        .collect();
+    if let Some(first) = outside.first() {
+        out.push(Finding {
+            level: Level::Warning,
+            message: format!(
+                "{} of {} initial particles start outside the flow mesh (first: group `{}` at {:?} m); they are removed as lost at the first step",
+                outside.len(),
+                particles.len(),
+                scene.groups[first.group as usize].name,
+                first.position.to_array()
+            ),
+        });
+    }
+    for (i, f) in scene.feeders.iter().enumerate() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(i as u64);
+        let region = match &f.source {
+            FeedSource::Region(r) => r,
+            FeedSource::Patch(p) => {
+                // the centres, one simulated radius inward, must be inside the mesh
+                let g = &scene.groups[f.group];
+                let r = 0.5 * coarse_grain(g.law, g.alpha, g.diameter, g.density).diameter;
+                let n = (0..FEEDER_SAMPLES)
+                    .filter(|_| m.flow.find_cell(p.sample(&mut rng, r).centre).is_none())
+                    .count();
+                if n > 0 {
+                    out.push(Finding {
+                        level: Level::Warning,
+                        message: format!(
+                            "feeders[{i}]: {n} of {FEEDER_SAMPLES} sampled starts on patch `{}` (one radius, {r:.4e} m, inward) lie outside the flow mesh; particles fed there are removed as lost",
+                            p.name
+                        ),
+                    });
+                }
+                continue;
+            }
+        };
+        let n = (0..FEEDER_SAMPLES)
+            .filter(|_| m.flow.find_cell(region.sample(&mut rng)).is_none())
+            .count();
+        if n > 0 {
+            out.push(Finding {
+                level: Level::Warning,
+                message: format!(
+                    "feeders[{i}]: {n} of {FEEDER_SAMPLES} sampled points of the feed region lie outside the flow mesh; particles fed there are removed as lost"
+                ),
+            });
+        }
+    }
+    out
+}
