@@ -91,35 +91,60 @@ impl SpawnRules {
     }
 }
 
+/// What a checkpoint does with a component of the particle layout.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Role {
+    /// The particle's identity and original (recorded: [`ParticleSpec`], id).
+    Identity,
+    /// State the next steps read: recorded per particle
+    /// (`checkpoint::records::ParticleRecord`).
+    Recorded,
+    /// Derived again, exactly, by the spawn path from the identity and the scene.
+    Derived,
+    /// Rewritten before it is read in every step, or a cache whose "unknown" value is
+    /// always valid: not recorded.
+    Scratch,
+}
+
 /// Every per-particle component type, once: the particle layout. Spawning
 /// ([`SpawnRules`] decides which of the optional ones a scene's particles carry), the
-/// reordering of the particle table by mesh cell and the layout checks all visit this
-/// list, so a new component is added here (and to the spawn groups below) only.
+/// reordering of the particle table by mesh cell, the layout checks and the checkpoint
+/// round-trip test all visit this list, so a new component is added here (with its
+/// [`Role`]) and to the spawn groups below.
 pub trait LayoutVisitor {
-    /// Visit component type `T`.
-    fn visit<T: Component<Mutability = bevy_ecs::component::Mutable> + Clone>(&mut self);
+    /// Visit component type `T`, whose checkpoint role is `role`.
+    fn visit<
+        T: Component<Mutability = bevy_ecs::component::Mutable> + Clone + PartialEq + std::fmt::Debug,
+    >(
+        &mut self,
+        role: Role,
+    );
 }
 
 /// Visit every component of the particle layout, in a fixed order.
 pub fn visit_layout(v: &mut impl LayoutVisitor) {
-    v.visit::<ParticleId>();
-    v.visit::<GroupId>();
-    v.visit::<Position>();
-    v.visit::<Velocity>();
-    v.visit::<CoarseGrain>();
-    v.visit::<Diameter>();
-    v.visit::<Density>();
-    v.visit::<Mass>();
-    v.visit::<FluidCoupling>();
-    v.visit::<StokesFactors>();
-    v.visit::<Force>();
-    v.visit::<Torque>();
-    v.visit::<AngularVelocity>();
-    v.visit::<WallHistory>();
-    v.visit::<BodyAcceleration>();
-    v.visit::<CellHint>();
-    v.visit::<FlowAtCentre>();
-    v.visit::<CarrierOffset>();
+    use Role::*;
+    v.visit::<ParticleId>(Identity);
+    v.visit::<GroupId>(Identity);
+    v.visit::<Position>(Recorded);
+    v.visit::<Velocity>(Recorded);
+    v.visit::<CoarseGrain>(Identity);
+    v.visit::<Diameter>(Derived);
+    v.visit::<Density>(Derived);
+    v.visit::<Mass>(Derived);
+    v.visit::<FluidCoupling>(Derived);
+    v.visit::<StokesFactors>(Derived);
+    v.visit::<Force>(Recorded);
+    v.visit::<Torque>(Recorded);
+    v.visit::<AngularVelocity>(Recorded);
+    v.visit::<WallHistory>(Recorded);
+    v.visit::<BodyAcceleration>(Derived);
+    v.visit::<CellHint>(Recorded);
+    // A cache: unknown after a restore, which gives the same bits (its docs).
+    v.visit::<FlowAtCentre>(Scratch);
+    // The constant offset is written before every integration; a modifier with state
+    // (turbulent dispersion) records it.
+    v.visit::<CarrierOffset>(Scratch);
 }
 
 /// Spawn one particle with every component of the layout: the base bundle, then each

@@ -317,7 +317,7 @@ fn group_report(scene: &Scene, g: &crate::Group) -> GroupReport {
 /// Shortest particle–particle contact time over all pairs of groups (the stiffest pair),
 /// s, when the scene declares `[contacts]`: Hertz t_c with m*, R* of the pair at the
 /// approach speed known before the run (the largest difference of the two groups' initial
-/// and feeding velocities, or the faster group's [`known_speed`] when those agree), or
+/// and feeding velocities, or the faster group's `known_speed` when those agree), or
 /// the linear law's t_c. The run measures the real approach speeds.
 pub fn particle_contact_time(scene: &Scene) -> Option<f64> {
     let c = scene.contacts?;

@@ -14,7 +14,7 @@
 //!   (`--represented`, default [`population::REPRESENTED_DEFAULT`], under `--quick`
 //!   [`population::REPRESENTED_QUICK`]): `N_orig / α³` particles of that group with the
 //!   point's α and law, particle 0 at the original's start, the others spread over the
-//!   region the scene's particles live in ([`population`]). The other groups of the file
+//!   region the scene's particles live in (`population`). The other groups of the file
 //!   (which only show the paper's CG variants side by side) are dropped.
 //! * **Population mode** (any other scene): every group is given the point's α and law and
 //!   its random particle count is divided by α³ (a CG particle stands for α³ originals).

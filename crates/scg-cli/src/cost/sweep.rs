@@ -114,7 +114,7 @@ pub fn single_particle(scene: &Scene) -> bool {
 
 /// The scene of one point (see the module documentation for the rule). In a
 /// single-particle scene, `represented = Some(n)` gives the population standing for `n`
-/// originals ([`super::population`]) and `None` the original particle alone.
+/// originals (`cost::population`) and `None` the original particle alone.
 pub fn point_scene(base: &Scene, p: &Point, represented: Option<usize>) -> Scene {
     let mut s = base.clone();
     let law = p.law.unwrap_or(CoarseGrainLaw::Scg);

@@ -151,7 +151,7 @@ pub fn for_each_piece<P: Split>(columns: P, body: impl Fn(P) + Sync) {
 /// Listed rows per piece of [`for_each_listed_piece`].
 const LISTED_PIECE: usize = 128;
 
-/// `body` on `columns` cut so that each piece holds about [`LISTED_PIECE`] of the `listed`
+/// `body` on `columns` cut so that each piece holds about `LISTED_PIECE` of the `listed`
 /// rows (ascending row numbers), the pieces on the team; `None`: [`for_each_piece`]. For
 /// passes that visit only listed rows, each costly (a wall contact): cut by rows, a list
 /// gathered at one end of the table would fall in one piece, on one thread. The cuts
@@ -181,7 +181,7 @@ pub fn for_each_listed_piece<P: Split>(
 /// [`for_each_piece_heavy`] costs, roughly.
 const HEAVY: usize = 64;
 
-/// [`for_each_piece`] for passes whose rows cost about [`HEAVY`] times a plain update: a
+/// [`for_each_piece`] for passes whose rows cost about `HEAVY` times a plain update: a
 /// particle tracked through a CFD mesh (locate, interpolate, drag: 0.2–1 µs). Those pay
 /// for the team from [`parallel_min`]` / HEAVY` rows (64 by default), in pieces of
 /// `rows / 8` (at least 32 rows, at most `PIECE_ROWS`): the cyclone's coarse-grained
