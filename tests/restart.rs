@@ -304,15 +304,7 @@ fn every_component_of_the_layout_survives_a_checkpoint() {
         Vec<(Role, String, Option<Vec<String>>)>,
     );
     impl LayoutVisitor for Columns<'_> {
-        fn visit<
-            T: bevy_ecs::component::Component<Mutability = bevy_ecs::component::Mutable>
-                + Clone
-                + PartialEq
-                + std::fmt::Debug,
-        >(
-            &mut self,
-            role: Role,
-        ) {
+        fn visit<T: scg::core::spawn::LayoutComponent>(&mut self, role: Role) {
             let mut q = self.0.query::<&T>();
             let rows: Vec<String> = q.iter(self.0).map(|x| format!("{x:?}")).collect();
             let name = std::any::type_name::<T>().to_string();

@@ -113,12 +113,19 @@ pub enum Role {
 /// [`Role`]) and to the spawn groups below.
 pub trait LayoutVisitor {
     /// Visit component type `T`, whose checkpoint role is `role`.
-    fn visit<
-        T: Component<Mutability = bevy_ecs::component::Mutable> + Clone + PartialEq + std::fmt::Debug,
-    >(
-        &mut self,
-        role: Role,
-    );
+    fn visit<T: LayoutComponent>(&mut self, role: Role);
+}
+
+/// What every component of the particle layout is: a mutable component that can be
+/// cloned (the cell sort), compared and printed (the checkpoint round-trip test).
+pub trait LayoutComponent:
+    Component<Mutability = bevy_ecs::component::Mutable> + Clone + PartialEq + std::fmt::Debug
+{
+}
+
+impl<T> LayoutComponent for T where
+    T: Component<Mutability = bevy_ecs::component::Mutable> + Clone + PartialEq + std::fmt::Debug
+{
 }
 
 /// Visit every component of the particle layout, in a fixed order.

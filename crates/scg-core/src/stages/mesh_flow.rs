@@ -28,7 +28,7 @@ use crate::exec::par::for_each_piece_heavy;
 use crate::physics::carrier::{Body, Carrier, Scheme, WithOffset, advance};
 use crate::physics::flow::Fluid;
 use crate::physics::mesh_flow::{MeshFlow, PatchInteraction, PatchRole, hint, land};
-use crate::spawn::{LayoutVisitor, Role, visit_layout};
+use crate::spawn::{LayoutComponent, LayoutVisitor, Role, visit_layout};
 use crate::state::{Health, Motion, SimClock, StepDisplacement, Tally};
 use crate::step::{StepBuilder, StepSet, StepSystem};
 
@@ -382,15 +382,7 @@ pub fn sort_by_cell(world: &mut World) {
     // Every component of the particle layout, checked against the table's.
     struct Ids<'a>(&'a mut World, Vec<bevy_ecs::component::ComponentId>);
     impl LayoutVisitor for Ids<'_> {
-        fn visit<
-            T: Component<Mutability = bevy_ecs::component::Mutable>
-                + Clone
-                + PartialEq
-                + std::fmt::Debug,
-        >(
-            &mut self,
-            _: Role,
-        ) {
+        fn visit<T: LayoutComponent>(&mut self, _: Role) {
             let id = self.0.register_component::<T>();
             self.1.push(id);
         }
@@ -436,15 +428,7 @@ pub fn sort_by_cell(world: &mut World) {
         keep_start: bool,
     }
     impl LayoutVisitor for Permute<'_> {
-        fn visit<
-            T: Component<Mutability = bevy_ecs::component::Mutable>
-                + Clone
-                + PartialEq
-                + std::fmt::Debug,
-        >(
-            &mut self,
-            _: Role,
-        ) {
+        fn visit<T: LayoutComponent>(&mut self, _: Role) {
             if self.keep_start
                 || std::any::TypeId::of::<T>() != std::any::TypeId::of::<FlowAtCentre>()
             {
