@@ -155,3 +155,14 @@ impl FlowAtCentre {
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq, TransparentWrapper)]
 #[repr(transparent)]
 pub struct CarrierOffset(pub DVec3);
+
+/// A particle's turbulent-dispersion state besides its fluctuation (which is its
+/// [`CarrierOffset`]): see [`crate::physics::dispersion::State`]. Present only when the
+/// scene declares `[dispersion]`.
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+pub struct Eddy {
+    /// `stochastic_ras`: age of the current eddy, s (OpenFOAM's `tTurb`; 0 at entry).
+    pub age: f64,
+    /// `langevin`: the rms velocity σ the fluctuation was set with, m/s (0: none yet).
+    pub sigma: f64,
+}

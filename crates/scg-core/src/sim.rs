@@ -211,6 +211,10 @@ impl Simulation {
             fluid: cfg.fluid,
             mesh: cfg.mesh_flow.is_some(),
             carrier_offset: cfg.carrier.is_some(),
+            dispersion: cfg
+                .carrier
+                .as_ref()
+                .is_some_and(|c| c.dispersion().is_some()),
         });
 
         let mut b = StepBuilder::new();

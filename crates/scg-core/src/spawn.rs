@@ -49,6 +49,9 @@ pub struct SpawnRules {
     pub mesh: bool,
     /// A carrier modifier: every particle has a [`CarrierOffset`] (zero at spawn).
     pub carrier_offset: bool,
+    /// Turbulent dispersion: every particle has an [`Eddy`] (age 0, no fluctuation, as
+    /// OpenFOAM's parcels enter).
+    pub dispersion: bool,
 }
 
 /// The simulated quantities of an original particle coarse-grained by `law` with ratio
@@ -149,9 +152,10 @@ pub fn visit_layout(v: &mut impl LayoutVisitor) {
     v.visit::<CellHint>(Recorded);
     // A cache: unknown after a restore, which gives the same bits (its docs).
     v.visit::<FlowAtCentre>(Scratch);
-    // The constant offset is written before every integration; a modifier with state
-    // (turbulent dispersion) records it.
-    v.visit::<CarrierOffset>(Scratch);
+    // The constant offset is rewritten before every integration, but turbulent
+    // dispersion keeps its fluctuation from step to step: state.
+    v.visit::<CarrierOffset>(Recorded);
+    v.visit::<Eddy>(Recorded);
 }
 
 /// Spawn one particle with every component of the layout: the base bundle, then each
@@ -203,6 +207,9 @@ macro_rules! spawn_bundle {
         }
         if rules.carrier_offset {
             e.insert(CarrierOffset::default());
+        }
+        if rules.dispersion {
+            e.insert(Eddy::default());
         }
         e.id()
     }};

@@ -9,7 +9,8 @@ use std::path::Path;
 use scg_core::checkpoint::Checkpoint;
 
 const MAGIC: &[u8; 8] = b"SCGCKPT\0";
-const FORMAT: u32 = 1;
+/// 2: particle records carry the carrier offset and the dispersion state.
+const FORMAT: u32 = 2;
 
 /// Write `c` to `path` atomically.
 pub fn write_checkpoint(path: &Path, c: &Checkpoint) -> Result<(), String> {

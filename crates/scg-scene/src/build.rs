@@ -128,7 +128,10 @@ impl Scene {
             contacts: self.contacts,
             record_every: record.then_some(self.record_every),
             groups: self.groups.iter().map(|g| g.name.clone()).collect(),
-            carrier: None,
+            carrier: self
+                .dispersion
+                .clone()
+                .map(scg_core::stages::carrier::CarrierModifier::Dispersion),
         }
     }
 

@@ -137,6 +137,11 @@ pub struct Scene {
     pub outlet: Option<Outlet>,
     /// Warnings the scene accepts knowingly (`[checks] allow`).
     pub allow: Vec<Allow>,
+    /// Turbulent dispersion (`[dispersion]`), if declared.
+    pub dispersion: Option<scg_core::stages::carrier::Dispersion>,
+    /// How the dispersion's turbulence was obtained (for `scg check`): e.g. "k and ε from
+    /// fields `k`, `epsilon`", "ε = 0.09·k·ω from field `omega`".
+    pub dispersion_source: String,
 }
 
 /// A `scg check` warning a scene may accept knowingly (`[checks] allow = [...]`), e.g. a
@@ -205,6 +210,26 @@ pub struct SceneMeshFlow {
     /// Steps between reorderings of the particle table by mesh cell (0: never; with
     /// particle contacts never).
     pub sort_every: u64,
+    /// Where more fields of the same time (turbulence for `[dispersion]`) are read from
+    /// (`None`: a generated flow).
+    pub reader: Option<FieldReader>,
+}
+
+/// Where the fields of a mesh flow come from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FieldReader {
+    /// An OpenFOAM case and its time directory.
+    Foam {
+        /// The case folder.
+        case: std::path::PathBuf,
+        /// The time read.
+        time: scg_mesh::foam::TimeSel,
+    },
+    /// A legacy VTK file.
+    Vtk {
+        /// The file.
+        file: std::path::PathBuf,
+    },
 }
 
 /// What a particle does at one patch of a mesh flow.

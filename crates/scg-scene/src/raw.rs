@@ -40,6 +40,52 @@ pub struct RawScene {
     pub feeders: Vec<RawFeeder>,
     pub outlet: Option<RawOutlet>,
     pub checks: Option<RawChecks>,
+    pub dispersion: Option<RawDispersion>,
+}
+
+/// `[dispersion]`: turbulent dispersion (docs/dispersion.md).
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawDispersion {
+    #[serde(deserialize_with = "name")]
+    pub model: RawDispersionModel,
+    /// m²/s² (a number, analytic flows) or a field name (mesh flows).
+    pub k: Option<RawTurbulenceValue>,
+    /// m²/s³ or a field name.
+    pub epsilon: Option<RawTurbulenceValue>,
+    /// 1/s or a field name (ε = 0.09·k·ω).
+    pub omega: Option<RawTurbulenceValue>,
+    /// langevin: Kolmogorov's Lagrangian constant C₀.
+    pub c0: Option<f64>,
+    pub profile: Option<RawProfile>,
+}
+
+/// `dispersion.k`, `.epsilon`, `.omega`: a value or a field name.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(untagged)]
+pub enum RawTurbulenceValue {
+    Value(f64),
+    Field(String),
+}
+
+/// `[dispersion.profile]`: k and ε (or ω) tabulated along one axis.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawProfile {
+    pub axis: String,
+    pub at: Vec<f64>,
+    pub k: Vec<f64>,
+    pub epsilon: Option<Vec<f64>>,
+    pub omega: Option<Vec<f64>>,
+    pub periodic: Option<bool>,
+}
+
+/// `dispersion.model`.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum RawDispersionModel {
+    StochasticRas,
+    Langevin,
 }
 
 /// `[checks]`: warnings of `scg check` the scene accepts knowingly.

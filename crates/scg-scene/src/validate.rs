@@ -2,6 +2,7 @@
 //! every value checked and resolved. Each rejection is a [`SceneError`] naming the
 //! file, the key and (when the key is in the file) its line.
 
+mod dispersion;
 mod particles;
 mod patches;
 mod physics;
@@ -160,6 +161,19 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
             Some(DragLaw::from(d.law))
         }
     };
+    let (dispersion, dispersion_source) = match &raw.dispersion {
+        None => (None, String::new()),
+        Some(d) => {
+            if drag.is_none() {
+                return Err(cx.err(
+                    "dispersion",
+                    "turbulent dispersion acts through the drag: it needs a [drag] table",
+                ));
+            }
+            let (d, src) = dispersion::dispersion(d, mesh_flow.as_ref(), seed, cx)?;
+            (Some(d), src)
+        }
+    };
     let (gravity, buoyancy) = match &raw.gravity {
         None => (None, false),
         Some(g) => {
@@ -283,6 +297,8 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
             .as_ref()
             .map(|c| c.allow.clone())
             .unwrap_or_default(),
+        dispersion,
+        dispersion_source,
     };
     if let (Some(c), Some(mat), Some(law)) = (&contacts_raw, material, normal_law) {
         scene.contacts = Some(contacts(c, mat, law, &scene.groups, cx)?);

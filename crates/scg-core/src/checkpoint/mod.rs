@@ -4,7 +4,7 @@
 //! What is saved is what the next steps read and cannot re-derive: every particle's
 //! identity, original size and scaling (its coarse-grained properties are derived again by
 //! the spawn path, exactly), position, velocity, angular velocity, force, torque and wall
-//! history and mesh cell, in table order (the order every stage visits them); the clock; the next id;
+//! history, mesh cell, carrier offset and dispersion state, in table order (the order every stage visits them); the clock; the next id;
 //! the tally; the outlet log; each feeder's count and random stream; the contact arrays
 //! that carry over between steps (Verlet list, its reference positions and drift bound,
 //! pair histories); the last step's displacement bound; the measured contact resolution.
@@ -34,10 +34,12 @@ type RecordQuery<'a> = (
     Option<&'a Torque>,
     Option<&'a WallHistory>,
     Option<&'a CellHint>,
+    Option<&'a CarrierOffset>,
+    Option<&'a Eddy>,
 );
 
 /// The record of one particle, from its components.
-fn record_of((id, g, cg, x, v, w, f, t, h, cell): RecordQuery) -> ParticleRecord {
+fn record_of((id, g, cg, x, v, w, f, t, h, cell, off, eddy): RecordQuery) -> ParticleRecord {
     ParticleRecord {
         id: id.0,
         spec: ParticleSpec {
@@ -53,6 +55,8 @@ fn record_of((id, g, cg, x, v, w, f, t, h, cell): RecordQuery) -> ParticleRecord
         force_torque: f.zip(t).map(|(f, t)| (f.0, t.0)),
         wall_history: h.map(|h| h.0.clone()),
         cell: cell.map(|c| c.0),
+        carrier_offset: off.map(|o| o.0),
+        eddy: eddy.map(|e| (e.age, e.sigma)),
     }
 }
 
@@ -83,6 +87,16 @@ fn insert_record(w: &mut World, p: &ParticleRecord) -> Result<Entity, String> {
     }
     match (p.cell, ent.get_mut::<CellHint>()) {
         (Some(c), Some(mut a)) => a.0 = c,
+        (None, None) => {}
+        _ => return Err(mismatch()),
+    }
+    match (p.carrier_offset, ent.get_mut::<CarrierOffset>()) {
+        (Some(o), Some(mut a)) => a.0 = o,
+        (None, None) => {}
+        _ => return Err(mismatch()),
+    }
+    match (p.eddy, ent.get_mut::<Eddy>()) {
+        (Some((age, sigma)), Some(mut a)) => *a = Eddy { age, sigma },
         (None, None) => {}
         _ => return Err(mismatch()),
     }

@@ -24,6 +24,11 @@ pub struct ParticleRecord {
     pub wall_history: Option<Vec<(u32, DVec3)>>,
     /// The mesh cell found last step, when the flow is on a mesh.
     pub cell: Option<u32>,
+    /// The carrier offset, m/s (the turbulent fluctuation), when the scene has a carrier
+    /// modifier.
+    pub carrier_offset: Option<DVec3>,
+    /// The dispersion state (eddy age, s; σ, m/s), when the scene has dispersion.
+    pub eddy: Option<(f64, f64)>,
 }
 
 /// One feeder's state.

@@ -6,6 +6,9 @@
 //! * [`flow`] — the prescribed fluid flow fields;
 //! * [`carrier`] — the carrier-velocity seam (the fluid velocity a particle sees, its
 //!   modifiers) and the one per-particle step of every scheme;
+//! * [`dispersion`] — turbulent dispersion (OpenFOAM's stochastic eddy model, a Langevin
+//!   random walk);
+//! * [`random`] — counter-based random numbers keyed by (seed, particle, step);
 //! * [`mesh_flow`] — flow fields on CFD meshes (location, interpolation, patch roles);
 //! * [`inlet`] — feeding on a mesh patch: uniform-by-area sampling, the flow through it;
 //! * [`integrate`] — the exponential and explicit schemes, kicks;
@@ -18,6 +21,7 @@
 //! * [`periodic`] — orthogonal periodic boxes (minimum image).
 pub mod carrier;
 pub mod contact;
+pub mod dispersion;
 pub mod drag;
 pub mod flow;
 pub mod inlet;
@@ -27,6 +31,7 @@ pub mod mesh_flow;
 pub mod neighbour;
 pub mod patch_interaction;
 pub mod periodic;
+pub mod random;
 pub mod scaling;
 pub mod trimesh;
 pub mod wall_motion;

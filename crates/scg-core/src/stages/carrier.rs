@@ -3,22 +3,47 @@
 //! ([`crate::physics::carrier`]). Added only when the scene declares a modifier; its
 //! system runs at the start of the integration stage, before the particles move.
 //!
-//! Today's modifier is a constant offset (a uniform wind on top of the flow, and the
-//! seam's own test); turbulent dispersion adds its per-particle fluctuation here.
+//! Two modifiers: a constant offset (a uniform wind on top of the flow, and the seam's
+//! own test), and turbulent dispersion ([`Dispersion`]: the fluctuation of
+//! [`crate::physics::dispersion`], one per particle, drawn from the particle's own
+//! counter-based random stream keyed by (seed, id, step), so the run is bit-identical for
+//! any thread count, rank count or restart).
 
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 
-use super::table::{bypass, columns_mut};
-use crate::components::CarrierOffset;
+use super::mesh_flow::MeshFlowState;
+use super::table::{bypass, columns, columns_mut};
+use crate::components::{CarrierOffset, CellHint, Eddy, ParticleId, Position, Velocity};
 use crate::exec::par::for_each_piece;
+use crate::physics::carrier::Carrier;
+use crate::physics::dispersion::{self, Model, State, Turbulence};
+use crate::physics::flow::FlowField;
+use crate::physics::random::Draws;
+use crate::state::SimClock;
 use crate::step::{StepBuilder, StepSet, StepSystem};
 
+/// Turbulent dispersion: a model and the turbulence it reads.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Dispersion {
+    /// The model.
+    pub model: Model,
+    /// k and ε (uniform, a profile, or the mesh's cell values).
+    pub turbulence: Turbulence,
+    /// The run's seed (each particle's stream is keyed by it, its id and the step).
+    pub seed: u64,
+    /// 1 for every direction the flow solves, 0 for the normal of a 2-D case's `empty`
+    /// patches (OpenFOAM's `constrainDirection`).
+    pub mask: DVec3,
+}
+
 /// A carrier modifier (resource).
-#[derive(Resource, Clone, Copy, Debug, PartialEq)]
+#[derive(Resource, Clone, Debug, PartialEq)]
 pub enum CarrierModifier {
     /// The same velocity added everywhere, m/s.
     ConstantOffset(DVec3),
+    /// Turbulent dispersion.
+    Dispersion(Dispersion),
 }
 
 impl CarrierModifier {
@@ -26,19 +51,42 @@ impl CarrierModifier {
     pub fn name(&self) -> &'static str {
         match self {
             CarrierModifier::ConstantOffset(_) => "carrier:constant_offset",
+            CarrierModifier::Dispersion(d) => match d.model {
+                Model::StochasticRas => "dispersion:stochastic_ras",
+                Model::Langevin { .. } => "dispersion:langevin",
+            },
+        }
+    }
+
+    /// The dispersion, if this modifier is one.
+    pub fn dispersion(&self) -> Option<&Dispersion> {
+        match self {
+            CarrierModifier::Dispersion(d) => Some(d),
+            CarrierModifier::ConstantOffset(_) => None,
         }
     }
 }
 
 /// Add the modifier's system (the integration stage's first) and its resource.
 pub fn plugin(world: &mut World, b: &mut StepBuilder, m: CarrierModifier) {
+    let name = m.name();
+    let dispersion = m.dispersion().is_some();
     world.insert_resource(m);
-    b.add(
-        StepSet::Integration,
-        m.name(),
-        StepSystem::ModifyCarrier,
-        modify_carrier,
-    );
+    if dispersion {
+        b.add(
+            StepSet::Integration,
+            name,
+            StepSystem::ModifyCarrier,
+            disperse,
+        );
+    } else {
+        b.add(
+            StepSet::Integration,
+            name,
+            StepSystem::ModifyCarrier,
+            modify_carrier,
+        );
+    }
 }
 
 /// Write every particle's offset for this step.
@@ -46,11 +94,65 @@ pub fn modify_carrier(m: Res<CarrierModifier>, mut q: Query<&mut CarrierOffset>)
     let Some(offs) = columns_mut(&mut q) else {
         return;
     };
-    match *m {
-        CarrierModifier::ConstantOffset(du) => for_each_piece(bypass(offs), |offs| {
+    if let CarrierModifier::ConstantOffset(du) = *m {
+        for_each_piece(bypass(offs), |offs| {
             for o in offs {
                 o.0 = du;
             }
-        }),
+        });
     }
+}
+
+/// Advance every particle's turbulent fluctuation by one step: the model reads the
+/// turbulence at the particle (its mesh cell on a mesh), its velocity and the mean carrier
+/// velocity there, and draws from the particle's stream for this step.
+#[allow(clippy::type_complexity)]
+pub fn disperse(
+    m: Res<CarrierModifier>,
+    clock: Res<SimClock>,
+    flow: Res<FlowField>,
+    mesh: Option<Res<MeshFlowState>>,
+    ids: Query<(&ParticleId, &Position, &Velocity, Option<&CellHint>)>,
+    mut state: Query<(&mut Eddy, &mut CarrierOffset)>,
+) {
+    let Some(d) = m.dispersion() else { return };
+    let (Some((ids, xs, vs, cells)), Some((eddies, offs))) =
+        (columns(&ids), columns_mut(&mut state))
+    else {
+        return;
+    };
+    let (dt, step) = (clock.dt, clock.step);
+    let mesh = mesh.as_ref().map(|m| &*m.spec.flow);
+    let mean = |cell: u32, x: DVec3| match mesh {
+        Some(mf) => Carrier::at(mf, cell, x).0,
+        None => flow.velocity(x),
+    };
+    let cols = (ids, xs, vs, cells, bypass(eddies), bypass(offs));
+    for_each_piece(cols, |(ids, xs, vs, cells, eddies, offs)| {
+        for i in 0..ids.len() {
+            let cell = cells.map_or(0, |c| c[i].0);
+            let x = xs[i].0;
+            let t = d.turbulence.at(cell, x);
+            let mut s = State {
+                u: offs[i].0,
+                age: eddies[i].age,
+                sigma: eddies[i].sigma,
+            };
+            let mut draws = Draws::new(d.seed, ids[i].0, step);
+            match d.model {
+                Model::StochasticRas => {
+                    let u = mean(cell, x);
+                    dispersion::stochastic_ras(dt, &t, vs[i].0, u, d.mask, &mut s, &mut draws);
+                }
+                Model::Langevin { c0 } => {
+                    dispersion::langevin(dt, &t, c0, d.mask, &mut s, &mut draws);
+                }
+            }
+            offs[i].0 = s.u;
+            eddies[i] = Eddy {
+                age: s.age,
+                sigma: s.sigma,
+            };
+        }
+    });
 }

@@ -14,7 +14,7 @@ use scg_core::stages::walls::Wall;
 
 use super::Ctx;
 use crate::error::SceneError;
-use crate::model::{Group, Outlet, SceneMeshFlow};
+use crate::model::{FieldReader, Group, Outlet, SceneMeshFlow};
 use crate::raw::{
     RawContacts, RawFlow, RawFlowKind, RawMaterial, RawNormalModel, RawOutlet, RawWall, RawWallKind,
 };
@@ -194,7 +194,7 @@ pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, 
         Some(n) => return Err(cx.err("flow.sort_every", format!("must be ≥ 0, got {n}"))),
     };
     let translate = cx.vec3("flow.translate", f.translate.unwrap_or([0.0; 3]))?;
-    let (mut mesh, cells, source) = match f.kind {
+    let (mut mesh, cells, source, reader) = match f.kind {
         RawFlowKind::Openfoam => {
             let case = base.join(cx.need("flow.case", &f.case)?);
             let shown = case.display().to_string();
@@ -221,7 +221,13 @@ pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, 
                 .map_err(|e| cx.err("flow.time", format!("{shown}: {e}")))?;
             let u = foam::read_vector_field(&case, &mesh, time, &field)
                 .map_err(|e| cx.err("flow.field", format!("{shown}: field `{field}`: {e}")))?;
-            (mesh, u, format!("{shown} (field from {})", dir.display()))
+            let reader = FieldReader::Foam { case, time };
+            (
+                mesh,
+                u,
+                format!("{shown} (field from {})", dir.display()),
+                reader,
+            )
         }
         RawFlowKind::Vtk => {
             let file = base.join(cx.need("flow.file", &f.file)?);
@@ -231,7 +237,7 @@ pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, 
             }
             let (mesh, u) = scg_mesh::vtk::read(&file, &field)
                 .map_err(|e| cx.err("flow.file", format!("{shown}: field `{field}`: {e}")))?;
-            (mesh, u, shown)
+            (mesh, u, shown, FieldReader::Vtk { file })
         }
         _ => return Ok(None),
     };
@@ -280,6 +286,7 @@ pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, 
         source,
         field,
         sort_every,
+        reader: Some(reader),
     }))
 }
 

@@ -1,0 +1,403 @@
+//! `[dispersion]`: the model, and the turbulence it reads — numbers or a profile on
+//! analytic flows, the CFD's fields on mesh flows (k and ε, or k and ω with
+//! ε = C_μ·k·ω).
+
+use std::sync::Arc;
+
+use glam::DVec3;
+
+use scg_core::physics::dispersion::{
+    C_MU, CellTurbulence, Model, Profile, Turbulence, epsilon_from_omega, sigma_of,
+};
+use scg_core::stages::carrier::Dispersion;
+use scg_mesh::{MeshGeometry, PolyMesh, ScalarField, foam};
+
+use super::Ctx;
+use crate::error::SceneError;
+use crate::model::{FieldReader, SceneMeshFlow};
+use crate::raw::{RawDispersion, RawDispersionModel, RawProfile, RawTurbulenceValue};
+
+/// `[dispersion]` → the carrier modifier and a line saying where its turbulence came from.
+pub(super) fn dispersion(
+    d: &RawDispersion,
+    mesh: Option<&SceneMeshFlow>,
+    seed: u64,
+    cx: &Ctx,
+) -> Result<(Dispersion, String), SceneError> {
+    let model = match d.model {
+        RawDispersionModel::StochasticRas => {
+            if d.c0.is_some() {
+                return Err(cx.err(
+                    "dispersion.c0",
+                    "is a parameter of the `langevin` model, not of `stochastic_ras`",
+                ));
+            }
+            Model::StochasticRas
+        }
+        RawDispersionModel::Langevin => Model::Langevin {
+            c0: cx.positive("dispersion.c0", d.c0.unwrap_or(2.1))?,
+        },
+    };
+    if d.epsilon.is_some() && d.omega.is_some() {
+        return Err(cx.err(
+            "dispersion.omega",
+            "give either `epsilon` or `omega`, not both",
+        ));
+    }
+    let (turbulence, source, mask) = match (mesh, &d.profile) {
+        (Some(_), Some(_)) => {
+            return Err(cx.err(
+                "dispersion.profile",
+                "a mesh flow reads k and ε from its fields (`k = \"k\"`, `epsilon = \
+                 \"epsilon\"` or `omega = \"omega\"`); a profile is for analytic flows",
+            ));
+        }
+        (None, Some(p)) => {
+            for key in ["k", "epsilon", "omega"] {
+                let given = match key {
+                    "k" => d.k.is_some(),
+                    "epsilon" => d.epsilon.is_some(),
+                    _ => d.omega.is_some(),
+                };
+                if given {
+                    return Err(cx.err(
+                        &format!("dispersion.{key}"),
+                        "give the turbulence either as numbers or as [dispersion.profile]",
+                    ));
+                }
+            }
+            let (p, src) = profile(p, cx)?;
+            (Turbulence::Profile(p), src, DVec3::ONE)
+        }
+        (None, None) => {
+            let k = match &d.k {
+                Some(RawTurbulenceValue::Value(k)) => cx.non_negative("dispersion.k", *k)?,
+                Some(RawTurbulenceValue::Field(_)) => {
+                    return Err(cx.err(
+                        "dispersion.k",
+                        "a field name needs a flow on a mesh (flow.kind = \"openfoam\" or \
+                         \"vtk\"); an analytic flow takes a number, m²/s²",
+                    ));
+                }
+                None => {
+                    return Err(cx.err(
+                        "dispersion.k",
+                        "missing: the turbulent kinetic energy, m²/s² (or [dispersion.profile])",
+                    ));
+                }
+            };
+            let value = |key: &str, v: &Option<RawTurbulenceValue>| match v {
+                Some(RawTurbulenceValue::Value(x)) => {
+                    cx.positive(&format!("dispersion.{key}"), *x).map(Some)
+                }
+                Some(RawTurbulenceValue::Field(_)) => Err(cx.err(
+                    &format!("dispersion.{key}"),
+                    "a field name needs a flow on a mesh; an analytic flow takes a number",
+                )),
+                None => Ok(None),
+            };
+            let (epsilon, src) = match (value("epsilon", &d.epsilon)?, value("omega", &d.omega)?) {
+                (Some(e), _) => (e, format!("uniform k = {k} m²/s², ε = {e} m²/s³")),
+                (None, Some(w)) => {
+                    let e = epsilon_from_omega(k, w);
+                    (
+                        e,
+                        format!("uniform k = {k} m²/s², ω = {w} 1/s: ε = {C_MU}·k·ω = {e} m²/s³"),
+                    )
+                }
+                (None, None) => {
+                    return Err(cx.err(
+                        "dispersion.epsilon",
+                        "missing: the dissipation rate ε, m²/s³ (or ω, 1/s)",
+                    ));
+                }
+            };
+            (Turbulence::Uniform { k, epsilon }, src, DVec3::ONE)
+        }
+        (Some(m), None) => {
+            let (t, src) = mesh_turbulence(d, m, matches!(model, Model::Langevin { .. }), cx)?;
+            (
+                Turbulence::Cells(Arc::new(t)),
+                src,
+                solved_directions(m.flow.mesh()),
+            )
+        }
+    };
+    Ok((
+        Dispersion {
+            model,
+            turbulence,
+            seed,
+            mask,
+        },
+        source,
+    ))
+}
+
+/// The directions a case solves: 0 along the normal of `empty` patches (a 2-D case), as
+/// OpenFOAM's `solutionD`.
+fn solved_directions(mesh: &PolyMesh) -> DVec3 {
+    let mut mask = DVec3::ONE;
+    for p in mesh.patches.iter().filter(|p| p.kind == "empty") {
+        for f in p.start..p.start + p.size.min(64) {
+            let (_, a) = scg_mesh::geometry::face_centre_and_area(&mesh.points, mesh.face(f));
+            let n = a.normalize_or_zero().abs();
+            for c in 0..3 {
+                if n[c] > 0.999 {
+                    mask[c] = 0.0;
+                }
+            }
+        }
+    }
+    mask
+}
+
+/// `[dispersion.profile]`.
+fn profile(p: &RawProfile, cx: &Ctx) -> Result<(Profile, String), SceneError> {
+    let axis = match p.axis.as_str() {
+        "x" => 0,
+        "y" => 1,
+        "z" => 2,
+        other => {
+            return Err(cx.err(
+                "dispersion.profile.axis",
+                format!("expected \"x\", \"y\" or \"z\", got \"{other}\""),
+            ));
+        }
+    };
+    let n = p.at.len();
+    if n < 2 {
+        return Err(cx.err("dispersion.profile.at", "needs at least two coordinates"));
+    }
+    for (i, w) in p.at.windows(2).enumerate() {
+        cx.finite("dispersion.profile.at", w[0])?;
+        cx.finite("dispersion.profile.at", w[1])?;
+        if w[1] <= w[0] {
+            return Err(cx.err(
+                "dispersion.profile.at",
+                format!(
+                    "must increase strictly: at[{}] = {} ≤ at[{i}] = {}",
+                    i + 1,
+                    w[1],
+                    w[0]
+                ),
+            ));
+        }
+    }
+    let same_length = |key: &str, v: &[f64]| {
+        if v.len() == n {
+            Ok(())
+        } else {
+            Err(cx.err(
+                &format!("dispersion.profile.{key}"),
+                format!("{} values where `at` has {n}", v.len()),
+            ))
+        }
+    };
+    same_length("k", &p.k)?;
+    for &k in &p.k {
+        cx.non_negative("dispersion.profile.k", k)?;
+    }
+    let (epsilon, what) = match (&p.epsilon, &p.omega) {
+        (Some(e), None) => {
+            same_length("epsilon", e)?;
+            for &x in e {
+                cx.positive("dispersion.profile.epsilon", x)?;
+            }
+            (e.clone(), "k and ε")
+        }
+        (None, Some(w)) => {
+            same_length("omega", w)?;
+            for &x in w {
+                cx.positive("dispersion.profile.omega", x)?;
+            }
+            let e =
+                p.k.iter()
+                    .zip(w)
+                    .map(|(&k, &w)| epsilon_from_omega(k, w))
+                    .collect();
+            (e, "k and ω (ε = 0.09·k·ω)")
+        }
+        (Some(_), Some(_)) => {
+            return Err(cx.err(
+                "dispersion.profile.omega",
+                "give either `epsilon` or `omega`, not both",
+            ));
+        }
+        (None, None) => {
+            return Err(cx.err(
+                "dispersion.profile.epsilon",
+                "missing: ε at each coordinate, m²/s³ (or `omega`, 1/s)",
+            ));
+        }
+    };
+    let periodic = p.periodic.unwrap_or(false);
+    if periodic && (p.k[0] != p.k[n - 1] || epsilon[0] != epsilon[n - 1]) {
+        return Err(cx.err(
+            "dispersion.profile.periodic",
+            "a periodic profile must end with the values it starts with",
+        ));
+    }
+    let src = format!(
+        "{what} tabulated along {} at {n} points{}",
+        p.axis,
+        if periodic { ", periodic" } else { "" }
+    );
+    Ok((
+        Profile {
+            axis,
+            at: p.at.clone(),
+            k: p.k.clone(),
+            epsilon,
+            periodic,
+        },
+        src,
+    ))
+}
+
+/// k and ε per cell from the mesh flow's source.
+fn mesh_turbulence(
+    d: &RawDispersion,
+    m: &SceneMeshFlow,
+    gradient: bool,
+    cx: &Ctx,
+) -> Result<(CellTurbulence, String), SceneError> {
+    let Some(reader) = &m.reader else {
+        return Err(cx.err("dispersion", "this flow has no source to read k and ε from"));
+    };
+    let mesh = m.flow.mesh();
+    let field_name = |key: &str, v: &Option<RawTurbulenceValue>| match v {
+        Some(RawTurbulenceValue::Field(f)) if !f.is_empty() => Ok(Some(f.clone())),
+        Some(RawTurbulenceValue::Field(_)) => {
+            Err(cx.err(&format!("dispersion.{key}"), "must name a field"))
+        }
+        Some(RawTurbulenceValue::Value(_)) => Err(cx.err(
+            &format!("dispersion.{key}"),
+            "a mesh flow reads the turbulence from its fields: give the field's name, e.g. \
+             `k = \"k\"`",
+        )),
+        None => Ok(None),
+    };
+    let k_name = field_name("k", &d.k)?.ok_or_else(|| {
+        cx.err(
+            "dispersion.k",
+            "missing: the name of the turbulent kinetic energy field (e.g. `k = \"k\"`)",
+        )
+    })?;
+    let read = |key: &str, name: &str| -> Result<ScalarField, SceneError> {
+        let (shown, r) = match reader {
+            FieldReader::Foam { case, time } => (
+                case.display().to_string(),
+                foam::read_scalar_field(case, mesh, *time, name),
+            ),
+            FieldReader::Vtk { file } => (
+                file.display().to_string(),
+                scg_mesh::vtk::read_scalar(file, name),
+            ),
+        };
+        let f = r.map_err(|e| {
+            cx.err(
+                &format!("dispersion.{key}"),
+                format!("{shown}: field `{name}`: {e}"),
+            )
+        })?;
+        f.check_non_negative(&shown, name, mesh)
+            .map_err(|e| cx.err(&format!("dispersion.{key}"), format!("field `{name}`: {e}")))?;
+        Ok(f)
+    };
+    let k = read("k", &k_name)?;
+    let (epsilon, src) = match (
+        field_name("epsilon", &d.epsilon)?,
+        field_name("omega", &d.omega)?,
+    ) {
+        (Some(e), _) => (
+            read("epsilon", &e)?,
+            format!("k and ε from the fields `{k_name}` and `{e}`"),
+        ),
+        (None, Some(w)) => {
+            let omega = read("omega", &w)?;
+            let times = |a: &[f64], b: &[f64]| -> Vec<f64> {
+                a.iter()
+                    .zip(b)
+                    .map(|(&k, &w)| epsilon_from_omega(k, w))
+                    .collect()
+            };
+            let patches = k
+                .patches
+                .iter()
+                .zip(&omega.patches)
+                .map(|(a, b)| match (a, b) {
+                    (Some(a), Some(b)) => Some(times(a, b)),
+                    _ => None,
+                })
+                .collect();
+            (
+                ScalarField {
+                    cells: times(&k.cells, &omega.cells),
+                    patches,
+                },
+                format!(
+                    "k from the field `{k_name}`, ε = {C_MU}·k·ω from the field `{w}` (no ε given)"
+                ),
+            )
+        }
+        (None, None) => {
+            return Err(cx.err(
+                "dispersion.epsilon",
+                "missing: the name of the dissipation field (`epsilon = \"epsilon\"`) or of \
+                 the specific dissipation (`omega = \"omega\"`, ε = 0.09·k·ω)",
+            ));
+        }
+    };
+    let grad_sigma = if gradient {
+        gauss_gradient_of_sigma(mesh, m.flow.geometry(), &k)
+    } else {
+        Vec::new()
+    };
+    Ok((
+        CellTurbulence {
+            k: k.cells,
+            epsilon: epsilon.cells,
+            grad_sigma,
+        },
+        src,
+    ))
+}
+
+/// ∇σ per cell, σ = √(2k/3), by the Gauss theorem: (1/V)·Σ_f σ_f·A_f, with σ_f linear
+/// between the cells on either side of an internal face (weighted by their distances to
+/// the face) and the patch value (the owner's where none is given) on a boundary face.
+fn gauss_gradient_of_sigma(mesh: &PolyMesh, g: &MeshGeometry, k: &ScalarField) -> Vec<DVec3> {
+    let sig: Vec<f64> = k.cells.iter().map(|&k| sigma_of(k)).collect();
+    let mut grad = vec![DVec3::ZERO; mesh.n_cells];
+    let ni = mesh.n_internal_faces();
+    for f in 0..mesh.n_faces() {
+        let o = mesh.owner[f] as usize;
+        let a = g.face_areas[f];
+        let sf = if f < ni {
+            let n = mesh.neighbour[f] as usize;
+            let xf = g.face_centres[f];
+            let an = a.normalize_or_zero();
+            let (dov, dn) = (
+                (xf - g.cell_centres[o]).dot(an).abs(),
+                (g.cell_centres[n] - xf).dot(an).abs(),
+            );
+            let w = if dov + dn > 0.0 { dn / (dov + dn) } else { 0.5 };
+            let s = w * sig[o] + (1.0 - w) * sig[n];
+            grad[n] -= s * a;
+            s
+        } else {
+            mesh.patch_of_face(f)
+                .and_then(|p| {
+                    let patch = &mesh.patches[p];
+                    k.patches[p].as_ref().map(|v| sigma_of(v[f - patch.start]))
+                })
+                .unwrap_or(sig[o])
+        };
+        grad[o] += sf * a;
+    }
+    for (gc, &v) in grad.iter_mut().zip(&g.cell_volumes) {
+        *gc = if v > 0.0 { *gc / v } else { DVec3::ZERO };
+    }
+    grad
+}
