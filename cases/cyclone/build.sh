@@ -4,8 +4,8 @@
 #   bash cases/cyclone/build.sh [--coarse|--full] [--out DIR] [--iterations N] [--np N] [--keep]
 #
 #   --coarse      (default) the tutorial's mesh: background blocks 33x33x63 (dx = 33 mm),
-#                 snappyHexMesh at level 0, 30.8k cells; simpleFoam 800 iterations, U averaged
-#                 over the last 400; serial
+#                 snappyHexMesh at level 0, 30.8k cells; simpleFoam 800 iterations, U, k and
+#                 omega averaged over the last 400; serial
 #   --full        background blocks 66x66x126 (dx = 17 mm), 248k cells; 1000 iterations,
 #                 averaged over the last 500, on --np processes (default 2: decomposePar +
 #                 mpirun -np 2 + reconstructPar); about 1.2 s CPU per iteration and process,
@@ -14,7 +14,8 @@
 #                 it is replaced
 #   --iterations  SIMPLE iterations (simpleFoam stops earlier when the residualControl
 #                 targets of system/fvSolution are met; in this geometry they are not)
-#   --average-from  first iteration of the average UMean (default: half the iterations)
+#   --average-from  first iteration of the averages UMean, kMean, omegaMean (default: half
+#                 the iterations)
 #   --np          processes for simpleFoam (1 = serial)
 #   --keep        keep the OpenFOAM working directory (printed) instead of deleting it
 #
@@ -23,8 +24,12 @@
 # snappyHexMeshDict into a fresh case; blockMesh; snappyHexMesh -overwrite; checkMesh (the
 # build fails unless it says "Mesh OK."); simpleFoam (steady RANS, k-omega SST, air
 # nu = 1.5e-5 m^2/s, inlet 10 m/s as in the tutorial; template/ holds the dictionaries);
-# then copies constant/polyMesh, the final U and UMean (binary, gzipped), the STL
-# (constant/triSurface), the case's dictionaries and a log summary to --out.
+# then copies constant/polyMesh, the final U, k, omega, nut and the averages UMean, kMean,
+# omegaMean (fieldAverage over the iterations from --average-from on; binary, gzipped), the
+# STL (constant/triSurface), the case's dictionaries and a log summary to --out. k and omega
+# (kMean, omegaMean) are the turbulence fields of scg's turbulent dispersion
+# ([dispersion] model = "stochastic_ras"; epsilon = 0.09 k omega); nut is the last
+# iteration's eddy viscosity (there is no average of it).
 set -eo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -110,6 +115,9 @@ else
 fi
 final=$(ls -d [0-9]* | sort -g | tail -1)
 [ -n "$final" ] && [ "$final" != 0 ] && [ -f "$final/U" ] && [ -f "$final/UMean" ] || { echo "build.sh: no final U written" >&2; trap - EXIT; exit 1; }
+for f in k omega nut kMean omegaMean; do
+    [ -f "$final/$f" ] || { echo "build.sh: no final $f written" >&2; trap - EXIT; exit 1; }
+done
 # the last iteration's initial residuals and the inlet/outlet volume flows
 summary="$work/summary.txt"
 {
@@ -117,7 +125,7 @@ summary="$work/summary.txt"
     echo "turbulence: RAS kOmegaSST, steady (simpleFoam, SIMPLEC), nu = 1.5e-5 m^2/s, inlet U = (-10 0 0) m/s"
     echo "final iteration: $final (of $iterations max)"
     if grep -q "reached convergence" log.simpleFoam; then grep "reached convergence" log.simpleFoam; fi
-    echo "UMean: U averaged over iterations $average_from..$final"
+    echo "UMean, kMean, omegaMean: U, k, omega averaged over iterations $average_from..$final"
     echo "initial residuals (first solve of each iteration): last; min..max over the averaged iterations"
     for f in Ux Uy Uz p k omega; do
         awk -v f="$f" -v a="$average_from" '
@@ -146,8 +154,9 @@ mkdir -p "$out/constant/polyMesh" "$out/$final" "$out/system"
 for f in points faces owner neighbour boundary; do
     gzip -9 -n -c "constant/polyMesh/$f" > "$out/constant/polyMesh/$f.gz"
 done
-gzip -9 -n -c "$final/U" > "$out/$final/U.gz"
-gzip -9 -n -c "$final/UMean" > "$out/$final/UMean.gz"
+for f in U UMean k omega nut kMean omegaMean; do
+    gzip -9 -n -c "$final/$f" > "$out/$final/$f.gz"
+done
 cp constant/transportProperties constant/turbulenceProperties "$out/constant/"
 mkdir -p "$out/constant/triSurface"
 cp "$stl" "$out/constant/triSurface/"   # for [[walls]] kind = "mesh" (scg reads .stl.gz)

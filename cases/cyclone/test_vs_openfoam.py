@@ -127,6 +127,45 @@ class Scene(unittest.TestCase):
                     vs.make_cases(vs.read_scene(p), os.path.join(self.tmp, "o"))
                 self.assertIn(f": {key}:", str(e.exception))
 
+    def test_dispersion_freezes_the_scenes_turbulence_fields(self):
+        base = vs.read_text(FIXTURE).replace('case = "coarse"', f'case = "{os.path.join(HERE, "coarse")}"')
+        p = self.write(base + '\n[dispersion]\nmodel = "stochastic_ras"\nk = "kMean"\nomega = "omegaMean"\n')
+        sc = vs.read_scene(p)
+        self.assertEqual(sc["dispersion"]["ras_model"], "kOmegaSST")
+        plan = vs.make_cases(sc, os.path.join(self.tmp, "out"))
+        d = plan["runs"][0]["dir"]
+        cloud = vs.read_text(os.path.join(d, "constant", "kinematicCloudProperties"))
+        self.assertEqual(entry(block(cloud, "subModels"), "dispersionModel"), "stochasticDispersionRAS")
+        tp = vs.read_text(os.path.join(d, "constant", "turbulenceProperties"))
+        self.assertEqual(entry(tp, "simulationType"), "RAS")
+        self.assertEqual(entry(block(tp, "RAS"), "RASModel"), "kOmegaSST")
+        self.assertIn("meshWave", vs.read_text(os.path.join(d, "system", "fvSchemes")))
+        # the same files scg reads, byte for byte, under the names the RAS model reads
+        t = os.path.join(HERE, "coarse", sc["time"])
+        for src, dst in (("kMean", "k"), ("omegaMean", "omega"), ("nut", "nut"), ("UMean", "U")):
+            with open(os.path.join(t, src + ".gz"), "rb") as a, open(os.path.join(d, "0", dst + ".gz"), "rb") as b:
+                self.assertEqual(a.read(), b.read(), src)
+        self.assertTrue(os.path.isfile(os.path.join(d, "0", "alphat")))
+        self.assertEqual(len(vs.internal_scalars(os.path.join(d, "0", "k.gz"))), 30819)
+        # no [dispersion]: none, and the laminar model of bench/openfoam
+        plan = vs.make_cases(vs.read_scene(FIXTURE), os.path.join(self.tmp, "off"))
+        d = plan["runs"][0]["dir"]
+        cloud = vs.read_text(os.path.join(d, "constant", "kinematicCloudProperties"))
+        self.assertEqual(entry(block(cloud, "subModels"), "dispersionModel"), "none")
+        self.assertFalse(os.path.exists(os.path.join(d, "0", "k.gz")))
+
+    def test_bad_dispersion_names_the_key(self):
+        base = vs.read_text(FIXTURE).replace('case = "coarse"', f'case = "{os.path.join(HERE, "coarse")}"')
+        for extra, key in (('model = "langevin"\nk = "kMean"\nomega = "omegaMean"', "dispersion.model"),
+                           ('model = "stochastic_ras"\nk = "kAvg"\nomega = "omegaMean"', "dispersion.k"),
+                           ('model = "stochastic_ras"\nk = "kMean"', "dispersion"),
+                           ('model = "stochastic_ras"\nk = "kMean"\nomega = "omegaMean"\nc0 = 2.1', "dispersion.c0")):
+            with self.subTest(key=key):
+                p = self.write(base + "\n[dispersion]\n" + extra + "\n")
+                with self.assertRaises(vs.SceneError) as e:
+                    vs.read_scene(p)
+                self.assertIn(f": {key}:", str(e.exception))
+
 
 class Results(unittest.TestCase):
     POST = (

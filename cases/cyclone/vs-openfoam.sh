@@ -5,12 +5,16 @@
 # one table of grade efficiency, counts and speed.
 #
 #   bash cases/cyclone/vs-openfoam.sh [--scene cases/cyclone.toml] [--quick] [--out DIR]
-#                                     [--scg PATH]
+#                                     [--scg PATH] [--openfoam-only]
 #
 #   --scene FILE  the scg scene (default cases/cyclone.toml): [flow] kind = "openfoam" with
 #                 a fixed dt, one [[feeders]] with `patch` per [[groups]] size class,
 #                 [flow.patches] walls (wall_model "rebound", [material] restitution),
-#                 outlets, inlets; [drag], [gravity], [fluid]
+#                 outlets, inlets; [drag], [gravity], [fluid]; [dispersion] model =
+#                 "stochastic_ras" with k = FIELD and omega = FIELD (or epsilon = FIELD),
+#                 fields of the flow's time folder: OpenFOAM's stochasticDispersionRAS on a
+#                 frozen RAS model (kOmegaSST, epsilon = 0.09 k omega; kEpsilon) whose k and
+#                 omega are those files (kMean, omegaMean: the same fields as scg's)
 #   --quick       a check of the script (seconds): duration 0.4 s and a quarter of the
 #                 feed rates (--set duration=0.4 --set feed_scale=0.25 for scg)
 #   --out DIR     results (default /tmp/scg-cyclone-vs-openfoam): grade.json (OpenFOAM,
@@ -24,6 +28,8 @@
 #                 flow.interpolation=cell_point_idw (OpenFOAM's cellPoint point values);
 #                 for scg only: keys that change the physics break the like-for-like
 #   --scg PATH    scg binary (default target/release/scg, built if missing)
+#   --openfoam-only  OpenFOAM's runs alone (1 process, 2 ranks, two at once): grade.json
+#                 and a summary (summary.txt), no scg run and no table
 #   NICE="nice -n 5" prefixes every run of both codes alike (for a shared machine)
 #
 # Steps: installs OpenFOAM with apt when missing (as cases/cyclone/build.sh); writes one
@@ -50,6 +56,7 @@ set_args=()
 feed_scale=""
 scg_set=()
 SCG=""
+foam_only=0
 NICE=${NICE:-}
 while [ $# -gt 0 ]; do
     case "$1" in
@@ -57,6 +64,7 @@ while [ $# -gt 0 ]; do
         --out) out=$2; shift ;;
         --quick) quick=1 ;;
         --scg) SCG=$2; shift ;;
+        --openfoam-only) foam_only=1 ;;
         --feed-scale) feed_scale=$2; shift ;;
         --dt) case_args+=(--dt "$2"); set_args+=(--set "dt=$2"); dt=$2; shift ;;
         --scg-set) scg_set+=(--set "$2"); shift ;;
@@ -76,11 +84,13 @@ source "$(dirname "$self")/../foam-env.sh"
 foam_env vs-openfoam.sh uncoupledKinematicParcelFoam
 set -u
 
-if [ -z "$SCG" ]; then
-    SCG=$root/target/release/scg
-    [ -x "$SCG" ] || (cd "$root" && cargo build --release --quiet)
+if [ "$foam_only" = 0 ]; then
+    if [ -z "$SCG" ]; then
+        SCG=$root/target/release/scg
+        [ -x "$SCG" ] || (cd "$root" && cargo build --release --quiet)
+    fi
+    SCG=$(realpath "$SCG")
 fi
-SCG=$(realpath "$SCG")
 
 py=(python3 "$root/cases/cyclone/vs_openfoam.py")
 if [ "$quick" = 1 ]; then
@@ -93,7 +103,7 @@ if [ -n "$feed_scale" ]; then
     set_args+=(--set "feed_scale=$feed_scale")
 fi
 echo "scene: $scene$([ "$quick" = 1 ] && echo " (--quick: duration 0.4 s)")${feed_scale:+ (feed_scale $feed_scale)}${dt:+ (dt $dt)}"
-echo "scg: $SCG ${scg_set[*]}"
+[ "$foam_only" = 1 ] && echo "scg: not run (--openfoam-only)" || echo "scg: $SCG ${scg_set[*]}"
 echo "OpenFOAM: $(command -v uncoupledKinematicParcelFoam) ($(dpkg-query -W -f='${Version}' openfoam 2>/dev/null || echo '?'))"
 echo "cores: $(nproc)  load: $(cut -d' ' -f1-3 /proc/loadavg)  NICE='${NICE}'"
 
@@ -176,6 +186,13 @@ for pid in "${pids[@]}"; do
     wait "$pid" || { echo "vs-openfoam.sh: a serial run at once failed (${twin_dirs[*]})" >&2; exit 1; }
 done
 "${py[@]}" concurrent "$out/openfoam-twice.json" "${twin_dirs[@]}"
+
+if [ "$foam_only" = 1 ]; then
+    echo
+    echo "== OpenFOAM alone (--openfoam-only); load now $(cut -d' ' -f1-3 /proc/loadavg)"
+    "${py[@]}" summary "$out/grade.json" "$out/openfoam-np2.json" "$out/openfoam-twice.json" | tee "$out/summary.txt"
+    exit 0
+fi
 
 # --- scg ------------------------------------------------------------------------------------
 for t in 1 2; do

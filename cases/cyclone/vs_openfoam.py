@@ -5,9 +5,16 @@ bench/foam.py's helpers (dictionary header, timed run, list reader) are imported
   python3 vs_openfoam.py case SCENE DIR [--duration T] [--feed-scale F] [--dt DT]
       OpenFOAM case(s) under DIR from the scg scene SCENE: one case per particle density
       (one kinematic cloud has one rho0), DIR/rho<ρ>/, and DIR/plan.json (the classes and
-      the runs). The scene's flow field (flow.case, flow.time, flow.field) is the frozen U.
+      the runs). The scene's flow field (flow.case, flow.time, flow.field) is the frozen U;
+      with [dispersion] model = "stochastic_ras" the scene's k and omega (or epsilon) fields
+      of the same time folder are the frozen k and omega (epsilon) of a RAS model that is
+      constructed and never solved, and the cloud's dispersionModel is
+      stochasticDispersionRAS (below)
   python3 vs_openfoam.py grade DIR OUT.json
       reads each run's log and patchPostProcessing output and writes grade.json
+  python3 vs_openfoam.py summary GRADE.json [PARALLEL.json [CONCURRENT.json]]
+      OpenFOAM's side alone (vs-openfoam.sh --openfoam-only): per class fed, escaped,
+      held, lost, efficiency, and the speeds
   python3 vs_openfoam.py parallel OUT.json DECOMPOSITION DIR...
       the speed of the decomposed runs DIR... (mpirun -np N ... -parallel): particle-steps
       per wall second, parcels per processor at the end (an error if one held none)
@@ -25,6 +32,19 @@ per-patch tables -> localInteraction, one entry per patch (outlets, inlets and u
 non-wall patches escape). grade.json per class: fed, escaped (outlets), lost (other escape
 patches), stuck (written inactive at the end), held (written active), patches (counts by
 patch), and the log's localInteraction per-patch totals (log_fates).
+
+Turbulent dispersion, from [dispersion] (absent or model = "none": dispersionModel none):
+model = "stochastic_ras" -> dispersionModel stochasticDispersionRAS; the fields named by
+k (default "k") and omega, or epsilon, in the flow's time folder are copied as 0/k and
+0/omega (0/epsilon) — the same files scg reads, whatever their names (kMean, omegaMean) —
+with constant/turbulenceProperties RAS kOmegaSST (kEpsilon with epsilon), whose epsilon()
+is betaStar k omega, betaStar = 0.09 (printCoeffs in the log); 0/nut (the time folder's
+nut, else uniform 0), 0/alphat (uniform 0: the compressible model's EddyDiffusivity reads
+it) and fvSchemes' wallDist (the SST model's wall distance) for its constructor.
+uncoupledKinematicParcelFoam constructs the turbulence model but never calls its correct():
+k and omega stay the files' values (grade checks the k and omega it writes at the end
+against the inputs). The dispersion model takes k and epsilon of the parcel's cell (cell
+values, no interpolation).
 
 Exit status 2 (message naming the file and key) when the scene cannot be mapped.
 """
@@ -143,6 +163,7 @@ def read_scene(path, duration=None, feed_scale=None, dt=None):
     dur = float(duration if duration is not None else s.get("duration", 0.0))
     if dur <= 0:
         bad(path, "duration", "must be positive")
+    dispersion = read_dispersion(path, s.get("dispersion", {}), case, time)
     interp = flow.get("interpolation", "cell_point")
     foam_interp = {"cell_value": "cell", "cell_point": "cellPoint", "cell_point_idw": "cellPoint"}.get(interp)
     if foam_interp is None:
@@ -181,8 +202,53 @@ def read_scene(path, duration=None, feed_scale=None, dt=None):
         "interaction_table": bool(overrides),
         "rho_f": rho_f, "mu": mu, "gravity": g, "dt": float(dt), "duration": dur,
         "drag": s.get("drag", {}).get("law", "stokes"), "classes": classes,
-        "feed_scale": feed_scale,
+        "feed_scale": feed_scale, "dispersion": dispersion,
     }
+
+
+def time_file(case, time, name):
+    """The field `name` of time folder `time` of `case` (name.gz or name), or None."""
+    return next((os.path.join(case, time, name + ext) for ext in (".gz", "")
+                 if os.path.isfile(os.path.join(case, time, name + ext))), None)
+
+
+DISPERSION_KEYS = ("model", "k", "omega", "epsilon")
+
+
+def read_dispersion(path, d, case, time):
+    """[dispersion] of the scene: None (no dispersion) or the model and the turbulence
+    fields' files: {"model", "foam_model", "ras_model", "k", "k_file", "second",
+    "second_name", "second_file"} with second "omega" (kOmegaSST) or "epsilon" (kEpsilon)."""
+    if not isinstance(d, dict):
+        bad(path, "dispersion", "a table")
+    model = d.get("model", "none")
+    if model == "none":
+        return None
+    if model != "stochastic_ras":
+        bad(path, "dispersion.model", f'{model!r}: only "stochastic_ras" (OpenFOAM\'s stochasticDispersionRAS) '
+            'or "none" have an OpenFOAM counterpart')
+    for key in d:
+        if key not in DISPERSION_KEYS:
+            bad(path, f"dispersion.{key}", f"not mapped to OpenFOAM (keys: {', '.join(DISPERSION_KEYS)})")
+    if "omega" in d and "epsilon" in d:
+        bad(path, "dispersion", "give omega or epsilon, not both")
+    if "omega" not in d and "epsilon" not in d:
+        bad(path, "dispersion", "needs omega = FIELD or epsilon = FIELD (a field of the flow's time folder)")
+    second = "omega" if "omega" in d else "epsilon"
+    out = {"model": model, "foam_model": "stochasticDispersionRAS", "second": second,
+           "ras_model": "kOmegaSST" if second == "omega" else "kEpsilon"}
+    for key, name in (("k", d.get("k", "k")), (second, d[second])):
+        if not isinstance(name, str) or not name:
+            bad(path, f"dispersion.{key}", "a field name")
+        f = time_file(case, time, name)
+        if f is None:
+            bad(path, f"dispersion.{key}", f"no {name} in {os.path.join(case, time)}")
+        if key == "k":
+            out["k"], out["k_file"] = name, f
+        else:
+            out["second_name"], out["second_file"] = name, f
+    out["nut_file"] = time_file(case, time, "nut")
+    return out
 
 
 def boundary_types(case):
@@ -353,7 +419,7 @@ subModels
 {chr(10).join(inj)}
     }}
 
-    dispersionModel none;
+    dispersionModel {dispersion_model(sc)};
 
     {interaction_text(sc)}
 
@@ -374,6 +440,43 @@ cloudFunctions
     }}
 }}
 """
+
+
+def dispersion_model(sc):
+    d = sc.get("dispersion")
+    if d is None:
+        return "none"
+    return (f"{d['foam_model']};   // scene [dispersion] model = \"{d['model']}\": k = {d['k']}, "
+            f"{d['second']} = {d['second_name']} (constant/turbulenceProperties)")
+
+
+def turbulence_files(sc):
+    """{relative path: text} of the frozen RAS model's dictionaries and generated fields
+    (the k and omega/epsilon files are copied by make_cases)."""
+    d = sc["dispersion"]
+    tp = foam.header("dictionary", "constant", "turbulenceProperties") + f"""\
+// scg vs-openfoam.sh: the RAS model whose k() and epsilon() the cloud's
+// stochasticDispersionRAS reads. uncoupledKinematicParcelFoam constructs it (reading 0/k,
+// 0/{d['second']}, 0/nut, 0/alphat) and never solves it: k = the scene's {d['k']},
+// {d['second']} = the scene's {d['second_name']}{'; epsilon() = betaStar k omega' if d['second'] == 'omega' else ''}.
+simulationType  RAS;
+RAS
+{{
+    RASModel        {d['ras_model']};
+    turbulence      on;
+    printCoeffs     on;
+}}
+"""
+    scalar = lambda name, dim: foam.header("volScalarField", "0", name) + (
+        f"dimensions      {dim};\ninternalField   uniform 0;\n"
+        'boundaryField\n{\n    ".*" { type calculated; value uniform 0; }\n}\n')
+    files = {"constant/turbulenceProperties": tp,
+             "0/alphat": scalar("alphat", "[1 -1 -1 0 0 0 0]")}
+    if d.get("nut_file") is None:
+        files["0/nut"] = scalar("nut", "[0 2 -1 0 0 0 0]")
+    schemes = read_text(os.path.join(HERE, "..", "..", "bench", "openfoam", "system", "fvSchemes"))
+    files["system/fvSchemes"] = schemes + "wallDist        { method meshWave; }   // the RAS model's wall distance\n"
+    return files
 
 
 def control_dict(sc):
@@ -478,6 +581,15 @@ def make_cases(sc, out):
         w("0/p", p)
         w("0/T", t)
         w("constant/kinematicCloudProperties", cloud_properties(sc, cls, rho))
+        if sc.get("dispersion"):
+            # the scene's turbulence fields, the same files scg reads, as the frozen k and
+            # omega (epsilon), whatever their names (OpenFOAM reads a file by its name)
+            dd = sc["dispersion"]
+            for src, name in ((dd["k_file"], "k"), (dd["second_file"], dd["second"]), (dd.get("nut_file"), "nut")):
+                if src:
+                    shutil.copy(src, os.path.join(d, "0", name + (".gz" if src.endswith(".gz") else "")))
+            for rel, text in turbulence_files(sc).items():
+                w(rel, text)
         runs.append({"dir": d, "density": rho, "groups": [c["group"] for c in cls]})
     plan = {k: v for k, v in sc.items() if k != "boundary"}
     plan["patch_model"] = "standardWallInteraction" if standard_wall(sc) else "localInteraction"
@@ -491,13 +603,64 @@ def make_cases(sc, out):
 
 # ---- reading OpenFOAM's results ------------------------------------------------------------
 
+def internal_scalars(path):
+    """The internalField of a volScalarField file (ascii or binary, .gz or not): a list of
+    floats (a uniform field: one value)."""
+    import struct
+    op = gzip.open if path.endswith(".gz") else open
+    with op(path, "rb") as f:
+        raw = f.read()
+    i = raw.index(b"internalField")
+    m = re.compile(rb"internalField\s+uniform\s+([^;\s]+)\s*;").match(raw, i)
+    if m:
+        return [float(m.group(1))]
+    m = re.compile(rb"internalField\s+nonuniform\s+List<scalar>\s*(\d+)\s*\(").match(raw, i)
+    if not m:
+        sys.exit(f"{path}: no scalar internalField")
+    n = int(m.group(1))
+    if re.search(rb"format\s+binary\s*;", raw[:i]):
+        return list(struct.unpack(f"<{n}d", raw[m.end():m.end() + 8 * n]))
+    vals = raw[m.end():raw.index(b")", m.end())].split()
+    if len(vals) != n:
+        sys.exit(f"{path}: {n} values announced, {len(vals)} read")
+    return [float(x) for x in vals]
+
+
+def frozen_check(d, names):
+    """The largest relative difference between the input 0/NAME and the NAME the run wrote
+    at its last time, per name (the turbulence model was not solved: 0)."""
+    times = [x for x in os.listdir(d) if re.fullmatch(r"[0-9.eE+-]+", x) and float(x) > 0]
+    out = {}
+    for name in names:
+        a = time_file(d, "0", name)
+        b = time_file(d, max(times, key=float), name) if times else None
+        if a is None or b is None:
+            out[name] = None
+            continue
+        x, y = internal_scalars(a), internal_scalars(b)
+        if len(x) != len(y):
+            out[name] = None
+            continue
+        out[name] = max(abs(p - q) / max(abs(p), 1e-300) for p, q in zip(x, y))
+    return out
+
+
 def parse_log(log):
     """Per step (after each `Evolving` block): parcels in the system, ExecutionTime; the
     last `parcels added` per injector; the wall-clock of each ExecutionTime (LOG.wall)."""
     parcels, cpu, added, inj = [], [], {}, None
     fates, fate_patch = {}, None
+    selected = {}
     with open(log) as f:
         for ln in f:
+            # "Selecting dispersion model stochasticDispersionRAS",
+            # "Selecting RAS turbulence model kOmegaSST"
+            m = re.match(r"\s*Selecting (dispersion model|RAS turbulence model|turbulence model type)\s+(\S+)", ln)
+            if m:
+                selected[m.group(1)] = m.group(2)
+            m = re.match(r"\s*betaStar\s+([0-9.eE+-]+)\s*;", ln)
+            if m:
+                selected["betaStar"] = float(m.group(1))
             # localInteraction's info, per patch (the totals so far; the last one counts):
             #     Parcel fate (number, mass)      : patch walls
             #       - escape                      = 0, 0
@@ -528,7 +691,8 @@ def parse_log(log):
     wall = []
     if os.path.isfile(log + ".wall"):
         wall = [float(x) for x in read_text(log + ".wall").split()]
-    return {"parcels": parcels, "cpu": cpu, "added": added, "wall": wall, "fates": fates}
+    return {"parcels": parcels, "cpu": cpu, "added": added, "wall": wall, "fates": fates,
+            "selected": selected}
 
 
 def timed_steps(case):
@@ -652,11 +816,27 @@ def grade(out, dest):
     notes = []
     inter = plan.get("patch_interactions", {})
     log_fates = {}
+    disp = plan.get("dispersion")
+    selected, frozen = {}, {}
     for run in plan["runs"]:
         d = run["dir"]
         lg = parse_log(os.path.join(d, "log.foam"))
         if not lg["cpu"]:
             sys.exit(f"{d}/log.foam: no step ran")
+        selected[d] = lg["selected"]
+        if disp:
+            got = lg["selected"].get("dispersion model")
+            if got != disp["foam_model"]:
+                sys.exit(f"{d}/log.foam: dispersion model {got!r} selected, not {disp['foam_model']}")
+            if lg["selected"].get("RAS turbulence model") != disp["ras_model"]:
+                sys.exit(f"{d}/log.foam: RAS model {lg['selected'].get('RAS turbulence model')!r}, "
+                         f"not {disp['ras_model']}")
+            frozen[d] = frozen_check(d, ["k", disp["second"]])
+            for name, diff in frozen[d].items():
+                if diff is None:
+                    notes.append(f"{d}: {name} not compared (not written at the end)")
+                elif diff > 1e-15:
+                    notes.append(f"{d}: {name} written at the end differs from the input by {diff:.3g} (relative)")
         for g in run["groups"]:
             if g not in lg["added"]:
                 sys.exit(f"{d}/log.foam: no 'parcels added' for injector {g}")
@@ -723,6 +903,12 @@ def grade(out, dest):
     notes += [
         "uncoupledKinematicParcelFoam, 1 process; frozen U = the scene's "
         f"{plan['field']} at time {plan['time']}; U interpolation {plan['foam_interpolation']}",
+        ("dispersion: none" if not disp else
+         f"dispersion: {disp['foam_model']} (scene {disp['model']}); frozen RAS {disp['ras_model']}: "
+         f"k = the scene's {disp['k']}, {disp['second']} = its {disp['second_name']}"
+         + (" (epsilon = betaStar k omega)" if disp["second"] == "omega" else "")
+         + "; cell values of the parcel's cell; not solved (k and " + disp["second"]
+         + " written at the end = the inputs: frozen_check, max relative difference)"),
         "drag: sphereDrag, Cd Re/24 = 1 + Re^(2/3)/6 (scg: " + plan["drag"] + ")",
         (f"walls: standardWallInteraction rebound e = {plan['restitution']}, mu = 0"
          if plan.get("patch_model", "standardWallInteraction") == "standardWallInteraction" else
@@ -740,6 +926,10 @@ def grade(out, dest):
         "particle_steps": int(ps), "cpu_s": cpu, "wall_s": wall,
         "particle_steps_per_s": ps / cpu if cpu > 0 else None, "dt": plan["dt"],
         "patch_model": plan.get("patch_model", "standardWallInteraction"), "log_fates": log_fates,
+        "dispersion": disp["foam_model"] if disp else "none",
+        "turbulence": ({"model": disp["ras_model"], "k": disp["k"], disp["second"]: disp["second_name"]}
+                       if disp else None),
+        "selected": selected, "frozen_check": frozen,
         "notes": notes,
     }
     write_json(dest, g)
@@ -837,6 +1027,10 @@ def table(grade_path, scg1_path, scg2_path, parallel_path=None, concurrent_path=
                    for g in s1["groups"]])
     um = lambda x: f"{x * 1e6:.2f} µm" if x is not None else "none (the efficiency does not cross 0.5)"
     print(f"d50: OpenFOAM {um(fo['d50'])}, scg {um(scg_d50)}")
+    if fo.get("dispersion", "none") != "none":
+        t = fo.get("turbulence") or {}
+        print(f"OpenFOAM dispersion: {fo['dispersion']} on frozen RAS {t.get('model')} ("
+              + ", ".join(f"{k} = {v}" for k, v in t.items() if k != "model") + ")")
     for name, res in (("OpenFOAM", [c["residence_times"] for c in fo["classes"]]),):
         med = [f"{c['group']} {sorted(r)[len(r) // 2]:.3g} s" for c, r in zip(fo["classes"], res) if r]
         print(f"median residence time of the escaped ({name}): " + (", ".join(med) or "-"))
@@ -868,6 +1062,32 @@ def table(grade_path, scg1_path, scg2_path, parallel_path=None, concurrent_path=
               f"{s2['particle_steps_per_s'] / fo['particle_steps_per_s']:.2f}")
 
 
+def summary(grade_path, parallel_path=None, concurrent_path=None):
+    """OpenFOAM's side alone (vs-openfoam.sh --openfoam-only)."""
+    fo = read_json(grade_path)
+    print(f"OpenFOAM v1912, dispersion {fo.get('dispersion', 'none')}"
+          + (f" (RAS {fo['turbulence']['model']}: " + ", ".join(f"{k} = {v}" for k, v in fo["turbulence"].items()
+                                                            if k != "model") + ")" if fo.get("turbulence") else ""))
+    print(f"{'class':>6} {'d [µm]':>7} | {'efficiency':>10} {'fed':>5} {'esc':>5} {'held':>5} {'lost':>4} {'stuck':>5}")
+    for c in fo["classes"]:
+        e = c["efficiency"]
+        print(f"{c['group']:>6} {c['diameter'] * 1e6:7.3g} | {(f'{e:10.4f}' if e is not None else '-'):>10} "
+              f"{c['fed']:5d} {c['escaped']:5d} {c['held']:5d} {c['lost']:4d} {c['stuck']:5d}")
+    um = lambda x: f"{x * 1e6:.2f} µm" if x is not None else "none (the efficiency does not cross 0.5)"
+    print(f"d50: {um(fo['d50'])}")
+    print(f"speed: 1 process {fo['particle_steps_per_s']:.4e} particle-steps/s ({fo['particle_steps']} in "
+          f"{fo['cpu_s']:.2f} s CPU, {fo['wall_s']:.2f} s wall, steps 2..N)")
+    if parallel_path:
+        fp = read_json(parallel_path)
+        print(f"       {fp['ranks']} ranks {fp['particle_steps_per_s']:.4e} ({fp['wall_s']:.2f} s wall)")
+    if concurrent_path:
+        fc = read_json(concurrent_path)
+        print(f"       {fc['processes']} serial runs at once {fc['particle_steps_per_s']:.4e} (summed)")
+    for d, f in (fo.get("frozen_check") or {}).items():
+        print(f"frozen turbulence ({os.path.basename(d)}): max relative difference input/end "
+              + ", ".join(f"{k} {v:.3g}" if v is not None else f"{k} -" for k, v in f.items()))
+
+
 def main(argv):
     import argparse
     ap = argparse.ArgumentParser(prog="vs_openfoam.py")
@@ -887,6 +1107,10 @@ def main(argv):
     t.add_argument("scg2")
     t.add_argument("parallel", nargs="?")
     t.add_argument("concurrent", nargs="?")
+    m = sub.add_parser("summary")
+    m.add_argument("grade")
+    m.add_argument("parallel", nargs="?")
+    m.add_argument("concurrent", nargs="?")
     q = sub.add_parser("concurrent")
     q.add_argument("out")
     q.add_argument("dirs", nargs="+")
@@ -906,6 +1130,8 @@ def main(argv):
             parallel(a.out, a.dirs, a.decomposition)
         elif a.cmd == "concurrent":
             concurrent(a.out, a.dirs)
+        elif a.cmd == "summary":
+            summary(a.grade, a.parallel, a.concurrent)
         else:
             table(a.grade, a.scg1, a.scg2, a.parallel, a.concurrent)
     except SceneError as e:
