@@ -17,6 +17,7 @@ use slip::{fluid_velocity, terminal_slip};
 
 mod dt;
 mod mesh;
+mod dispersion;
 mod overlaps;
 mod render;
 mod slip;
@@ -569,6 +570,7 @@ pub fn check(scene: &Scene) -> Report {
         }
     }
     findings.extend(mesh_flow_findings(scene));
+    findings.extend(dispersion::findings(scene));
     for (code, n) in allowed {
         findings.push(Finding {
             level: Level::Note,
