@@ -26,11 +26,18 @@ fn the_cyclone_reads_its_turbulence_fields() {
     )
     .unwrap();
     let d = scene.dispersion.as_ref().unwrap();
-    assert!(scene.dispersion_source.contains("0.09·k·ω"), "{}", scene.dispersion_source);
+    assert!(
+        scene.dispersion_source.contains("0.09·k·ω"),
+        "{}",
+        scene.dispersion_source
+    );
     let scg::core::physics::dispersion::Turbulence::Cells(c) = &d.turbulence else {
         panic!("cell turbulence expected");
     };
-    assert_eq!(c.k.len(), scene.mesh_flow.as_ref().unwrap().flow.mesh().n_cells);
+    assert_eq!(
+        c.k.len(),
+        scene.mesh_flow.as_ref().unwrap().flow.mesh().n_cells
+    );
     let kmax = c.k.iter().cloned().fold(0.0, f64::max);
     assert!(kmax > 1.0 && kmax < 100.0, "k max {kmax}");
     assert!(c.epsilon.iter().all(|e| *e > 0.0));
@@ -66,12 +73,21 @@ fn err(section: &str) -> String {
 #[test]
 fn bad_dispersion_input_names_file_key_and_line() {
     let e = err("[dispersion]\nmodel = \"eddy_walk\"\nk = \"k\"\nomega = \"omega\"");
-    assert!(e.contains("cases/cyclone.toml:") && e.contains("eddy_walk"), "{e}");
-    assert!(e.contains("stochastic_ras") && e.contains("langevin"), "{e}");
+    assert!(
+        e.contains("cases/cyclone.toml:") && e.contains("eddy_walk"),
+        "{e}"
+    );
+    assert!(
+        e.contains("stochastic_ras") && e.contains("langevin"),
+        "{e}"
+    );
     let e = err("[dispersion]\nmodel = \"stochastic_ras\"\nk = \"kk\"\nomega = \"omega\"");
     assert!(e.contains("dispersion.k") && e.contains("kk"), "{e}");
     let e = err("[dispersion]\nmodel = \"stochastic_ras\"\nk = \"k\"");
-    assert!(e.contains("dispersion.epsilon") && e.contains("missing"), "{e}");
+    assert!(
+        e.contains("dispersion.epsilon") && e.contains("missing"),
+        "{e}"
+    );
     let e = err("[dispersion]\nmodel = \"stochastic_ras\"\nk = 1.0\nomega = \"omega\"");
     assert!(e.contains("dispersion.k") && e.contains("field"), "{e}");
     let e = err("[dispersion]\nmodel = \"stochastic_ras\"\nk = \"k\"\nomega = \"omega\"\nc0 = 2");
@@ -86,7 +102,13 @@ fn bad_dispersion_input_names_file_key_and_line() {
 fn analytic_flows_take_numbers_or_a_profile() {
     let base = std::fs::read_to_string("cases/uniform.toml").unwrap();
     let parse = |s: &str| {
-        scg::scene::parse_in(&format!("{base}\n{s}\n"), "cases/uniform.toml", Path::new("cases"), "u", &[])
+        scg::scene::parse_in(
+            &format!("{base}\n{s}\n"),
+            "cases/uniform.toml",
+            Path::new("cases"),
+            "u",
+            &[],
+        )
     };
     let ok = parse("[dispersion]\nmodel = \"langevin\"\nk = 0.5\nepsilon = 2.0").unwrap();
     assert!(ok.dispersion.is_some());
@@ -94,12 +116,28 @@ fn analytic_flows_take_numbers_or_a_profile() {
         "[dispersion]\nmodel = \"stochastic_ras\"\n[dispersion.profile]\naxis = \"y\"\nat = [0, 1]\nk = [0.1, 0.2]\nomega = [10, 20]",
     )
     .unwrap();
-    assert!(ok.dispersion_source.contains("ω"), "{}", ok.dispersion_source);
+    assert!(
+        ok.dispersion_source.contains("ω"),
+        "{}",
+        ok.dispersion_source
+    );
     for (s, key) in [
-        ("[dispersion]\nmodel = \"langevin\"\nk = -0.5\nepsilon = 2.0", "dispersion.k"),
-        ("[dispersion]\nmodel = \"langevin\"\nk = nan\nepsilon = 2.0", "dispersion.k"),
-        ("[dispersion]\nmodel = \"langevin\"\nk = \"k\"\nepsilon = 2.0", "dispersion.k"),
-        ("[dispersion]\nmodel = \"langevin\"\nk = 0.5\nepsilon = 0.0", "dispersion.epsilon"),
+        (
+            "[dispersion]\nmodel = \"langevin\"\nk = -0.5\nepsilon = 2.0",
+            "dispersion.k",
+        ),
+        (
+            "[dispersion]\nmodel = \"langevin\"\nk = nan\nepsilon = 2.0",
+            "dispersion.k",
+        ),
+        (
+            "[dispersion]\nmodel = \"langevin\"\nk = \"k\"\nepsilon = 2.0",
+            "dispersion.k",
+        ),
+        (
+            "[dispersion]\nmodel = \"langevin\"\nk = 0.5\nepsilon = 0.0",
+            "dispersion.epsilon",
+        ),
         (
             "[dispersion]\nmodel = \"langevin\"\n[dispersion.profile]\naxis = \"w\"\nat = [0, 1]\nk = [1, 1]\nepsilon = [1, 1]",
             "dispersion.profile.axis",
@@ -110,6 +148,9 @@ fn analytic_flows_take_numbers_or_a_profile() {
         ),
     ] {
         let e = parse(s).unwrap_err().to_string();
-        assert!(e.contains(key) && e.contains("cases/uniform.toml"), "{s}: {e}");
+        assert!(
+            e.contains(key) && e.contains("cases/uniform.toml"),
+            "{s}: {e}"
+        );
     }
 }

@@ -21,11 +21,15 @@
 //!   contact walls and drawings.
 //!
 //! Readers and writers:
-//! * [`foam`]: OpenFOAM cases — [`foam::read_mesh`], [`foam::read_vector_field`] (a time
-//!   directory chosen by [`foam::TimeSel`], listed by [`foam::time_dirs`]),
-//!   [`foam::write_case`] and [`foam::write_vector_field`]; ASCII, binary and gzipped files.
-//! * [`vtk`]: VTK unstructured grids — [`vtk::read`] (legacy `.vtk`, XML `.vtu`) and
-//!   [`vtk::write_legacy`].
+//! * [`foam`]: OpenFOAM cases — [`foam::read_mesh`], [`foam::read_vector_field`] and
+//!   [`foam::read_scalar_field`] (a time directory chosen by [`foam::TimeSel`], listed by
+//!   [`foam::time_dirs`]), [`foam::write_case`], [`foam::write_vector_field`] and
+//!   [`foam::write_scalar_field`]; ASCII, binary and gzipped files.
+//! * [`vtk`]: VTK unstructured grids — [`vtk::read`] and [`vtk::read_scalar`] (legacy
+//!   `.vtk`, XML `.vtu`) and [`vtk::write_legacy`].
+//!
+//! Scalar fields ([`ScalarField`]: turbulence `k`, `epsilon`, `omega`, `nut`) are
+//! interpolated by packing up to three into a [`CellField`] ([`CellField::from_scalars`]).
 
 pub mod build;
 pub mod error;
@@ -44,6 +48,6 @@ pub use error::MeshError;
 pub use geometry::MeshGeometry;
 pub use interp::{Interpolation, Interpolator};
 pub use locate::{Hit, Location, Locator};
-pub use polymesh::{CellField, Patch, PolyMesh};
+pub use polymesh::{CellField, Patch, PolyMesh, ScalarField};
 pub use shared::Shared;
 pub use table::{CellTable, TableWalk};

@@ -12,10 +12,13 @@
 //! only. Polyhedra in XML files need the `faces`/`faceoffsets` arrays, which vtkio does not
 //! read: they are rejected.
 //!
-//! The velocity is the 3-component array named `field_name`: from CELL_DATA if present
-//! (then the patch values are `None`), else from POINT_DATA, averaged onto each cell as the
-//! arithmetic mean of the values at its distinct points, and onto each boundary face as the
-//! mean at the face's points (then the patch values are `Some`).
+//! The velocity is the 3-component array named `field_name` ([`read`]), a scalar (`k`,
+//! `epsilon`, …) the 1-component array ([`read_scalar`]: legacy `SCALARS name type 1` with
+//! its `LOOKUP_TABLE`, a 1-component array of a legacy `FIELD`, an XML `DataArray` with one
+//! component): from CELL_DATA if present (then the patch values are `None`, the owner's),
+//! else from POINT_DATA, averaged onto each cell as the arithmetic mean of the values at its
+//! distinct points, and onto each boundary face as the mean at the face's points (then the
+//! patch values are `Some`).
 
 mod appended;
 mod cells;
@@ -31,12 +34,70 @@ use vtkio::model::{
 
 pub use cells::{assemble, cell_faces, face_area_centre, signed_volume};
 
-use crate::{CellField, MeshError, PolyMesh};
+use crate::{CellField, MeshError, PolyMesh, ScalarField};
 
 /// Read the unstructured grid of `path` (`.vtk` legacy, `.vtu` XML) and its vector array
 /// `field_name` (m/s for a velocity). See the module documentation for the conversion.
 pub fn read(path: impl AsRef<Path>, field_name: &str) -> Result<(PolyMesh, CellField), MeshError> {
     let path = path.as_ref();
+    let raw = read_raw(path, field_name, 3)?;
+    let vectors = |v: &[f64]| -> Vec<DVec3> {
+        v.chunks_exact(3)
+            .map(|c| DVec3::new(c[0], c[1], c[2]))
+            .collect()
+    };
+    let field = CellField {
+        cells: vectors(&raw.cells),
+        patches: raw
+            .patches
+            .iter()
+            .map(|p| p.as_deref().map(vectors))
+            .collect(),
+    };
+    if let Some((i, v)) = field.cells.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(MeshError::invalid(
+            path,
+            format!("{}/{field_name}[{i}]", raw.entry),
+            format!("not finite: {v}"),
+        ));
+    }
+    Ok((raw.mesh, field))
+}
+
+/// Read the scalar array `array_name` (1 component) of the unstructured grid of `path`
+/// (`.vtk` legacy, `.vtu` XML), on the mesh [`read`] reads from the same file (the same
+/// mesh, rebuilt): cell data as the cell values (patch values `None`), point data averaged
+/// onto cells and boundary faces, as for a velocity. Every cell value must be finite;
+/// negative values are accepted ([`ScalarField::check_non_negative`]).
+pub fn read_scalar(path: impl AsRef<Path>, array_name: &str) -> Result<ScalarField, MeshError> {
+    let path = path.as_ref();
+    let raw = read_raw(path, array_name, 1)?;
+    if let Some((i, v)) = raw.cells.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(MeshError::invalid(
+            path,
+            format!("{}/{array_name}[{i}]", raw.entry),
+            format!("not finite: {v}"),
+        ));
+    }
+    Ok(ScalarField {
+        cells: raw.cells,
+        patches: raw.patches,
+    })
+}
+
+/// The mesh of a VTK file and an array of `nc` components on it, flat (`nc` numbers per
+/// cell or face).
+struct Raw {
+    mesh: PolyMesh,
+    /// `nc` values per cell.
+    cells: Vec<f64>,
+    /// Per patch, `nc` values per face (point data) or `None` (cell data).
+    patches: Vec<Option<Vec<f64>>>,
+    /// `CELL_DATA` or `POINT_DATA`: where the array was found.
+    entry: &'static str,
+}
+
+fn read_raw(path: &Path, field_name: &str, nc: usize) -> Result<Raw, MeshError> {
     let bad = |entry: &str, message: String| MeshError::invalid(path, entry, message);
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
     if ext != "vtk" && ext != "vtu" {
@@ -76,8 +137,8 @@ pub fn read(path: impl AsRef<Path>, field_name: &str) -> Result<(PolyMesh, CellF
     let mut points: Vec<DVec3> = Vec::new();
     let mut cell_faces_all: Vec<Vec<Vec<u32>>> = Vec::new();
     let mut cell_points: Vec<Vec<u32>> = Vec::new();
-    let mut cell_values: Option<Vec<DVec3>> = Some(Vec::new());
-    let mut point_values: Option<Vec<DVec3>> = Some(Vec::new());
+    let mut cell_values: Option<Vec<f64>> = Some(Vec::new());
+    let mut point_values: Option<Vec<f64>> = Some(Vec::new());
     for (k, piece) in pieces.into_iter().enumerate() {
         let piece: UnstructuredGridPiece = match piece {
             Piece::Inline(p) => *p,
@@ -148,27 +209,29 @@ pub fn read(path: impl AsRef<Path>, field_name: &str) -> Result<(PolyMesh, CellF
             volumetric.push(c);
         }
         let n_vtk_cells = piece.cells.types.len();
-        cell_values = match (cell_values, vector_array(&piece.data, false, field_name)) {
+        cell_values = match (cell_values, array(&piece.data, false, field_name, nc)) {
             (Some(mut acc), Some(v)) => {
                 let v = v.map_err(|m| bad(&format!("CELL_DATA/{field_name}"), m))?;
-                if v.len() != n_vtk_cells {
+                if v.len() / nc != n_vtk_cells {
                     return Err(bad(
                         &format!("CELL_DATA/{field_name}"),
-                        format!("{} values for {n_vtk_cells} cells", v.len()),
+                        format!("{} values for {n_vtk_cells} cells", v.len() / nc),
                     ));
                 }
-                acc.extend(volumetric.iter().map(|&c| v[c]));
+                for &c in &volumetric {
+                    acc.extend_from_slice(&v[c * nc..(c + 1) * nc]);
+                }
                 Some(acc)
             }
             _ => None,
         };
-        point_values = match (point_values, vector_array(&piece.data, true, field_name)) {
+        point_values = match (point_values, array(&piece.data, true, field_name, nc)) {
             (Some(mut acc), Some(v)) => {
                 let v = v.map_err(|m| bad(&format!("POINT_DATA/{field_name}"), m))?;
-                if v.len() as u64 != n_pts {
+                if (v.len() / nc) as u64 != n_pts {
                     return Err(bad(
                         &format!("POINT_DATA/{field_name}"),
-                        format!("{} values for {n_pts} points", v.len()),
+                        format!("{} values for {n_pts} points", v.len() / nc),
                     ));
                 }
                 acc.extend(v);
@@ -179,45 +242,48 @@ pub fn read(path: impl AsRef<Path>, field_name: &str) -> Result<(PolyMesh, CellF
     }
     let mesh = assemble(points, cell_faces_all).map_err(|m| bad("Cells", m))?;
     mesh.check(path)?;
-    let field = if let Some(cells) = cell_values {
-        CellField {
-            cells,
+    if let Some(cells) = cell_values {
+        return Ok(Raw {
             patches: vec![None; mesh.patches.len()],
-        }
-    } else if let Some(pv) = point_values {
-        let mean =
-            |pts: &[u32]| pts.iter().map(|&p| pv[p as usize]).sum::<DVec3>() / pts.len() as f64;
-        let cells = cell_points.iter().map(|p| mean(p)).collect();
-        let patches = mesh
-            .patches
-            .iter()
-            .map(|p| {
-                Some(
-                    (p.start..p.start + p.size)
-                        .map(|f| mean(mesh.face(f)))
-                        .collect(),
-                )
-            })
-            .collect();
-        CellField { cells, patches }
-    } else {
+            mesh,
+            cells,
+            entry: "CELL_DATA",
+        });
+    }
+    let Some(pv) = point_values else {
         return Err(bad(
             field_name,
-            "no 3-component cell or point array of this name".into(),
+            format!("no {nc}-component cell or point array of this name"),
         ));
     };
-    let entry = if field.patches.iter().all(Option::is_none) {
-        "CELL_DATA"
-    } else {
-        "POINT_DATA"
+    // the mean of the values at `pts`, appended to `out`
+    let mean = |pts: &[u32], out: &mut Vec<f64>| {
+        for j in 0..nc {
+            let sum: f64 = pts.iter().map(|&p| pv[p as usize * nc + j]).sum();
+            out.push(sum / pts.len() as f64);
+        }
     };
-    if let Some((i, v)) = field.cells.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        return Err(bad(
-            &format!("{entry}/{field_name}[{i}]"),
-            format!("not finite: {v}"),
-        ));
+    let mut cells = Vec::with_capacity(cell_points.len() * nc);
+    for p in &cell_points {
+        mean(p, &mut cells);
     }
-    Ok((mesh, field))
+    let patches = mesh
+        .patches
+        .iter()
+        .map(|p| {
+            let mut v = Vec::with_capacity(p.size * nc);
+            for f in p.start..p.start + p.size {
+                mean(mesh.face(f), &mut v);
+            }
+            Some(v)
+        })
+        .collect();
+    Ok(Raw {
+        mesh,
+        cells,
+        patches,
+        entry: "POINT_DATA",
+    })
 }
 
 /// True when entry `i` of a polyhedron face stream is a count (nFaces or a face's size).
@@ -296,8 +362,9 @@ fn connectivity(cells: &Cells) -> Result<Vec<(u8, Vec<u64>)>, String> {
     Ok(out)
 }
 
-/// The 3-component array `name` among the point (`point`) or cell attributes, if present.
-fn vector_array(data: &Attributes, point: bool, name: &str) -> Option<Result<Vec<DVec3>, String>> {
+/// The `k`-component array `name` among the point (`point`) or cell attributes, if
+/// present: `k` numbers per entry, flat.
+fn array(data: &Attributes, point: bool, name: &str, k: usize) -> Option<Result<Vec<f64>, String>> {
     let attrs = if point { &data.point } else { &data.cell };
     for a in attrs {
         let (n_comp, buf) = match a {
@@ -310,16 +377,17 @@ fn vector_array(data: &Attributes, point: bool, name: &str) -> Option<Result<Vec
             }
             _ => continue,
         };
-        if n_comp != 3 {
-            return Some(Err(format!("{n_comp} components where 3 are needed")));
+        if n_comp != k {
+            return Some(Err(format!(
+                "{n_comp} components where {k} {} needed",
+                if k == 1 { "is" } else { "are" }
+            )));
         }
-        let Some(v) = buf.cast_into::<f64>() else {
+        let Some(mut v) = buf.cast_into::<f64>() else {
             return Some(Err("values are not numbers".into()));
         };
-        return Some(Ok(v
-            .chunks_exact(3)
-            .map(|c| DVec3::new(c[0], c[1], c[2]))
-            .collect()));
+        v.truncate(v.len() / k * k);
+        return Some(Ok(v));
     }
     None
 }

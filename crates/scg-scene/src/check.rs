@@ -15,9 +15,9 @@ use crate::model::{Allow, FeedSource};
 use crate::{Placement, Scene};
 use slip::{fluid_velocity, terminal_slip};
 
+mod dispersion;
 mod dt;
 mod mesh;
-mod dispersion;
 mod overlaps;
 mod render;
 mod slip;

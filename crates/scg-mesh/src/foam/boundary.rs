@@ -33,6 +33,23 @@ pub enum FaceValue {
     Unsupported(&'static str),
 }
 
+/// Why a cyclic patch is refused.
+const CYCLIC: &str = "a cyclic (periodic) patch: particles would have to cross to its partner \
+     patch, which scg does not do; mesh the full domain, or make the patches walls, inlets or \
+     outlets";
+/// Why a cyclicAMI patch is refused.
+const CYCLIC_AMI: &str = "a cyclicAMI patch (periodic or sliding interface): particles would \
+     have to cross to its partner patch, which scg does not do";
+/// Why a cyclicACMI patch is refused.
+const CYCLIC_ACMI: &str = "a cyclicACMI patch: particles would have to cross to its partner \
+     patch, which scg does not do";
+/// Why a cyclicSlip patch is refused.
+const CYCLIC_SLIP: &str = "a cyclicSlip patch: particles would have to cross to its partner \
+     patch, which scg does not do";
+/// Why a processor patch is refused.
+const PROCESSOR: &str = "a processor patch: this is one piece of a decomposed case; run \
+     reconstructPar and read the whole case";
+
 /// Every boundary-condition type scg reads for a velocity, and what its face values are.
 pub const TABLE: &[(&str, FaceValue)] = &[
     ("noSlip", FaceValue::Zero),
@@ -71,42 +88,11 @@ pub const TABLE: &[(&str, FaceValue)] = &[
     ("symmetryPlane", FaceValue::Tangential),
     ("wedge", FaceValue::Tangential),
     ("empty", FaceValue::Empty),
-    (
-        "cyclic",
-        FaceValue::Unsupported(
-            "a cyclic (periodic) patch: particles would have to cross to its partner patch, \
-             which scg does not do; mesh the full domain, or make the patches walls, inlets \
-             or outlets",
-        ),
-    ),
-    (
-        "cyclicAMI",
-        FaceValue::Unsupported(
-            "a cyclicAMI patch (periodic or sliding interface): particles would have to cross \
-             to its partner patch, which scg does not do",
-        ),
-    ),
-    (
-        "cyclicACMI",
-        FaceValue::Unsupported(
-            "a cyclicACMI patch: particles would have to cross to its partner patch, which \
-             scg does not do",
-        ),
-    ),
-    (
-        "cyclicSlip",
-        FaceValue::Unsupported(
-            "a cyclicSlip patch: particles would have to cross to its partner patch, which \
-             scg does not do",
-        ),
-    ),
-    (
-        "processor",
-        FaceValue::Unsupported(
-            "a processor patch: this is one piece of a decomposed case; run reconstructPar \
-             and read the whole case",
-        ),
-    ),
+    ("cyclic", FaceValue::Unsupported(CYCLIC)),
+    ("cyclicAMI", FaceValue::Unsupported(CYCLIC_AMI)),
+    ("cyclicACMI", FaceValue::Unsupported(CYCLIC_ACMI)),
+    ("cyclicSlip", FaceValue::Unsupported(CYCLIC_SLIP)),
+    ("processor", FaceValue::Unsupported(PROCESSOR)),
 ];
 
 /// What type `kind` means, `None` when it is not in [`TABLE`].
@@ -152,12 +138,7 @@ pub fn face_values(
         FaceValue::Zero => Some(vec![DVec3::ZERO; patch.size]),
         FaceValue::Written => match written {
             Some(v) => Some(v),
-            None => {
-                return Err(format!(
-                    "type '{kind}' without a `value` entry (OpenFOAM writes the evaluated face \
-                     values there; run the solver or foamFormatConvert to write them)"
-                ));
-            }
+            None => return Err(missing_value(kind)),
         },
         FaceValue::Owner | FaceValue::Empty => None,
         FaceValue::Tangential => Some(
@@ -175,6 +156,142 @@ pub fn face_values(
     })
 }
 
+/// Every boundary-condition type scg reads for a scalar (`volScalarField`: turbulence `k`,
+/// `epsilon`, `omega`, `nut`, also `p` and the like), and what its face values are, as
+/// OpenFOAM (Foundation dev and ESI) defines the type. Only four kinds occur:
+///
+/// * [`FaceValue::Written`]: the type writes its evaluated face values as `value`
+///   (required): `fixedValue` and everything derived from it (the wall functions
+///   `epsilonWallFunction` and `omegaWallFunction`, which set the wall cells' values and
+///   the faces to them, `kLowReWallFunction`, the `nut…WallFunction`s, `v2WallFunction`,
+///   `fWallFunction`, `totalPressure`, `timeVaryingMappedFixedValue`, `mapped`, …), the mixed types
+///   (`inletOutlet`, `outletInlet`, the turbulence inlets `turbulentIntensityKinetic
+///   EnergyInlet`, `turbulentMixingLengthDissipationRateInlet`,
+///   `turbulentMixingLengthFrequencyInlet` and their newer names `turbulentKineticEnergy`,
+///   `turbulentEpsilon`, `turbulentOmega`, `freestream`, `advective`, …), the fixed
+///   gradients (`fixedGradient`, `fixedFluxPressure`) and `calculated`.
+/// * [`FaceValue::Owner`]: the owner cell's value, stored as `None`, whatever `value` the
+///   file writes: `zeroGradient`, and `kqRWallFunction`, which derives from zeroGradient
+///   (it writes a `value`, equal to the owner's once evaluated). A scalar has no normal
+///   component, so `slip`, `symmetry`, `symmetryPlane` and `wedge`, which mirror a
+///   vector, leave a scalar at its owner's value.
+/// * [`FaceValue::Empty`]: `empty`, as for a velocity.
+/// * [`FaceValue::Unsupported`]: `cyclic`, `cyclicAMI`, `cyclicACMI`, `cyclicSlip`,
+///   `processor`, refused for the reasons [`TABLE`] gives.
+///
+/// A type not listed is an error naming the file, `boundaryField/<patch>/type` and the type
+/// ([`scalar_face_values`]).
+pub const SCALAR_TABLE: &[(&str, FaceValue)] = &[
+    ("fixedValue", FaceValue::Written),
+    ("uniformFixedValue", FaceValue::Written),
+    ("fixedMean", FaceValue::Written),
+    ("fixedProfile", FaceValue::Written),
+    ("timeVaryingMappedFixedValue", FaceValue::Written),
+    ("turbulentInlet", FaceValue::Written),
+    ("totalPressure", FaceValue::Written),
+    ("uniformTotalPressure", FaceValue::Written),
+    ("calculated", FaceValue::Written),
+    ("inletOutlet", FaceValue::Written),
+    ("outletInlet", FaceValue::Written),
+    ("uniformInletOutlet", FaceValue::Written),
+    ("fixedMeanOutletInlet", FaceValue::Written),
+    ("freestream", FaceValue::Written),
+    ("freestreamPressure", FaceValue::Written),
+    ("advective", FaceValue::Written),
+    ("waveTransmissive", FaceValue::Written),
+    ("fixedGradient", FaceValue::Written),
+    ("fixedFluxPressure", FaceValue::Written),
+    ("turbulentIntensityKineticEnergyInlet", FaceValue::Written),
+    (
+        "turbulentMixingLengthDissipationRateInlet",
+        FaceValue::Written,
+    ),
+    ("turbulentMixingLengthFrequencyInlet", FaceValue::Written),
+    ("turbulentKineticEnergy", FaceValue::Written),
+    ("turbulentEpsilon", FaceValue::Written),
+    ("turbulentOmega", FaceValue::Written),
+    ("atmBoundaryLayerInletK", FaceValue::Written),
+    ("atmBoundaryLayerInletEpsilon", FaceValue::Written),
+    ("epsilonWallFunction", FaceValue::Written),
+    ("omegaWallFunction", FaceValue::Written),
+    ("kLowReWallFunction", FaceValue::Written),
+    ("v2WallFunction", FaceValue::Written),
+    ("fWallFunction", FaceValue::Written),
+    ("nutkWallFunction", FaceValue::Written),
+    ("nutkRoughWallFunction", FaceValue::Written),
+    ("nutUWallFunction", FaceValue::Written),
+    ("nutURoughWallFunction", FaceValue::Written),
+    ("nutUSpaldingWallFunction", FaceValue::Written),
+    ("nutLowReWallFunction", FaceValue::Written),
+    ("nutUBlendedWallFunction", FaceValue::Written),
+    ("nutkFilmWallFunction", FaceValue::Written),
+    ("nutkAtmRoughWallFunction", FaceValue::Written),
+    ("mapped", FaceValue::Written),
+    ("mappedValue", FaceValue::Written),
+    ("zeroGradient", FaceValue::Owner),
+    ("kqRWallFunction", FaceValue::Owner),
+    ("slip", FaceValue::Owner),
+    ("symmetry", FaceValue::Owner),
+    ("symmetryPlane", FaceValue::Owner),
+    ("wedge", FaceValue::Owner),
+    ("empty", FaceValue::Empty),
+    ("cyclic", FaceValue::Unsupported(CYCLIC)),
+    ("cyclicAMI", FaceValue::Unsupported(CYCLIC_AMI)),
+    ("cyclicACMI", FaceValue::Unsupported(CYCLIC_ACMI)),
+    ("cyclicSlip", FaceValue::Unsupported(CYCLIC_SLIP)),
+    ("processor", FaceValue::Unsupported(PROCESSOR)),
+];
+
+/// What scalar type `kind` means, `None` when it is not in [`SCALAR_TABLE`].
+pub fn lookup_scalar(kind: &str) -> Option<FaceValue> {
+    SCALAR_TABLE
+        .iter()
+        .find(|(k, _)| *k == kind)
+        .map(|&(_, v)| v)
+}
+
+/// The names of [`SCALAR_TABLE`], comma-separated (for messages).
+pub fn known_scalar_types() -> String {
+    SCALAR_TABLE
+        .iter()
+        .map(|(k, _)| *k)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The face values of `patch` of a scalar field for boundary-condition type `kind`:
+/// `Ok(None)` for the owner's values, `Ok(Some(v))` with one value per face (the
+/// `written` values of the entry's `value`), `Err(message)` for a type not in
+/// [`SCALAR_TABLE`], a refused one, or a `Written` type without its values.
+pub fn scalar_face_values(
+    kind: &str,
+    written: Option<Vec<f64>>,
+) -> Result<Option<Vec<f64>>, String> {
+    let Some(meaning) = lookup_scalar(kind) else {
+        return Err(format!(
+            "unknown boundary condition type '{kind}' for a scalar (scg reads: {})",
+            known_scalar_types()
+        ));
+    };
+    match meaning {
+        FaceValue::Written => match written {
+            Some(v) => Ok(Some(v)),
+            None => Err(missing_value(kind)),
+        },
+        FaceValue::Unsupported(why) => Err(format!("type '{kind}' is not supported: {why}")),
+        // Zero and Tangential are vector kinds, not in the scalar table.
+        FaceValue::Owner | FaceValue::Empty | FaceValue::Zero | FaceValue::Tangential => Ok(None),
+    }
+}
+
+/// The message for a `Written` type without a `value` entry.
+fn missing_value(kind: &str) -> String {
+    format!(
+        "type '{kind}' without a `value` entry (OpenFOAM writes the evaluated face values \
+         there; run the solver or foamFormatConvert to write them)"
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -190,5 +307,21 @@ mod tests {
         assert_eq!(lookup("noSlip"), Some(FaceValue::Zero));
         assert_eq!(lookup("noslip"), None);
         assert!(known_types().contains("symmetryPlane"));
+        for (i, (k, v)) in SCALAR_TABLE.iter().enumerate() {
+            assert!(
+                SCALAR_TABLE[i + 1..].iter().all(|(j, _)| j != k),
+                "{k} listed twice"
+            );
+            assert!(!matches!(v, FaceValue::Zero | FaceValue::Tangential), "{k}");
+            // A type both tables list means the same for both, but for the mirror types.
+            if let Some(u) = lookup(k)
+                && u != FaceValue::Tangential
+            {
+                assert_eq!(u, *v, "{k}");
+            }
+        }
+        assert_eq!(lookup_scalar("kqRWallFunction"), Some(FaceValue::Owner));
+        assert_eq!(lookup_scalar("noSlip"), None);
+        assert!(known_scalar_types().contains("nutkWallFunction"));
     }
 }

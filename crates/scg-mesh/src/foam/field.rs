@@ -37,13 +37,40 @@ pub(crate) fn parse_vector_field(
     bytes: &[u8],
     mesh: &PolyMesh,
 ) -> Result<CellField, MeshError> {
+    let (cells, patches) = parse_field(
+        file,
+        bytes,
+        mesh,
+        "volVectorField",
+        values,
+        |kind, written, patch, cells| boundary::face_values(kind, written, mesh, patch, cells),
+    )?;
+    Ok(CellField { cells, patches })
+}
+
+/// Reads the values of an entry: `(file, entry, tokens, count)` → `count` finite values.
+pub(super) type ReadValues<T> = fn(&Path, &str, &[Token], usize) -> Result<Vec<T>, MeshError>;
+
+/// A parsed field: the cell values and, per patch, the face values (`None`: the owners').
+pub(super) type Parsed<T> = (Vec<T>, Vec<Option<Vec<T>>>);
+
+/// Parse a field file of `class`: the cell values and, per patch of `mesh`, the face values
+/// `face` makes of the patch's `type`, its `value` (if written) and the cell values.
+pub(super) fn parse_field<T>(
+    file: &Path,
+    bytes: &[u8],
+    mesh: &PolyMesh,
+    class: &str,
+    values: ReadValues<T>,
+    face: impl Fn(&str, Option<Vec<T>>, &Patch, &[T]) -> Result<Option<Vec<T>>, String>,
+) -> Result<Parsed<T>, MeshError> {
     let mut p = Parser::new(file, bytes);
     let h = p.header()?;
-    let class = h.word("class").unwrap_or("");
-    if class != "volVectorField" {
+    let found = h.word("class").unwrap_or("");
+    if found != class {
         return Err(p.err(
             "FoamFile/class",
-            format!("class '{class}' where volVectorField was expected"),
+            format!("class '{found}' where {class} was expected"),
         ));
     }
     let body = p.dict_body("", false)?;
@@ -91,11 +118,10 @@ pub(crate) fn parse_vector_field(
                 ));
             }
         };
-        let v = boundary::face_values(kind, written, mesh, patch, &cells)
-            .map_err(|m| bad(&format!("{entry}/type"), m))?;
+        let v = face(kind, written, patch, &cells).map_err(|m| bad(&format!("{entry}/type"), m))?;
         patches.push(v);
     }
-    Ok(CellField { cells, patches })
+    Ok((cells, patches))
 }
 
 /// The boundaryField entry of `patch`, found as OpenFOAM finds it: by the patch's name,

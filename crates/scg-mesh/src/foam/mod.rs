@@ -1,5 +1,6 @@
-//! OpenFOAM cases: the mesh (`constant/polyMesh`), volVectorFields in time directories,
-//! and a writer for both.
+//! OpenFOAM cases: the mesh (`constant/polyMesh`), volVectorFields ([`read_vector_field`])
+//! and volScalarFields ([`read_scalar_field`]: turbulence `k`, `epsilon`, `omega`, `nut`) in
+//! time directories, and writers for all three.
 //!
 //! Reads what OpenFOAM writes: the `FoamFile` header (`format ascii|binary`, `arch
 //! "LSB;label=32;scalar=64"`, also `label=64`, `scalar=32` and `MSB`), `//` and `/* */`
@@ -13,6 +14,7 @@ mod field;
 mod fuzz_tests;
 mod mesh;
 pub(crate) mod parse;
+mod scalar;
 mod write;
 
 use std::io::Read;
@@ -22,7 +24,8 @@ use crate::MeshError;
 
 pub use field::read_vector_field;
 pub use mesh::read_mesh;
-pub use write::{Format, write_case, write_vector_field};
+pub use scalar::read_scalar_field;
+pub use write::{Format, write_case, write_scalar_field, write_vector_field};
 
 /// Which time directory to read a field from.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,11 +1,11 @@
-//! Writing a [`PolyMesh`] and a [`CellField`] as an OpenFOAM case.
+//! Writing a [`PolyMesh`], a [`CellField`] and a [`ScalarField`] as an OpenFOAM case.
 
 use std::io::Write;
 use std::path::Path;
 
 use glam::DVec3;
 
-use crate::{CellField, MeshError, PolyMesh};
+use crate::{CellField, MeshError, PolyMesh, ScalarField};
 
 /// How lists are written.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -150,59 +150,145 @@ pub fn write_vector_field(
     field: &CellField,
     format: Format,
 ) -> Result<(), MeshError> {
-    let tdir = dir.as_ref().join(time);
-    let file = tdir.join(name);
-    if field.cells.len() != mesh.n_cells {
-        return Err(MeshError::invalid(
-            &file,
-            "internalField",
-            format!("{} values for {} cells", field.cells.len(), mesh.n_cells),
-        ));
-    }
-    if field.patches.len() != mesh.patches.len() {
-        return Err(MeshError::invalid(
-            &file,
-            "boundaryField",
-            format!(
-                "{} patch entries for {} patches",
-                field.patches.len(),
-                mesh.patches.len()
-            ),
-        ));
-    }
-    std::fs::create_dir_all(&tdir).map_err(|source| MeshError::Io {
-        file: tdir.clone(),
-        source,
-    })?;
     let w = Writer { format };
-    let mut out = w.header("volVectorField", time, name, None);
-    out.extend(b"\ndimensions      [0 1 -1 0 0 0 0];\n\ninternalField   nonuniform List<vector> ");
-    w.vectors(&mut out, &field.cells);
-    out.extend(b";\n\nboundaryField\n{\n");
-    for (p, values) in mesh.patches.iter().zip(&field.patches) {
-        out.extend(format!("    {}\n    {{\n", p.name).bytes());
-        match values {
-            Some(v) => {
-                if v.len() != p.size {
-                    return Err(MeshError::invalid(
-                        &file,
-                        format!("boundaryField/{}/value", p.name),
-                        format!("{} values for {} faces", v.len(), p.size),
-                    ));
-                }
-                out.extend(
-                    b"        type            calculated;\n        value           nonuniform List<vector> ",
-                );
-                w.vectors(&mut out, v);
-                out.extend(b";\n");
-            }
-            None if p.kind == "empty" => out.extend(b"        type            empty;\n"),
-            None => out.extend(b"        type            zeroGradient;\n"),
+    let file = FieldFile {
+        dir: dir.as_ref(),
+        time,
+        name,
+        class: "volVectorField",
+        dimensions: "[0 1 -1 0 0 0 0]",
+        list: "List<vector>",
+    };
+    file.write(
+        mesh,
+        &field.cells,
+        &field.patches,
+        |out, v| w.vectors(out, v),
+        &w,
+    )
+}
+
+/// Write `field` as the volScalarField `dir/<time>/<name>` on `mesh`, as
+/// [`write_vector_field`] writes a vector: the cells as `nonuniform List<scalar>`, patches
+/// with values `type calculated; value nonuniform List<scalar> ...`, the others
+/// `type zeroGradient` (`type empty` on empty patches). The `dimensions` are those of
+/// `k`, `epsilon`, `omega`, `nut`, `nuTilda` or kinematic `p` when `name` is one of them,
+/// else dimensionless.
+pub fn write_scalar_field(
+    dir: impl AsRef<Path>,
+    time: &str,
+    name: &str,
+    mesh: &PolyMesh,
+    field: &ScalarField,
+    format: Format,
+) -> Result<(), MeshError> {
+    let w = Writer { format };
+    let file = FieldFile {
+        dir: dir.as_ref(),
+        time,
+        name,
+        class: "volScalarField",
+        dimensions: match name {
+            "k" | "p" => "[0 2 -2 0 0 0 0]",
+            "epsilon" => "[0 2 -3 0 0 0 0]",
+            "omega" => "[0 0 -1 0 0 0 0]",
+            "nut" | "nuTilda" => "[0 2 -1 0 0 0 0]",
+            _ => "[0 0 0 0 0 0 0]",
+        },
+        list: "List<scalar>",
+    };
+    file.write(
+        mesh,
+        &field.cells,
+        &field.patches,
+        |out, v| w.scalars(out, v),
+        &w,
+    )
+}
+
+/// A field file to write.
+struct FieldFile<'a> {
+    dir: &'a Path,
+    time: &'a str,
+    name: &'a str,
+    class: &'a str,
+    dimensions: &'a str,
+    /// The list type (`List<vector>`).
+    list: &'a str,
+}
+
+impl FieldFile<'_> {
+    fn write<T>(
+        &self,
+        mesh: &PolyMesh,
+        cells: &[T],
+        patches: &[Option<Vec<T>>],
+        values: impl Fn(&mut Vec<u8>, &[T]),
+        w: &Writer,
+    ) -> Result<(), MeshError> {
+        let tdir = self.dir.join(self.time);
+        let file = tdir.join(self.name);
+        if cells.len() != mesh.n_cells {
+            return Err(MeshError::invalid(
+                &file,
+                "internalField",
+                format!("{} values for {} cells", cells.len(), mesh.n_cells),
+            ));
         }
-        out.extend(b"    }\n");
+        if patches.len() != mesh.patches.len() {
+            return Err(MeshError::invalid(
+                &file,
+                "boundaryField",
+                format!(
+                    "{} patch entries for {} patches",
+                    patches.len(),
+                    mesh.patches.len()
+                ),
+            ));
+        }
+        std::fs::create_dir_all(&tdir).map_err(|source| MeshError::Io {
+            file: tdir.clone(),
+            source,
+        })?;
+        let mut out = w.header(self.class, self.time, self.name, None);
+        out.extend(
+            format!(
+                "\ndimensions      {};\n\ninternalField   nonuniform {} ",
+                self.dimensions, self.list
+            )
+            .bytes(),
+        );
+        values(&mut out, cells);
+        out.extend(b";\n\nboundaryField\n{\n");
+        for (p, vals) in mesh.patches.iter().zip(patches) {
+            out.extend(format!("    {}\n    {{\n", p.name).bytes());
+            match vals {
+                Some(v) => {
+                    if v.len() != p.size {
+                        return Err(MeshError::invalid(
+                            &file,
+                            format!("boundaryField/{}/value", p.name),
+                            format!("{} values for {} faces", v.len(), p.size),
+                        ));
+                    }
+                    out.extend(
+                        format!(
+                            "        type            calculated;\n        value           nonuniform {} ",
+                            self.list
+                        )
+                        .bytes(),
+                    );
+                    values(&mut out, v);
+                    out.extend(b";\n");
+                }
+                None if p.kind == "empty" => out.extend(b"        type            empty;\n"),
+                None => out.extend(b"        type            zeroGradient;\n"),
+            }
+            out.extend(b"    }\n");
+        }
+        out.extend(b"}\n");
+        put(&file, out)
     }
-    out.extend(b"}\n");
-    put(&file, out)
 }
 
 fn put(file: &Path, bytes: Vec<u8>) -> Result<(), MeshError> {
@@ -249,6 +335,24 @@ impl Writer {
                     for c in x.to_array() {
                         out.extend(c.to_le_bytes());
                     }
+                }
+            }
+        }
+        out.extend(b")\n");
+    }
+
+    fn scalars(&self, out: &mut Vec<u8>, v: &[f64]) {
+        out.extend(format!("\n{}\n(", v.len()).bytes());
+        match self.format {
+            Format::Ascii => {
+                out.push(b'\n');
+                for x in v {
+                    out.extend(format!("{x}\n").bytes());
+                }
+            }
+            Format::Binary => {
+                for x in v {
+                    out.extend(x.to_le_bytes());
                 }
             }
         }

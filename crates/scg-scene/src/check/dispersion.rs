@@ -43,7 +43,7 @@ pub(super) fn findings(scene: &Scene) -> Vec<Finding> {
     let (e0, em, e1) = range(&eps);
     let (t0, tm, t1) = range(&time);
     let dt = scene.dt;
-    let short = time.iter().filter(|t| !(**t > dt)).count();
+    let short = time.iter().filter(|t| t.is_nan() || **t <= dt).count();
     let share = short as f64 / time.len().max(1) as f64;
     let mut out = vec![Finding {
         level: Level::Note,
