@@ -19,6 +19,9 @@ foam_env() {
             openfoam openfoam-examples
     fi
     # The Debian bashrc refers to unset variables and to helper scripts it does not ship.
+    # (sourced with no arguments: the bashrc reads its arguments as settings or files to
+    # source, and would source a script of the current folder named like our first one)
+    set --
     # shellcheck disable=SC1090
     source "$foam_etc" >/dev/null 2>&1 || true
     command -v "$cmd" >/dev/null || { echo "$script: $cmd not found after sourcing $foam_etc" >&2; exit 1; }

@@ -213,7 +213,7 @@ ExecutionTime = 0.30 s  ClockTime = 0 s
 
     def test_parallel_speed_and_parcels_per_rank(self):
         """Particle-steps over steps 2..N per wall second of the decomposed run, the parcels
-        each processor held at the end, and an error when one held none."""
+        each processor held at the end, and an error when one held none of many."""
         log = "".join(f"    Current number of parcels = {n}\nExecutionTime = {0.1 * k:.2f} s\n"
                       for k, n in enumerate([0, 4, 6, 6]))
         d = tempfile.mkdtemp()
@@ -239,6 +239,9 @@ ExecutionTime = 0.30 s  ClockTime = 0 s
             self.assertEqual((r["ranks"], r["parcels_per_rank_at_end"]), (2, [[4, 2]]))
             self.assertEqual(json.load(open(out))["decomposition"], "simple (2 1 1)")
             held(1, 0)
+            # 4 parcels left in all: a nearly empty domain says nothing of the balance
+            self.assertEqual(vs.parallel(out, [d], "simple (2 1 1)")["parcels_per_rank_at_end"], [[4, 0]])
+            held(0, 40)
             with self.assertRaises(SystemExit) as e:
                 vs.parallel(out, [d], "simple (2 1 1)")
             self.assertIn("held no parcel", str(e.exception))

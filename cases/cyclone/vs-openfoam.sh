@@ -5,7 +5,7 @@
 # one table of grade efficiency, counts and speed.
 #
 #   bash cases/cyclone/vs-openfoam.sh [--scene cases/cyclone.toml] [--quick] [--out DIR]
-#                                     [--scg PATH] [--openfoam-only]
+#                                     [--scg PATH] [--openfoam-only] [--split "A B C"]
 #
 #   --scene FILE  the scg scene (default cases/cyclone.toml): [flow] kind = "openfoam" with
 #                 a fixed dt, one [[feeders]] with `patch` per [[groups]] size class,
@@ -23,6 +23,7 @@
 #                 and their logs)
 #   --feed-scale F  multiply every feeder's rate by F in both codes (scg's feed_scale;
 #                 more particles, a smaller sampling error: the table prints it)
+#   --split "A B C"  the 2-rank decomposition (default "2 1 1"; the duct: "1 2 1")
 #   --dt DT       the time step of both codes instead of the scene's (scg: --set dt=DT)
 #   --scg-set KEY=VALUE  passed to both scg runs as --set (repeatable), e.g.
 #                 flow.interpolation=cell_point_idw (OpenFOAM's cellPoint point values);
@@ -57,6 +58,7 @@ feed_scale=""
 scg_set=()
 SCG=""
 foam_only=0
+split="2 1 1"
 NICE=${NICE:-}
 while [ $# -gt 0 ]; do
     case "$1" in
@@ -66,6 +68,7 @@ while [ $# -gt 0 ]; do
         --scg) SCG=$2; shift ;;
         --openfoam-only) foam_only=1 ;;
         --feed-scale) feed_scale=$2; shift ;;
+        --split) split=$2; shift ;;
         --dt) case_args+=(--dt "$2"); set_args+=(--set "dt=$2"); dt=$2; shift ;;
         --scg-set) scg_set+=(--set "$2"); shift ;;
         -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$self"; exit 0 ;;
@@ -130,8 +133,8 @@ echo "wrote $out/grade.json"
 # -np 2 ... -parallel). Debian's OpenFOAM has no scotch; `simple (2 1 1)` cuts the cyclone
 # by a vertical plane through its axis, so that the swirl shares the parcels between the
 # two halves (of the simple splits it ran fastest here: (2 1 1) 19.7 s, (1 2 1) 22.5 s,
-# (1 1 2) 26.0 s wall on the full scene). The run fails when a processor holds no parcel.
-split="2 1 1"
+# (1 1 2) 26.0 s wall on the full scene; --split changes it). The run fails when a
+# processor holds no parcel at the end while the others hold at least 10 each.
 decomposition="simple ($split)"
 # copy_case SRC DST: a fresh copy of case SRC's inputs (no results) in DST.
 copy_case() {

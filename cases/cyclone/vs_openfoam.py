@@ -940,7 +940,8 @@ def parallel(dest, dirs, decomposition):
     """The speed of the decomposed runs in `dirs` (mpirun -np N ... -parallel): their
     particle-steps and wall time over steps 2..N (as `grade`), and the parcels each
     processor held at the end (from processor*/<last time>/lagrangian). Exits with an
-    error when a processor held none: one core would have idled."""
+    error when a processor held none of at least 10 per processor: one core would have
+    idled."""
     ps = wall = 0.0
     ranks, per_rank = 0, []
     for d in dirs:
@@ -953,7 +954,8 @@ def parallel(dest, dirs, decomposition):
             sys.exit(f"{d}: no processor folders (not a decomposed case)")
         ranks = max(ranks, len(procs))
         held = [len(diameters_at_end(os.path.join(d, pr))) for pr in procs]
-        if min(held) == 0:
+        # (a domain nearly empty at the end says nothing of the balance during the run)
+        if min(held) == 0 and sum(held) >= 10 * len(held):
             sys.exit(f"{d}: a processor held no parcel at the end ({held}): one core idled")
         per_rank.append(held)
     out = {
