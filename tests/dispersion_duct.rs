@@ -163,3 +163,86 @@ fn dispersion_agrees_with_openfoam_and_the_eddy_reference() {
     // Inertia and the crossing-trajectory lifetime: the 200 µm spread least.
     assert!(ours[3].3 * 3 < ours[0].3 * 2, "{ours:?}");
 }
+
+/// Recordings carry each particle's |u′| (MCAP point field `fluctuation`; the Rerun
+/// component is checked in crates/scg-record/tests/rrd.rs) when the scene has dispersion,
+/// and `scg replay --verify` checks it bit for bit; without dispersion the points are as
+/// before (72 bytes, no such field). Its
+/// mean square over the tracers in an eddy is the model's ⟨|u′|²⟩ = 2k/3.
+#[test]
+fn recordings_carry_the_fluctuation() {
+    let dir = tempfile::tempdir().unwrap();
+    let scg = |args: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_scg"))
+            .args(args)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout).to_string();
+        assert!(
+            out.status.success(),
+            "{args:?}: {text}{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        text
+    };
+    let out = dir.path().to_str().unwrap();
+    scg(&[
+        "run",
+        "cases/duct.toml",
+        "--out",
+        out,
+        "--set",
+        "duration=0.4",
+    ]);
+    let mcap = dir.path().join("duct.mcap");
+    let rec = scg::record::read_mcap(&mcap).unwrap();
+    let last = rec.frames.last().unwrap();
+    assert_eq!(last.fluctuation.len(), last.len());
+    assert!(last.len() > 1000, "{}", last.len());
+    // The tracers (group 0): an inertial particle's eddy ends sooner the larger its slip,
+    // hence the larger its |u′|, so a snapshot of them under-samples the large ones.
+    let tracers = last.group.iter().filter(|g| **g == 0).count();
+    let on: Vec<f64> = (0..last.len())
+        .filter(|&i| last.group[i] == 0 && last.fluctuation[i] > 0.0)
+        .map(|i| last.fluctuation[i])
+        .collect();
+    // fed 0..0.4 s, an eddy after 0.1 s: about three quarters carry one
+    assert!(on.len() * 2 > tracers, "{} of {tracers}", on.len());
+    let mean_sq = on.iter().map(|u| u * u).sum::<f64>() / on.len() as f64;
+    let k = 0.01;
+    let rel = mean_sq / (2.0 * k / 3.0) - 1.0;
+    // ±3 standard errors (|N|² has variance 2)
+    assert!(
+        rel.abs() < 3.0 * (2.0 / on.len() as f64).sqrt(),
+        "⟨|u′|²⟩ {mean_sq}"
+    );
+    assert!(rec.frames[0].fluctuation.iter().all(|u| *u == 0.0));
+    let v = scg(&["replay", mcap.to_str().unwrap(), "--verify"]);
+    assert!(v.contains("bit-identical"), "{v}");
+    let rrd = std::fs::read(dir.path().join("duct.rrd")).unwrap();
+    assert!(
+        rrd.windows(11).any(|w| w == b"fluctuation"),
+        "no fluctuation in the .rrd"
+    );
+
+    // Without dispersion: no fluctuation anywhere.
+    let plain = dir.path().join("plain.toml");
+    let text = std::fs::read_to_string("cases/duct.toml").unwrap();
+    let at = text.find("[dispersion]").unwrap();
+    let end = at + text[at..].find("[[groups]]").unwrap();
+    let text = format!("{}{}", &text[..at], &text[end..]).replace("\"duct/case\"", "\"CASE\"");
+    let case = concat!(env!("CARGO_MANIFEST_DIR"), "/cases/duct/case");
+    std::fs::write(&plain, text.replace("CASE", case)).unwrap();
+    let out2 = dir.path().join("plain");
+    scg(&[
+        "run",
+        plain.to_str().unwrap(),
+        "--out",
+        out2.to_str().unwrap(),
+        "--set",
+        "duration=0.2",
+    ]);
+    let rec = scg::record::read_mcap(&out2.join("duct.mcap")).unwrap();
+    assert!(rec.frames.iter().all(|f| f.fluctuation.is_empty()));
+}

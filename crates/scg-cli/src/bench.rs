@@ -28,6 +28,17 @@ pub enum BenchKind {
     Neighbours,
 }
 
+/// The dispersion model a benchmark runs with (`--dispersion`).
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BenchDispersion {
+    /// No dispersion: the mean flow alone.
+    None,
+    /// OpenFOAM's StochasticDispersionRAS (`model = "stochastic_ras"`).
+    StochasticRas,
+    /// The drift-corrected normalised Langevin walk (`model = "langevin"`).
+    Langevin,
+}
+
 /// Arguments of `scg bench`.
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -47,6 +58,49 @@ pub struct BenchArgs {
     /// to run it over MPI ranks with `scg run` (bench/mpi.sh).
     #[arg(long, value_name = "FILE")]
     pub scene_out: Option<std::path::PathBuf>,
+    /// `drag` and `mesh`: with turbulent dispersion (docs/dispersion.md), eddies of about
+    /// 100 steps; `mesh` reads k and ε per cell (k = 10^-4 m²/s² varying by ±50 % across
+    /// the box, ε = 0.1 m²/s³) as a CFD case's fields, `drag` a uniform k and ε. The cost
+    /// of dispersion is the difference from the same run without it.
+    #[arg(long, value_enum, default_value_t = BenchDispersion::None)]
+    pub dispersion: BenchDispersion,
+}
+
+/// Turns on `dispersion` in a benchmark's `scene`: per cell on a mesh flow (k varying by
+/// ±50 % along x, ε uniform, ∇σ by the cells' centres), uniform otherwise; k/ε = 1 ms,
+/// 100 steps of the benchmarks' dt = 10 µs.
+pub fn with_dispersion(scene: &mut scg_scene::Scene, dispersion: BenchDispersion) {
+    use scg_core::physics::dispersion::{CellTurbulence, Model, Turbulence, sigma_of};
+    let model = match dispersion {
+        BenchDispersion::None => return,
+        BenchDispersion::StochasticRas => Model::StochasticRas,
+        BenchDispersion::Langevin => Model::Langevin { c0: 2.1 },
+    };
+    let (k0, epsilon) = (1.0e-4, 0.1);
+    let turbulence = match &scene.mesh_flow {
+        Some(m) => {
+            let (w, _) = MESH_BENCH_BOX;
+            let centres = &m.flow.geometry().cell_centres;
+            let k: Vec<f64> = centres.iter().map(|c| k0 * (1.0 + 0.5 * c.x / w)).collect();
+            // σ = √(2k/3) with dk/dx = 0.5 k0 / w: ∂σ/∂x = (dk/dx)/(3σ)
+            let grad_sigma = k
+                .iter()
+                .map(|&k| glam::DVec3::X * (0.5 * k0 / w) / (3.0 * sigma_of(k)))
+                .collect();
+            Turbulence::Cells(std::sync::Arc::new(CellTurbulence {
+                epsilon: vec![epsilon; k.len()],
+                k,
+                grad_sigma,
+            }))
+        }
+        None => Turbulence::Uniform { k: k0, epsilon },
+    };
+    scene.dispersion = Some(scg_core::stages::carrier::Dispersion {
+        model,
+        turbulence,
+        seed: scene.seed,
+        mask: glam::DVec3::ONE,
+    });
 }
 
 /// The mesh benchmark's box: half-width in x and y and height, m (the vortex's axis is z
@@ -349,13 +403,21 @@ pub fn bench(a: BenchArgs) -> i32 {
         }
         _ => scg_scene::parse(&text, "<bench>", "bench", &[]).map_err(|e| e.to_string()),
     };
-    let scene = match scene {
+    let mut scene = match scene {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
             return EXIT_BAD_INPUT;
         }
     };
+    if a.dispersion != BenchDispersion::None {
+        if !matches!(a.kind, BenchKind::Drag | BenchKind::Mesh) {
+            eprintln!("error: --dispersion: only the drag and mesh benchmarks take it");
+            return EXIT_BAD_INPUT;
+        }
+        with_dispersion(&mut scene, a.dispersion);
+        println!("dispersion: {:?}", a.dispersion);
+    }
     let mut sim = scene.build(false);
     for _ in 0..5 {
         if let Err(e) = sim.step() {

@@ -208,9 +208,17 @@ fn first_difference(a: &Frame, b: &Frame) -> Option<String> {
     if a.len() != b.len() {
         return Some(format!("particle count {} vs {}", a.len(), b.len()));
     }
+    if a.fluctuation.is_empty() != b.fluctuation.is_empty() {
+        return Some(format!(
+            "fluctuation recorded {} vs {}",
+            !a.fluctuation.is_empty(),
+            !b.fluctuation.is_empty()
+        ));
+    }
+    let fluct = |f: &Frame, i: usize| f.fluctuation.get(i).map(|u| u.to_bits());
     for i in 0..a.len() {
         let bits = |v: [f64; 3]| v.map(f64::to_bits);
-        let fields: [(&str, bool); 6] = [
+        let fields: [(&str, bool); 7] = [
             ("id", a.id[i] == b.id[i]),
             ("group", a.group[i] == b.group[i]),
             ("position", bits(a.position[i]) == bits(b.position[i])),
@@ -220,6 +228,7 @@ fn first_difference(a: &Frame, b: &Frame) -> Option<String> {
                 a.diameter[i].to_bits() == b.diameter[i].to_bits(),
             ),
             ("density", a.density[i].to_bits() == b.density[i].to_bits()),
+            ("fluctuation", fluct(a, i) == fluct(b, i)),
         ];
         if let Some((f, _)) = fields.iter().find(|(_, ok)| !ok) {
             return Some(format!("particle {} field {f}", a.id[i]));

@@ -122,7 +122,8 @@ pub struct CellHint(pub u32);
 /// `at` takes `u` instead of locating the centre again, which gives the same value bit
 /// for bit (the same cell records); `at` is NaN when unknown (a new, restored or migrated
 /// particle, a landing off the table), and then the step locates it. Kept only where the
-/// step reads it (the explicit scheme, Reynolds-dependent drag); unknown otherwise.
+/// step reads it (the explicit scheme, Reynolds-dependent drag) or the dispersion does
+/// (`stochastic_ras`'s slip); unknown otherwise.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
 pub struct FlowAtCentre {
     /// The centre the value was found at, m (NaN: unknown).

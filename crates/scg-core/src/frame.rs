@@ -25,6 +25,9 @@ pub struct Frame {
     pub diameter: Vec<f64>,
     /// Density as simulated (after coarse graining), kg/m³.
     pub density: Vec<f64>,
+    /// Magnitude |u′| of the turbulent fluctuation the dispersion model adds to the
+    /// carrier velocity each particle sees, m/s; empty when the run has no dispersion.
+    pub fluctuation: Vec<f64>,
     /// Scalars measured at this frame, e.g. `("count/small", 12.0)`; see [`crate::stats`].
     pub stats: Vec<(String, f64)>,
 }
@@ -41,6 +44,7 @@ impl Frame {
             velocity: Vec::with_capacity(n),
             diameter: Vec::with_capacity(n),
             density: Vec::with_capacity(n),
+            fluctuation: Vec::new(),
             stats: Vec::new(),
         }
     }

@@ -39,6 +39,9 @@ pub const COMPONENT_PARTICLE_ID: &str = "particle_id";
 /// Extra component logged with each group's `Points3D`: the particle speeds |v| (m/s,
 /// Float32, one per point, in the same order as the positions).
 pub const COMPONENT_SPEED: &str = "speed";
+/// Extra component logged with each group's `Points3D` when the run has dispersion: the
+/// magnitude |u′| of each particle's turbulent fluctuation (m/s, Float32, one per point).
+pub const COMPONENT_FLUCTUATION: &str = "fluctuation";
 
 // ---------------------------------------------------------------------------------------------
 // MCAP
@@ -87,6 +90,15 @@ pub const POINT_FIELDS: [(&str, u32, FieldType); 10] = [
     ("id", 64, FieldType::Uint32),
     ("group", 68, FieldType::Uint32),
 ];
+
+/// The point field appended when the run has dispersion: |u′|, m/s (the magnitude of the
+/// turbulent fluctuation the particle sees), at the end of a point of
+/// [`POINT_STRIDE_FLUCTUATION`] bytes. Readers find fields by name, so a recording without
+/// it reads as before.
+pub const POINT_FIELD_FLUCTUATION: (&str, u32, FieldType) =
+    ("fluctuation", POINT_STRIDE, FieldType::Float64);
+/// Bytes per point when the points carry [`POINT_FIELD_FLUCTUATION`].
+pub const POINT_STRIDE_FLUCTUATION: u32 = POINT_STRIDE + 8;
 
 /// Schema name of the `/stats` channel.
 pub const STATS_SCHEMA_NAME: &str = "scg.Stats";

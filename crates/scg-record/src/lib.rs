@@ -125,6 +125,10 @@ pub(crate) fn check_frame(frame: &Frame, n_groups: usize) -> Result<(), RecordEr
             return Err(bad(format!("{n} ids but {len} entries in `{name}`")));
         }
     }
+    let m = frame.fluctuation.len();
+    if m != 0 && m != n {
+        return Err(bad(format!("{n} ids but {m} entries in `fluctuation`")));
+    }
     if let Some(g) = frame.group.iter().find(|&&g| g as usize >= n_groups) {
         return Err(bad(format!(
             "group index {g} out of range ({n_groups} groups)"

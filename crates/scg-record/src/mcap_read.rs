@@ -15,8 +15,8 @@ use scg_core::frame::{Frame, GroupMeta, Outline, PatchSurface, RunMeta};
 use crate::layout::{
     FORMAT_VERSION, FieldType, GroupJson, META_CASE, META_DT, META_FORMAT, META_GROUPS,
     META_OUTLINES, META_RECORD_EVERY, META_SCENE_DIR, META_SCG_VERSION, META_SEED, META_WARNINGS,
-    METADATA_NAME, OutlineJson, POINT_FIELDS, SCENE_ATTACHMENT, StatsIn, TOPIC_PARTICLES,
-    TOPIC_PATCHES, TOPIC_STATS,
+    METADATA_NAME, OutlineJson, POINT_FIELD_FLUCTUATION, POINT_FIELDS, SCENE_ATTACHMENT, StatsIn,
+    TOPIC_PARTICLES, TOPIC_PATCHES, TOPIC_STATS,
 };
 use crate::{RecordError, Recording};
 
@@ -339,6 +339,20 @@ fn decode_particles(data: &[u8]) -> Result<Frame, String> {
         }
         *slot = offset;
     }
+    // The optional fluctuation (runs with dispersion), by name as the others.
+    let (fname, _, _) = POINT_FIELD_FLUCTUATION;
+    let fluct = match cloud.fields.iter().find(|f| f.name == fname) {
+        None => None,
+        Some(f) if f.r#type != NumericType::Float64 as i32 => {
+            return Err(format!("point field `{fname}` has type {}", f.r#type));
+        }
+        Some(f) if f.offset as usize + 8 > stride => {
+            return Err(format!(
+                "point field `{fname}` overruns the stride {stride}"
+            ));
+        }
+        Some(f) => Some(f.offset as usize),
+    };
     let bytes = cloud.data.as_ref();
     if stride == 0 || bytes.len() % stride != 0 {
         return Err(format!(
@@ -367,6 +381,9 @@ fn decode_particles(data: &[u8]) -> Result<Frame, String> {
         frame.density.push(f(rho));
         frame.id.push(u(id));
         frame.group.push(u(group));
+        if let Some(at) = fluct {
+            frame.fluctuation.push(f(at));
+        }
     }
     Ok(frame)
 }

@@ -22,9 +22,9 @@ use scg_core::frame::{Frame, FrameSink, RunMeta};
 use crate::layout::{
     FORMAT_VERSION, FRAME_ID, FieldType, GroupJson, META_CASE, META_DT, META_FORMAT, META_GROUPS,
     META_OUTLINES, META_RECORD_EVERY, META_SCENE_DIR, META_SCG_VERSION, META_SEED, META_WARNINGS,
-    METADATA_NAME, OrderedValues, OutlineJson, POINT_FIELDS, POINT_STRIDE, SCENE_ATTACHMENT,
-    SCENE_MEDIA_TYPE, STATS_JSON_SCHEMA, STATS_SCHEMA_NAME, StatsOut, TOPIC_PARTICLES,
-    TOPIC_PATCHES, TOPIC_STATS, patch_color,
+    METADATA_NAME, OrderedValues, OutlineJson, POINT_FIELD_FLUCTUATION, POINT_FIELDS, POINT_STRIDE,
+    POINT_STRIDE_FLUCTUATION, SCENE_ATTACHMENT, SCENE_MEDIA_TYPE, STATS_JSON_SCHEMA,
+    STATS_SCHEMA_NAME, StatsOut, TOPIC_PARTICLES, TOPIC_PATCHES, TOPIC_STATS, patch_color,
 };
 use crate::{RecordError, check_frame, commit_partial, partial_path};
 
@@ -91,6 +91,8 @@ pub struct McapSink {
     pending_bytes: usize,
     last_close: Instant,
     fields: Vec<PackedElementField>,
+    /// `fields` and the fluctuation's (frames of a run with dispersion).
+    fields_fluctuation: Vec<PackedElementField>,
     message: Vec<u8>,
 }
 
@@ -137,18 +139,19 @@ fn meta_entries(meta: &RunMeta) -> Result<BTreeMap<String, String>, RecordError>
     ]))
 }
 
+fn field((name, offset, ty): (&str, u32, FieldType)) -> PackedElementField {
+    PackedElementField {
+        name: name.to_owned(),
+        offset,
+        r#type: match ty {
+            FieldType::Float64 => NumericType::Float64,
+            FieldType::Uint32 => NumericType::Uint32,
+        } as i32,
+    }
+}
+
 fn point_fields() -> Vec<PackedElementField> {
-    POINT_FIELDS
-        .iter()
-        .map(|&(name, offset, ty)| PackedElementField {
-            name: name.to_owned(),
-            offset,
-            r#type: match ty {
-                FieldType::Float64 => NumericType::Float64,
-                FieldType::Uint32 => NumericType::Uint32,
-            } as i32,
-        })
-        .collect()
+    POINT_FIELDS.iter().map(|&f| field(f)).collect()
 }
 
 /// The identity pose.
@@ -332,6 +335,11 @@ impl McapSink {
             pending_bytes: 0,
             last_close: Instant::now(),
             fields: point_fields(),
+            fields_fluctuation: {
+                let mut f = point_fields();
+                f.push(field(POINT_FIELD_FLUCTUATION));
+                f
+            },
             message: Vec::new(),
         })
     }
@@ -370,7 +378,11 @@ impl McapSink {
             }
             data.extend_from_slice(&frame.id[i].to_le_bytes());
             data.extend_from_slice(&frame.group[i].to_le_bytes());
+            if let Some(u) = frame.fluctuation.get(i) {
+                data.extend_from_slice(&u.to_le_bytes());
+            }
         }
+        let turbulent = !frame.fluctuation.is_empty();
         let timestamp = u32::try_from(log_time / 1_000_000_000)
             .ok()
             .and_then(|sec| Timestamp::new_checked(sec, (log_time % 1_000_000_000) as u32))
@@ -394,8 +406,16 @@ impl McapSink {
                     w: 1.0,
                 }),
             }),
-            point_stride: POINT_STRIDE,
-            fields: self.fields.clone(),
+            point_stride: if turbulent {
+                POINT_STRIDE_FLUCTUATION
+            } else {
+                POINT_STRIDE
+            },
+            fields: if turbulent {
+                self.fields_fluctuation.clone()
+            } else {
+                self.fields.clone()
+            },
             data: Bytes::from(data),
         };
         self.message.clear();

@@ -28,9 +28,9 @@ use rerun::{
 use scg_core::frame::{Frame, FrameSink, RunMeta};
 
 use crate::layout::{
-    COMPONENT_PARTICLE_ID, COMPONENT_SPEED, ENTITY_GEOMETRY, ENTITY_PARTICLES, ENTITY_PATCHES,
-    ENTITY_SCENE, ENTITY_STATS, ENTITY_WARNINGS, RRD_APPLICATION_ID, RRD_PROPERTY,
-    TIMELINE_SIM_TIME, TIMELINE_STEP, patch_color,
+    COMPONENT_FLUCTUATION, COMPONENT_PARTICLE_ID, COMPONENT_SPEED, ENTITY_GEOMETRY,
+    ENTITY_PARTICLES, ENTITY_PATCHES, ENTITY_SCENE, ENTITY_STATS, ENTITY_WARNINGS,
+    RRD_APPLICATION_ID, RRD_PROPERTY, TIMELINE_SIM_TIME, TIMELINE_STEP, patch_color,
 };
 use crate::{RecordError, Recording, check_frame, commit_partial, partial_path};
 
@@ -360,6 +360,7 @@ impl RrdSink {
         let mut radii: Vec<Vec<f32>> = vec![Vec::new(); self.groups.len()];
         let mut ids: Vec<Vec<u32>> = vec![Vec::new(); self.groups.len()];
         let mut speeds: Vec<Vec<f32>> = vec![Vec::new(); self.groups.len()];
+        let mut fluct: Vec<Vec<f32>> = vec![Vec::new(); self.groups.len()];
         for i in 0..frame.len() {
             let g = frame.group[i] as usize;
             let p = frame.position[i];
@@ -368,21 +369,32 @@ impl RrdSink {
             radii[g].push((0.5 * frame.diameter[i]) as f32);
             ids[g].push(frame.id[i]);
             speeds[g].push((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt() as f32);
+            if let Some(u) = frame.fluctuation.get(i) {
+                fluct[g].push(*u as f32);
+            }
         }
-        for ((((group, positions), radii), ids), speeds) in self
+        let turbulent = !frame.fluctuation.is_empty();
+        for (((((group, positions), radii), ids), speeds), fluct) in self
             .groups
             .iter()
             .zip(positions)
             .zip(radii)
             .zip(ids)
             .zip(speeds)
+            .zip(fluct)
         {
             let points = Points3D::new(positions)
                 .with_radii(radii)
                 .with_colors([group.color]);
-            let extra = AnyValues::default()
+            let mut extra = AnyValues::default()
                 .with_component_from_data(COMPONENT_PARTICLE_ID, one(UInt32Array::from(ids)))
                 .with_component_from_data(COMPONENT_SPEED, one(Float32Array::from(speeds)));
+            if turbulent {
+                extra = extra.with_component_from_data(
+                    COMPONENT_FLUCTUATION,
+                    one(Float32Array::from(fluct)),
+                );
+            }
             rec.log(group.path.clone(), &[&points as &dyn AsComponents, &extra])
                 .map_err(rerun_err)?;
         }

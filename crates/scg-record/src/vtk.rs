@@ -1,6 +1,6 @@
 //! VTK files for ParaView (and any VTK reader): one XML UnstructuredGrid (`.vtu`) per
 //! frame, the particles as vertex cells with their velocity, diameter, density, id and
-//! group as point data; a ParaView collection (`<case>.pvd`) that puts the frames on the
+//! group (and, with dispersion, the fluctuation |u′|) as point data; a ParaView collection (`<case>.pvd`) that puts the frames on the
 //! simulation time; the scene geometry as line cells in `<case>_geometry.vtu`; and a mesh
 //! flow's boundary patches as triangles in `<case>_patches.vtu` (cell data `patch`,
 //! `role`).
@@ -193,6 +193,9 @@ pub fn frame_vtu(frame: &Frame) -> String {
         data_array(s, "Float64", "density", 1, &frame.density);
         data_array(s, "UInt32", "id", 1, &frame.id);
         data_array(s, "UInt32", "group", 1, &frame.group);
+        if !frame.fluctuation.is_empty() {
+            data_array(s, "Float64", "fluctuation", 1, &frame.fluctuation);
+        }
     })
 }
 

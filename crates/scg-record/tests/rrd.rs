@@ -12,7 +12,9 @@ use rerun::external::re_log_encoding::DecoderApp;
 use rerun::log::{Chunk, LogMsg};
 use rerun::{EntityPath, EntityPathPart, Points3D, StoreKind, TimelineName};
 use scg_core::frame::{Frame, FrameSink};
-use scg_record::layout::{COMPONENT_PARTICLE_ID, TIMELINE_SIM_TIME, TIMELINE_STEP};
+use scg_record::layout::{
+    COMPONENT_FLUCTUATION, COMPONENT_PARTICLE_ID, TIMELINE_SIM_TIME, TIMELINE_STEP,
+};
 use scg_record::{McapSink, RecordError, RrdSink, partial_path, read_mcap, write_rrd};
 
 /// What an `.rrd` file holds, as decoded by Rerun.
@@ -353,4 +355,88 @@ fn write_interop_files() {
     let rec = read_mcap(&mcap).expect("read");
     write_rrd(&rec, &dir.join("replay.rrd")).expect("write_rrd");
     check_recording(&rrd);
+}
+
+/// Frames with the dispersion's |u′| (`Frame::fluctuation`): the `.rrd` carries it as the
+/// `fluctuation` component of each group's points, in the positions' order, and an MCAP
+/// written and replayed to `.rrd` the same; frames without it carry no such component.
+#[test]
+fn fluctuation_is_a_component_when_frames_carry_it() {
+    let with: Vec<Frame> = frames()
+        .into_iter()
+        .map(|mut f| {
+            f.fluctuation = f.id.iter().map(|&id| 1e-3 * id as f64 + 0.25).collect();
+            f
+        })
+        .collect();
+    let dir = tempfile::tempdir().expect("tempdir");
+    let fluct_of = |path: &Path| {
+        let decoded = decode(path);
+        let mut seen = BTreeMap::new();
+        for chunk in &decoded.chunks {
+            if !chunk.entity_path().to_string().starts_with("/particles") {
+                continue;
+            }
+            let ids: Vec<&[u32]> = chunk
+                .iter_slices::<u32>(COMPONENT_PARTICLE_ID.into())
+                .collect();
+            let u: Vec<&[f32]> = chunk
+                .iter_slices::<f32>(COMPONENT_FLUCTUATION.into())
+                .collect();
+            for (ids, u) in ids.iter().zip(&u) {
+                assert_eq!(ids.len(), u.len());
+                for (id, u) in ids.iter().zip(*u) {
+                    seen.insert(*id, *u);
+                }
+            }
+        }
+        seen
+    };
+    let live = dir.path().join("live.rrd");
+    let mut sink = RrdSink::create(&live, &meta()).expect("create");
+    let mcap = dir.path().join("run.mcap");
+    let mut m = McapSink::create(&mcap, &meta()).expect("create");
+    for frame in &with {
+        sink.write_frame(frame).expect("write_frame");
+        m.write_frame(frame).expect("write_frame");
+    }
+    sink.finish().expect("finish");
+    m.finish().expect("finish");
+    let rec = read_mcap(&mcap).expect("read");
+    // (the frames' stats hold a NaN: compare the fluctuation and ids, bit for bit)
+    assert_eq!(rec.frames.len(), with.len());
+    for (a, b) in rec.frames.iter().zip(&with) {
+        assert_eq!(a.id, b.id);
+        let bits = |f: &Frame| {
+            f.fluctuation
+                .iter()
+                .map(|u| u.to_bits())
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(bits(a), bits(b), "MCAP round trip of frame {}", a.step);
+    }
+    let replay = dir.path().join("replay.rrd");
+    write_rrd(&rec, &replay).expect("write_rrd");
+    for path in [&live, &replay] {
+        let seen = fluct_of(path);
+        assert!(seen.len() > 10);
+        for (id, u) in &seen {
+            assert_eq!(*u, (1e-3 * *id as f64 + 0.25) as f32, "particle {id}");
+        }
+    }
+    let plain = dir.path().join("plain.rrd");
+    let mut sink = RrdSink::create(&plain, &meta()).expect("create");
+    for frame in &frames() {
+        sink.write_frame(frame).expect("write_frame");
+    }
+    sink.finish().expect("finish");
+    assert!(fluct_of(&plain).is_empty());
+    // A frame whose fluctuation does not match its particles is refused.
+    let mut bad = with[1].clone();
+    bad.fluctuation.pop();
+    let mut sink = RrdSink::create(&dir.path().join("bad.rrd"), &meta()).expect("create");
+    assert!(matches!(
+        sink.push(&bad),
+        Err(RecordError::InvalidFrame { .. })
+    ));
 }

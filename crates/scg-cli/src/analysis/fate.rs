@@ -183,6 +183,7 @@ mod tests {
             velocity: vec![[0.0; 3]; parts.len()],
             diameter: vec![1e-4; parts.len()],
             density: vec![100.0; parts.len()],
+            fluctuation: Vec::new(),
             stats: Vec::new(),
         }
     }

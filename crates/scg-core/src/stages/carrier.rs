@@ -14,7 +14,9 @@ use glam::DVec3;
 
 use super::mesh_flow::MeshFlowState;
 use super::table::{bypass, columns, columns_mut};
-use crate::components::{CarrierOffset, CellHint, Eddy, ParticleId, Position, Velocity};
+use crate::components::{
+    CarrierOffset, CellHint, Eddy, FlowAtCentre, ParticleId, Position, Velocity,
+};
 use crate::exec::par::for_each_piece;
 use crate::physics::carrier::Carrier;
 use crate::physics::dispersion::{self, Model, State, Turbulence};
@@ -112,11 +114,17 @@ pub fn disperse(
     clock: Res<SimClock>,
     flow: Res<FlowField>,
     mesh: Option<Res<MeshFlowState>>,
-    ids: Query<(&ParticleId, &Position, &Velocity, Option<&CellHint>)>,
+    ids: Query<(
+        &ParticleId,
+        &Position,
+        &Velocity,
+        Option<&CellHint>,
+        Option<&FlowAtCentre>,
+    )>,
     mut state: Query<(&mut Eddy, &mut CarrierOffset)>,
 ) {
     let Some(d) = m.dispersion() else { return };
-    let (Some((ids, xs, vs, cells)), Some((eddies, offs))) =
+    let (Some((ids, xs, vs, cells, known)), Some((eddies, offs))) =
         (columns(&ids), columns_mut(&mut state))
     else {
         return;
@@ -127,8 +135,8 @@ pub fn disperse(
         Some(mf) => Carrier::at(mf, cell, x).0,
         None => flow.velocity(x),
     };
-    let cols = (ids, xs, vs, cells, bypass(eddies), bypass(offs));
-    for_each_piece(cols, |(ids, xs, vs, cells, eddies, offs)| {
+    let cols = (ids, xs, vs, cells, known, bypass(eddies), bypass(offs));
+    for_each_piece(cols, |(ids, xs, vs, cells, known, eddies, offs)| {
         for i in 0..ids.len() {
             let cell = cells.map_or(0, |c| c[i].0);
             let x = xs[i].0;
@@ -141,7 +149,11 @@ pub fn disperse(
             let mut draws = Draws::new(d.seed, ids[i].0, step);
             match d.model {
                 Model::StochasticRas => {
-                    let u = mean(cell, x);
+                    // the mean velocity the last step's landing found here, when kept
+                    // (the same value bit for bit), else sampled
+                    let u = known
+                        .and_then(|k| k[i].at(x))
+                        .unwrap_or_else(|| mean(cell, x));
                     dispersion::stochastic_ras(dt, &t, vs[i].0, u, d.mask, &mut s, &mut draws);
                 }
                 Model::Langevin { c0 } => {

@@ -20,6 +20,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 
+use super::carrier::CarrierModifier;
 use super::outlet::{OutletLog, OutletPart, remove_departed};
 use super::table::{bypass, columns_mut};
 use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
@@ -146,6 +147,7 @@ pub struct MeshInputs<'w> {
     health: Res<'w, Health>,
     disp: Option<Res<'w, StepDisplacement>>,
     state: Res<'w, MeshFlowState>,
+    carrier: Option<Res<'w, CarrierModifier>>,
 }
 
 /// Move every particle through the mesh flow (see the module documentation): the one
@@ -186,8 +188,9 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
         n_cells: flow.mesh().n_cells as u32,
         health: &d.health,
     };
-    // The schemes that never read the start's fluid velocity run a loop without it.
-    let keep_start = scheme.reads_start();
+    // The schemes that never read the start's fluid velocity run a loop without it
+    // (unless the dispersion model reads it).
+    let keep_start = keeps_start(&d.motion, d.carrier.as_deref());
     for_each_piece_heavy(columns, |piece| {
         let (d2max, gone) = match (keep_start, piece.7) {
             (true, None) => step.advance::<true, _>(piece, |_| flow),
@@ -330,16 +333,22 @@ impl MeshStep<'_> {
     }
 }
 
-/// True when a step reads the fluid velocity at its start, so that [`FlowAtCentre`] is
-/// kept ([`Scheme::reads_start`]).
-fn keeps_start(m: &Motion) -> bool {
-    Scheme {
-        dt: 0.0,
-        law: m.drag,
-        integrator: m.integrator,
-        fluid: Scheme::NO_FLUID,
-    }
-    .reads_start()
+/// True when a step reads the fluid velocity at its start ([`Scheme::reads_start`]) or the
+/// carrier modifier reads the mean velocity at the centre (`stochastic_ras`: the slip of
+/// the eddy-crossing time), so that [`FlowAtCentre`] is kept. The landing finds the value
+/// anyway; keeping it costs a store.
+fn keeps_start(m: &Motion, carrier: Option<&CarrierModifier>) -> bool {
+    let mean_at_centre = carrier
+        .and_then(CarrierModifier::dispersion)
+        .is_some_and(|d| d.model == crate::physics::dispersion::Model::StochasticRas);
+    mean_at_centre
+        || Scheme {
+            dt: 0.0,
+            law: m.drag,
+            integrator: m.integrator,
+            fluid: Scheme::NO_FLUID,
+        }
+        .reads_start()
 }
 
 /// Default steps between two reorderings of the particle table by mesh cell
@@ -436,7 +445,10 @@ pub fn sort_by_cell(world: &mut World) {
             }
         }
     }
-    let keep_start = keeps_start(world.resource::<Motion>());
+    let keep_start = keeps_start(
+        world.resource::<Motion>(),
+        world.get_resource::<CarrierModifier>(),
+    );
     visit_layout(&mut Permute {
         world,
         perm: &perm,

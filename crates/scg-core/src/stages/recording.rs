@@ -37,13 +37,14 @@ pub(crate) type FrameData = (
     &'static Diameter,
     &'static Density,
     &'static Mass,
+    Option<(&'static Eddy, &'static CarrierOffset)>,
 );
 
 type FrameQuery<'w, 's> = Query<'w, 's, FrameData>;
 
 /// The frame row of one particle's [`FrameData`].
 pub(crate) fn frame_row(
-    (id, g, x, v, d, rho, m): bevy_ecs::query::QueryItem<'_, '_, FrameData>,
+    (id, g, x, v, d, rho, m, turb): bevy_ecs::query::QueryItem<'_, '_, FrameData>,
 ) -> FrameRow {
     FrameRow {
         id: id.0,
@@ -53,6 +54,7 @@ pub(crate) fn frame_row(
         diameter: d.0,
         density: rho.0,
         mass: m.0,
+        fluctuation: turb.map(|(_, u)| u.0.length()),
     }
 }
 
@@ -74,6 +76,9 @@ pub struct FrameRow {
     pub density: f64,
     /// Mass as simulated, kg.
     pub mass: f64,
+    /// |u′| of the dispersion model's fluctuation, m/s (`None`: no dispersion).
+    #[serde(default)]
+    pub fluctuation: Option<f64>,
 }
 
 /// Build the frame of the current state, particles sorted by id, with the standard stats.
@@ -99,6 +104,10 @@ pub fn frame_from_rows(
     rows.sort_unstable_by_key(|r| r.id);
     let n = rows.len();
     let mut fr = Frame::with_capacity(step, time, n);
+    let turbulent = rows.iter().any(|r| r.fluctuation.is_some());
+    if turbulent {
+        fr.fluctuation.reserve(n);
+    }
     let ng = params.groups.len();
     let mut count = vec![0u64; ng];
     let (mut speed_sum, mut ke) = (0.0, 0.0);
@@ -110,6 +119,9 @@ pub fn frame_from_rows(
         fr.velocity.push(r.velocity);
         fr.diameter.push(r.diameter);
         fr.density.push(r.density);
+        if turbulent {
+            fr.fluctuation.push(r.fluctuation.unwrap_or(0.0));
+        }
         if let Some(c) = count.get_mut(r.group as usize) {
             *c += 1;
         }
