@@ -47,8 +47,22 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Run a scene (the embedded vortex case when no file is given).
+    #[command(after_help = "Examples:\n  \
+        scg run                                    the paper's vortex case (embedded) into recordings/\n  \
+        scg run cases/squarebend.toml --out out    a CFD case: out/squarebend.rrd and .mcap\n  \
+        scg run cases/classifier.toml --set coarse_grain.alpha=2 --set duration=0.05\n  \
+        scg run --plan cases/duct.toml             the systems the scene runs, in order\n  \
+        scg run cases/cyclone.toml --no-record --summary-json s.json --fates-csv fates.csv\n  \
+        scg run cases/vortex.toml --vtk vtk        also VTK frames for ParaView\n  \
+        scg run cases/cyclone.toml --checkpoint-every 0.5\n  \
+        scg run --restart recordings/cyclone.ckpt --set duration=6\n\n\
+        The scene keys: docs/scenes.md; what a run writes: docs/cli.md, docs/recordings.md.")]
     Run(run::RunArgs),
     /// Validate scenes and print derived quantities and warnings.
+    #[command(after_help = "Examples:\n  \
+        scg check cases/*.toml                     every shipped scene\n  \
+        scg check cases/cyclone.toml --set dt=1e-4  dt/τ, eddy lifetimes, patches, feeders at another dt\n\n\
+        Exit status 2 names the file, key and line of the first bad input.")]
     Check {
         /// Scene files (each checked in turn, e.g. `scg check cases/*.toml`).
         #[arg(required = true, value_name = "CASE")]
@@ -58,14 +72,38 @@ enum Command {
         set: Vec<String>,
     },
     /// Benchmarks.
+    #[command(after_help = "Examples:\n  \
+        scg bench drag --particles 1000000 --steps 300\n  \
+        scg bench mesh --cells 100000 --particles 300000 --steps 100 --dispersion stochastic-ras\n  \
+        scg bench dense --particles 32000 --threads 1\n  \
+        scg bench dilute --scene-out dilute.toml   the scene, e.g. for mpirun -np 2 scg run dilute.toml\n\n\
+        The last line is `particle-steps/s: N`. Peers and history: docs/performance.md.")]
     Bench(bench::BenchArgs),
     /// What accuracy costs in time: sweep α, law, dt, integrator and stiffness on a scene.
+    #[command(after_help = "Examples:\n  \
+        scg cost cases/vortex.toml --quick         a reduced sweep (CI)\n  \
+        scg cost cases/uniform.toml --alphas 1,2,4 --laws scg,none --dt-mult 1,2\n  \
+        scg cost cases/classifier.toml --out cost-classifier\n\n\
+        Writes cost.md, cost.csv and cost.svg into --out.")]
     Cost(cost::CostArgs),
     /// Studies: `classifier`, `classifier-psd` (paper Section 5, Figs 8–10),
     /// `classifier-cut` (the steady-state cut size) and `cyclone` (grade efficiency of
     /// cases/cyclone.toml in five coarse-graining variants).
+    #[command(after_help = "Examples:\n  \
+        scg study classifier --quick               the paper's Table 3, reduced (minutes)\n  \
+        scg study classifier-psd                   size distribution and partition curve\n  \
+        scg study cyclone --quick                  grade efficiency, five variants\n  \
+        scg study cyclone --from recordings/study-cyclone --openfoam /tmp/scg-cyclone-vs-openfoam/grade.json\n  \
+        scg study cyclone --run scg2 --from recordings/study-cyclone   re-run one variant\n\n\
+        What each study writes: docs/cli.md; the cyclone study: docs/cyclone.md.")]
     Study(study::StudyArgs),
     /// Work from an MCAP recording: rebuild .rrd, analyse, verify.
+    #[command(after_help = "Examples:\n  \
+        scg replay recordings/vortex.mcap --verify  re-run the embedded scene, compare every frame\n  \
+        scg replay recordings/vortex.mcap --rrd vortex.rrd --spawn\n  \
+        scg replay recordings/vortex.mcap --analyze --from 1 --to 3\n  \
+        scg replay recordings/cyclone.mcap --vtk vtk   frames for ParaView\n  \
+        scg replay recordings/cyclone.mcap.partial --rrd cyclone.rrd   a killed run's frames")]
     Replay(replay::ReplayArgs),
 }
 
@@ -148,5 +186,34 @@ fn check(case: &std::path::Path, set: &[String]) -> i32 {
         EXIT_BAD_INPUT
     } else {
         0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Cli;
+    use clap::{CommandFactory, Parser};
+
+    /// Every example of `scg --help` and `scg <command> --help` parses as the command
+    /// line it shows (the text after two spaces is its description).
+    #[test]
+    fn every_help_example_parses() {
+        let mut root = Cli::command();
+        let mut texts = vec![root.render_help().to_string()];
+        for sub in root.get_subcommands_mut() {
+            texts.push(sub.render_help().to_string());
+        }
+        let mut n = 0;
+        for text in &texts {
+            for line in text.lines().filter(|l| l.starts_with("  scg ")) {
+                let cmd = line.trim().split("  ").next().unwrap();
+                let args: Vec<&str> = cmd.split_whitespace().collect();
+                if let Err(e) = Cli::try_parse_from(&args) {
+                    panic!("`{cmd}`: {e}");
+                }
+                n += 1;
+            }
+        }
+        assert!(n >= 30, "{n} examples");
     }
 }
