@@ -14,13 +14,19 @@ fn scene(sets: &[&str], without_dispersion: bool) -> scg::scene::Scene {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/cases/duct.toml");
     let mut text = std::fs::read_to_string(path).unwrap();
     if without_dispersion {
-        let at = text.find("[dispersion]").unwrap();
-        let end = at + text[at..].find("[[groups]]").unwrap();
-        text.replace_range(at..end, "");
+        text = drop_dispersion(&text);
     }
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
     let dir = Path::new(path).parent().unwrap();
     scg::scene::parse_in(&text, path, dir, "duct", &sets).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The scene text without its `[dispersion]` table (it stands before the first
+/// `[[groups]]`).
+fn drop_dispersion(text: &str) -> String {
+    let at = text.find("[dispersion]").unwrap();
+    let end = at + text[at..].find("[[groups]]").unwrap();
+    format!("{}{}", &text[..at], &text[end..])
 }
 
 /// (group, entered, escaped through `core`, stuck on `ring`, stuck elsewhere, airborne).
@@ -228,10 +234,8 @@ fn recordings_carry_the_fluctuation() {
 
     // Without dispersion: no fluctuation anywhere.
     let plain = dir.path().join("plain.toml");
-    let text = std::fs::read_to_string("cases/duct.toml").unwrap();
-    let at = text.find("[dispersion]").unwrap();
-    let end = at + text[at..].find("[[groups]]").unwrap();
-    let text = format!("{}{}", &text[..at], &text[end..]).replace("\"duct/case\"", "\"CASE\"");
+    let text = drop_dispersion(&std::fs::read_to_string("cases/duct.toml").unwrap())
+        .replace("\"duct/case\"", "\"CASE\"");
     let case = concat!(env!("CARGO_MANIFEST_DIR"), "/cases/duct/case");
     std::fs::write(&plain, text.replace("CASE", case)).unwrap();
     let out2 = dir.path().join("plain");

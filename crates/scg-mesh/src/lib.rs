@@ -27,9 +27,6 @@
 //!   [`foam::write_scalar_field`]; ASCII, binary and gzipped files.
 //! * [`vtk`]: VTK unstructured grids — [`vtk::read`] and [`vtk::read_scalar`] (legacy
 //!   `.vtk`, XML `.vtu`) and [`vtk::write_legacy`].
-//!
-//! Scalar fields ([`ScalarField`]: turbulence `k`, `epsilon`, `omega`, `nut`) are
-//! interpolated by packing up to three into a [`CellField`] ([`CellField::from_scalars`]).
 
 pub mod build;
 pub mod error;

@@ -180,8 +180,8 @@ impl CellField {
 /// patch (`None` where the boundary takes the owner cell's value, e.g. zeroGradient): the
 /// scalar counterpart of [`CellField`], with the same conventions. Turbulence fields (`k`
 /// m²/s², `epsilon` m²/s³, `omega` 1/s, `nut` m²/s) are read into one by
-/// [`crate::foam::read_scalar_field`] and [`crate::vtk::read_scalar`]; to interpolate, pack
-/// up to three of them into a [`CellField`] with [`CellField::from_scalars`].
+/// [`crate::foam::read_scalar_field`] and [`crate::vtk::read_scalar`] and used by their
+/// cell values (as OpenFOAM's dispersion models read them).
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct ScalarField {
     /// Value in every cell, in the field's units.
@@ -207,7 +207,7 @@ impl ScalarField {
         let check = |entry: &dyn Fn(usize) -> String, v: &[f64]| match v
             .iter()
             .enumerate()
-            .find(|(_, x)| x.is_nan() || **x < 0.0 || !x.is_finite())
+            .find(|(_, x)| !x.is_finite() || **x < 0.0)
         {
             Some((i, x)) if x.is_finite() => Err(MeshError::invalid(
                 file,
@@ -230,70 +230,4 @@ impl ScalarField {
         }
         Ok(())
     }
-}
-
-impl CellField {
-    /// Up to three scalar fields on `mesh` packed into the components of one vector field:
-    /// `a` into x, `b` into y, `c` into z (a missing one is zero), cell values and patch
-    /// values alike. A patch with values in any of the fields gets values in all: a field
-    /// whose patch entry is `None` contributes its owner cells' values there, which is what
-    /// its `None` means. So an [`crate::Interpolator`] built on the result interpolates the
-    /// scalars, component by component, as it interpolates a velocity.
-    ///
-    /// Packing is exact for [`crate::Interpolation::CellValue`] and
-    /// [`crate::Interpolation::CellPointIdw`], whose point and face values are sums of the
-    /// cell and patch values with weights from the geometry alone (linear in the values,
-    /// component by component). For [`crate::Interpolation::CellPoint`] it is exact at
-    /// every point but one kind: where a wall patch meets another patch the linear-exact
-    /// point value is kept only if *every* component lies within its neighbours' range
-    /// ([`crate::interp::point_values_linear_exact`]), so one component out of range there
-    /// moves the others to the clipped (still convex) weights too. Pack fields separately
-    /// (one per [`CellField`]) where that matters.
-    ///
-    /// Each field should fit `mesh` (one value per cell, per patch `None` or one value per
-    /// face), as the readers return them; a value a field lacks is NaN in the result, which
-    /// [`crate::interp::check_field`] and [`crate::Interpolator::new`] reject.
-    pub fn from_scalars(
-        mesh: &PolyMesh,
-        a: &ScalarField,
-        b: Option<&ScalarField>,
-        c: Option<&ScalarField>,
-    ) -> CellField {
-        let fields = [Some(a), b, c];
-        let cell = |f: Option<&ScalarField>, i: usize| match f {
-            Some(f) => f.cells.get(i).copied().unwrap_or(f64::NAN),
-            None => 0.0,
-        };
-        let pack =
-            |i: usize| DVec3::new(cell(fields[0], i), cell(fields[1], i), cell(fields[2], i));
-        let cells: Vec<DVec3> = (0..mesh.n_cells).map(pack).collect();
-        let patches = mesh
-            .patches
-            .iter()
-            .enumerate()
-            .map(|(k, patch)| {
-                let given = fields.map(|f| patch_values(f, k));
-                given.iter().find(|g| g.is_some())?;
-                Some(
-                    (0..patch.size)
-                        .map(|i| {
-                            let owner = mesh.owner.get(patch.start + i).map(|&o| o as usize);
-                            let comp = |j: usize| match (fields[j], given[j]) {
-                                (None, _) => 0.0,
-                                (Some(_), Some(v)) => v.get(i).copied().unwrap_or(f64::NAN),
-                                (f, None) => owner.map_or(f64::NAN, |o| cell(f, o)),
-                            };
-                            DVec3::new(comp(0), comp(1), comp(2))
-                        })
-                        .collect(),
-                )
-            })
-            .collect();
-        CellField { cells, patches }
-    }
-}
-
-/// The values of patch `k` of `f`, if it gives them.
-fn patch_values(f: Option<&ScalarField>, k: usize) -> Option<&[f64]> {
-    f?.patches.get(k)?.as_deref()
 }

@@ -1,9 +1,9 @@
 //! VTK files for ParaView (and any VTK reader): one XML UnstructuredGrid (`.vtu`) per
 //! frame, the particles as vertex cells with their velocity, diameter, density, id and
-//! group (and, with dispersion, the fluctuation |u′|) as point data; a ParaView collection (`<case>.pvd`) that puts the frames on the
-//! simulation time; the scene geometry as line cells in `<case>_geometry.vtu`; and a mesh
-//! flow's boundary patches as triangles in `<case>_patches.vtu` (cell data `patch`,
-//! `role`).
+//! group (and, with dispersion, the fluctuation |u′|) as point data; a ParaView
+//! collection (`<case>.pvd`) that puts the frames on the simulation time; the scene
+//! geometry as line cells in `<case>_geometry.vtu`; and a mesh flow's boundary patches as
+//! triangles in `<case>_patches.vtu` (cell data `patch`, `role`).
 //!
 //! A frame without particles is a grid of no points and no cells, which VTK's reader and
 //! ParaView load; meshio 5.3 reads no grid without cells (not even one it writes itself).
