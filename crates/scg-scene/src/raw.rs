@@ -182,6 +182,31 @@ pub struct RawFlow {
     pub patches: Option<RawPatches>,
     /// Steps between reorderings of the particles by mesh cell (0: never).
     pub sort_every: Option<i64>,
+    /// The near-wall velocity in wall-adjacent cells.
+    pub wall_function: Option<RawWallFunction>,
+}
+
+/// `[flow.wall_function]`.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawWallFunction {
+    #[serde(deserialize_with = "name")]
+    pub model: RawWallFunctionModel,
+    /// The turbulent kinetic energy field for u_τ = C_μ^¼·√k (else u_τ from the velocity).
+    pub k: Option<String>,
+    pub kappa: Option<f64>,
+    pub e: Option<f64>,
+    pub c_mu: Option<f64>,
+}
+
+/// `flow.wall_function.model`.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum RawWallFunctionModel {
+    /// The interpolation to the wall patches' own values (no-slip: zero).
+    None,
+    /// The log law of the wall below the wall-adjacent cell's centre.
+    LogLaw,
 }
 
 /// `flow.time`: a name (`"latest"`) or a number.

@@ -149,7 +149,7 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
         Some(f) => flow_field(f, cx)?,
     };
     let mesh_flow = match &raw.flow {
-        Some(f) => mesh_flow(f, cx)?,
+        Some(f) => mesh_flow(f, fluid.as_ref(), cx)?,
         None => None,
     };
     let drag = match &raw.drag {

@@ -221,7 +221,7 @@ impl PatchSampler {
 /// the velocity extrapolated from the owner.
 pub fn settle(flow: &MeshFlow, owner: u32, x: DVec3) -> (u32, DVec3) {
     match flow.track(owner, x) {
-        Location::Inside(h) => (h.cell, flow.at(&h)),
+        Location::Inside(h) => (h.cell, flow.near_wall(h.cell, x, flow.at(&h))),
         _ => match flow.find_cell(x) {
             Some(c) => {
                 let (u, _) = flow.velocity(c, x);

@@ -15,6 +15,18 @@ use scg_mesh::{
 };
 
 pub use super::patch_interaction::{PatchInteraction, coulomb_rebound, hint, rebound};
+use super::wall_function::{FrictionVelocity, LogLaw, WallCells, slip_wall_values};
+
+/// The near-wall velocity of a mesh flow ([`MeshFlow::with_wall_function`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct WallFunctionSpec {
+    /// The log law.
+    pub law: LogLaw,
+    /// Kinematic viscosity of the fluid, m²/s.
+    pub nu: f64,
+    /// Where u_τ comes from.
+    pub friction: FrictionVelocity,
+}
 
 /// The mesh flow as the carrier of its particles ([`MeshFlow::velocity`]).
 impl super::carrier::Carrier for MeshFlow {
@@ -69,6 +81,7 @@ pub struct MeshFlow {
     table: Option<CellTable>,
     roles: Vec<PatchRole>,
     field_speed: (f64, f64),
+    wall: Option<WallCells>,
 }
 
 impl fmt::Debug for MeshFlow {
@@ -93,6 +106,20 @@ impl MeshFlow {
         scheme: Interpolation,
         roles: Vec<PatchRole>,
     ) -> Result<Self, scg_mesh::MeshError> {
+        Self::with_wall_function(mesh, field, scheme, roles, None)
+    }
+
+    /// [`MeshFlow::new`] with, when `wall` is given, the log law of the wall in the cells
+    /// next to the wall patches (see [`crate::physics::wall_function`]): the wall faces
+    /// take the slip values, and a point nearer a wall than its cell's centre sees the
+    /// log law's velocity.
+    pub fn with_wall_function(
+        mesh: PolyMesh,
+        field: &CellField,
+        scheme: Interpolation,
+        roles: Vec<PatchRole>,
+        wall: Option<&WallFunctionSpec>,
+    ) -> Result<Self, scg_mesh::MeshError> {
         if roles.len() != mesh.patches.len() {
             return Err(scg_mesh::MeshError::invalid(
                 "<mesh>",
@@ -101,6 +128,24 @@ impl MeshFlow {
             ));
         }
         let geom = MeshGeometry::new(&mesh)?;
+        scg_mesh::interp::check_field(&mesh, field)?;
+        let is_wall: Vec<bool> = roles.iter().map(|r| *r == PatchRole::Wall).collect();
+        let (wall, slip) = match wall {
+            None => (None, None),
+            Some(w) => (
+                Some(WallCells::new(
+                    &mesh,
+                    &geom,
+                    field,
+                    &is_wall,
+                    w.law,
+                    w.nu,
+                    &w.friction,
+                )),
+                Some(slip_wall_values(&mesh, &geom, field, &is_wall)),
+            ),
+        };
+        let field = slip.as_ref().unwrap_or(field);
         let loc = Arc::new(Locator::owned(Arc::new(mesh), Arc::new(geom))?);
         let interp = Interpolator::owned(Arc::clone(&loc), field, scheme)?;
         let table = CellTable::new(&interp);
@@ -115,7 +160,58 @@ impl MeshFlow {
             table,
             roles,
             field_speed: (lo, hi),
+            wall,
         })
+    }
+
+    /// How far the cell field is from conserving volume: Σ over cells of |Σ_f u_f·A_f|
+    /// (m³/s), with u_f linear between the two cells' values on an internal face
+    /// (weighted by the distances of their centres to the face) and the interpolated
+    /// value at a boundary face's centre. Half of it is the volume flow into the cells
+    /// where the field converges, where fluid tracers collect: to compare with the flow
+    /// through the domain. A CFD solver's cell velocities conserve volume only through
+    /// its face fluxes (Rhie–Chow), so this is never zero, but it should be small.
+    pub fn cell_imbalance(&self) -> f64 {
+        let m = self.mesh();
+        let g = self.geometry();
+        let u = self.interp.cell_values();
+        let ni = m.n_internal_faces();
+        let mut net = vec![0.0f64; m.n_cells];
+        for f in 0..m.n_faces() {
+            let o = m.owner[f] as usize;
+            let (a, xf) = (g.face_areas[f], g.face_centres[f]);
+            let q = if f < ni {
+                let n = m.neighbour[f] as usize;
+                let (dof, dnf) = (
+                    (xf - g.cell_centres[o]).length(),
+                    (g.cell_centres[n] - xf).length(),
+                );
+                let w = dnf / (dof + dnf);
+                let uf = u[o] * w + u[n] * (1.0 - w);
+                net[n] -= uf.dot(a);
+                uf.dot(a)
+            } else {
+                self.velocity(o as u32, xf).0.dot(a)
+            };
+            net[o] += q;
+        }
+        net.iter().map(|q| q.abs()).sum()
+    }
+
+    /// The wall-adjacent cells of the wall function (`None` without one).
+    pub fn wall_cells(&self) -> Option<&WallCells> {
+        self.wall.as_ref()
+    }
+
+    /// `u`, the interpolated velocity at x in cell `c`, with the wall function's log law
+    /// where x is nearer a wall than the centre of its wall-adjacent cell (unchanged
+    /// without a wall function), m/s.
+    #[inline(always)]
+    pub fn near_wall(&self, c: u32, x: DVec3, u: DVec3) -> DVec3 {
+        match &self.wall {
+            None => u,
+            Some(w) => w.apply(c, x, u),
+        }
     }
 
     /// The mesh, m.
@@ -212,7 +308,7 @@ impl MeshFlow {
     #[inline]
     pub fn velocity(&self, hint: u32, x: DVec3) -> (DVec3, u32) {
         let hit = match self.walk_table(hint, x) {
-            TableWalk::Inside { cell, value } => return (value, cell),
+            TableWalk::Inside { cell, value } => return (self.near_wall(cell, x, value), cell),
             // The ray toward x leaves the mesh through a boundary face (a particle at a
             // wall, its mid-step point beyond it): the locator's walk, on the same faces,
             // would end there too, and only asks whether x is inside the mesh elsewhere (a
@@ -228,9 +324,9 @@ impl MeshFlow {
                 let u = self
                     .velocity_in(h.cell, x)
                     .unwrap_or_else(|| self.interp.at(&h));
-                (u, h.cell)
+                (self.near_wall(h.cell, x, u), h.cell)
             }
-            None => (self.interp.velocity(hint, x), hint),
+            None => (self.near_wall(hint, x, self.interp.velocity(hint, x)), hint),
         }
     }
 
@@ -238,8 +334,12 @@ impl MeshFlow {
     /// alone), m/s.
     pub fn velocity_walk(&self, hint: u32, x: DVec3) -> (DVec3, u32) {
         match self.loc.track(hint, x) {
-            Location::Inside(h) | Location::Crossed { hit: h, .. } => (self.interp.at(&h), h.cell),
-            Location::Left { .. } | Location::Outside => (self.interp.velocity(hint, x), hint),
+            Location::Inside(h) | Location::Crossed { hit: h, .. } => {
+                (self.near_wall(h.cell, x, self.interp.at(&h)), h.cell)
+            }
+            Location::Left { .. } | Location::Outside => {
+                (self.near_wall(hint, x, self.interp.velocity(hint, x)), hint)
+            }
         }
     }
 
@@ -345,7 +445,7 @@ pub fn land(
         return Landing {
             x: x1,
             v: v1,
-            u: Some(value),
+            u: Some(flow.near_wall(cell, x1, value)),
             hint: cell,
         };
     }
@@ -378,7 +478,7 @@ fn land_boundary(
                 return Landing {
                     x: x1,
                     v: v1,
-                    u: Some(value),
+                    u: Some(flow.near_wall(cell, x1, value)),
                     hint: cell,
                 };
             }

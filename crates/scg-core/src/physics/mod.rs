@@ -15,6 +15,7 @@
 //! * [`lane`] — one formula for one particle or four AVX2 lanes (the flows use it);
 //! * [`contact`] — normal, tangential and rolling laws, and the pair kernel;
 //! * [`wall_shape`] — wall geometry (planes, cylinders, meshes) and touch tests;
+//! * [`wall_function`] — the log law of the wall in wall-adjacent cells of a mesh flow;
 //! * [`wall_motion`] — prescribed rigid wall motion: pose at t, surface velocity;
 //! * [`trimesh`] — triangle-mesh walls: closest points, topology, bin grid, contacts;
 //! * [`neighbour`] — the Verlet neighbour list;
@@ -34,5 +35,6 @@ pub mod periodic;
 pub mod random;
 pub mod scaling;
 pub mod trimesh;
+pub mod wall_function;
 pub mod wall_motion;
 pub mod wall_shape;

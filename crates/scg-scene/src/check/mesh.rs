@@ -31,6 +31,28 @@ pub(super) fn mesh_flow_findings(scene: &Scene) -> Vec<Finding> {
             ),
         });
     }
+    if let Some(w) = m.flow.wall_cells() {
+        let (cells, faces) = w.counts();
+        let law = w.law();
+        let message = match w.y_plus_range() {
+            Some((lo, mid, hi)) => {
+                let level = if lo < 30.0 {
+                    "; below y⁺ = 30 the first cell is in the buffer layer or the viscous sublayer, where the log law is approximate"
+                } else {
+                    ""
+                };
+                format!(
+                    "wall function: the log law (κ = {}, E = {}, C_μ = {}) below the centres of {cells} wall-adjacent cells ({faces} wall faces); y⁺ of the centres {lo:.1}..{hi:.1} (median {mid:.1}){level}",
+                    law.kappa, law.e, law.c_mu
+                )
+            }
+            None => "wall function: no face on a wall patch, it changes nothing".into(),
+        };
+        out.push(Finding {
+            level: Level::Note,
+            message,
+        });
+    }
     if mesh.patches.iter().any(|p| p.kind == "wedge") {
         out.push(Finding {
             level: Level::Warning,

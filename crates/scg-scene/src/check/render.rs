@@ -135,9 +135,10 @@ fn mesh_flow_lines(
     let v = |v: glam::DVec3| format!("[{:.6e}, {:.6e}, {:.6e}]", v.x, v.y, v.z);
     let (umin, umax) = f.field_speed();
     let mut s = format!(
-        "flow mesh {}: {} cells, {} faces ({} internal), {} points, bounds {} to {} m, field `{}` ({:?}), speed {:.4e} to {:.4e} m/s\n",
+        "flow mesh {}: {} cells, volume {:.6e} m³, {} faces ({} internal), {} points, bounds {} to {} m, field `{}` ({:?}), speed {:.4e} to {:.4e} m/s\n",
         m.source,
         mesh.n_cells,
+        f.geometry().cell_volumes.iter().sum::<f64>(),
         mesh.n_faces(),
         mesh.n_internal_faces(),
         mesh.points.len(),
@@ -195,14 +196,24 @@ fn mesh_flow_lines(
 /// the flow rate through it.
 fn inlet_lines(scene: &Scene, m: &crate::model::SceneMeshFlow) -> String {
     let mut s = String::new();
+    let imbalance = if scene
+        .feeders
+        .iter()
+        .any(|f| matches!(f.source, crate::model::FeedSource::Patch(_)))
+    {
+        m.flow.cell_imbalance()
+    } else {
+        0.0
+    };
     for (i, f) in scene.feeders.iter().enumerate() {
         let crate::model::FeedSource::Patch(p) = &f.source else {
             continue;
         };
         let q = p.flux(&m.flow);
         let u = q.mean_velocity;
+        let volume: f64 = m.flow.geometry().cell_volumes.iter().sum();
         s.push_str(&format!(
-            "  feeders[{i}] on patch `{}`: area {:.6e} m², mean field velocity [{:.6e}, {:.6e}, {:.6e}] m/s, inflow Q = ∫u·n_in dA = {:.6e} m³/s (mean normal speed {:.6e} m/s), velocity {}\n",
+            "  feeders[{i}] on patch `{}`: area {:.6e} m², mean field velocity [{:.6e}, {:.6e}, {:.6e}] m/s, inflow Q = ∫u·n_in dA = {:.6e} m³/s (mean normal speed {:.6e} m/s; the mesh's volume over it, V/Q = {:.4e} s, is a fluid tracer's mean residence time when the field conserves volume: the cells' imbalance is {:.3}·Q), velocity {}\n",
             p.name,
             q.area,
             u.x,
@@ -210,6 +221,8 @@ fn inlet_lines(scene: &Scene, m: &crate::model::SceneMeshFlow) -> String {
             u.z,
             q.inflow,
             q.inflow / q.area,
+            volume / q.inflow,
+            0.5 * imbalance / q.inflow,
             if f.field_velocity {
                 "from the field".to_string()
             } else {

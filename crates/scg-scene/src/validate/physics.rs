@@ -19,7 +19,10 @@ use crate::raw::{
     RawContacts, RawFlow, RawFlowKind, RawMaterial, RawNormalModel, RawOutlet, RawWall, RawWallKind,
 };
 use crate::raw::{RawInterpolation, RawTime};
-use scg_core::physics::mesh_flow::{MeshFlow, PatchRole};
+use crate::raw::{RawWallFunction, RawWallFunctionModel};
+use scg_core::physics::flow::Fluid;
+use scg_core::physics::mesh_flow::{MeshFlow, PatchRole, WallFunctionSpec};
+use scg_core::physics::wall_function::{FrictionVelocity, LogLaw};
 use scg_mesh::{
     Interpolation,
     foam::{self, TimeSel},
@@ -141,6 +144,7 @@ pub(super) fn flow_field(f: &RawFlow, cx: &Ctx) -> Result<FlowField, SceneError>
         ("flow.translate", f.translate.is_some()),
         ("flow.patches", f.patches.is_some()),
         ("flow.sort_every", f.sort_every.is_some()),
+        ("flow.wall_function", f.wall_function.is_some()),
     ];
     let (wrong, kinds) = if mesh_kind {
         (&analytic_keys[..], "still, uniform, vortex or classifier")
@@ -174,7 +178,11 @@ pub(super) fn flow_field(f: &RawFlow, cx: &Ctx) -> Result<FlowField, SceneError>
 /// `[flow]` of kind `openfoam` or `vtk`: the mesh and the field, read once, placed
 /// (x' = translate + scale·x, m), patch roles from `[flow.patches]`; `None` for the
 /// analytic kinds. Errors name the key and carry the mesh reader's message (file, entry).
-pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, SceneError> {
+pub(super) fn mesh_flow(
+    f: &RawFlow,
+    fluid: Option<&Fluid>,
+    cx: &Ctx,
+) -> Result<Option<SceneMeshFlow>, SceneError> {
     let base = cx.base;
     let field = f.field.clone().unwrap_or_else(|| "U".to_string());
     if field.is_empty() {
@@ -279,7 +287,11 @@ pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, 
     } else {
         "flow.case"
     };
-    let flow = MeshFlow::new(mesh, &cells, scheme, roles)
+    let wall = match &f.wall_function {
+        None => None,
+        Some(w) => wall_function(w, fluid, &mesh, &reader, cx)?,
+    };
+    let flow = MeshFlow::with_wall_function(mesh, &cells, scheme, roles, wall.as_ref())
         .map_err(|e| cx.err(key, format!("{source}: {e}")))?;
     Ok(Some(SceneMeshFlow {
         flow: std::sync::Arc::new(flow),
@@ -287,6 +299,88 @@ pub(super) fn mesh_flow(f: &RawFlow, cx: &Ctx) -> Result<Option<SceneMeshFlow>, 
         field,
         sort_every,
         reader: Some(reader),
+    }))
+}
+
+/// `[flow.wall_function]`: `None` for `model = "none"`.
+fn wall_function(
+    w: &RawWallFunction,
+    fluid: Option<&Fluid>,
+    mesh: &scg_mesh::PolyMesh,
+    reader: &FieldReader,
+    cx: &Ctx,
+) -> Result<Option<WallFunctionSpec>, SceneError> {
+    if w.model == RawWallFunctionModel::None {
+        for (k, given) in [
+            ("k", w.k.is_some()),
+            ("kappa", w.kappa.is_some()),
+            ("e", w.e.is_some()),
+            ("c_mu", w.c_mu.is_some()),
+        ] {
+            if given {
+                return Err(cx.err(
+                    &format!("flow.wall_function.{k}"),
+                    "is only used by model = \"log_law\"",
+                ));
+            }
+        }
+        return Ok(None);
+    }
+    let Some(fluid) = fluid else {
+        return Err(cx.err(
+            "flow.wall_function",
+            "the log law needs the fluid's viscosity: add a [fluid] table",
+        ));
+    };
+    if !(fluid.density > 0.0) {
+        return Err(cx.err(
+            "fluid.density",
+            "the wall function needs ν = viscosity/density: the density must be > 0",
+        ));
+    }
+    let d = LogLaw::default();
+    let law = LogLaw {
+        kappa: cx.positive("flow.wall_function.kappa", w.kappa.unwrap_or(d.kappa))?,
+        e: cx.positive("flow.wall_function.e", w.e.unwrap_or(d.e))?,
+        c_mu: cx.positive("flow.wall_function.c_mu", w.c_mu.unwrap_or(d.c_mu))?,
+    };
+    if !(law.e > 1.0) {
+        return Err(cx.err(
+            "flow.wall_function.e",
+            "must be > 1 (9.8 for a smooth wall)",
+        ));
+    }
+    let friction = match &w.k {
+        None => FrictionVelocity::FromVelocity,
+        Some(name) if name.is_empty() => {
+            return Err(cx.err("flow.wall_function.k", "must name a field"));
+        }
+        Some(name) => {
+            let (shown, r) = match reader {
+                FieldReader::Foam { case, time } => (
+                    case.display().to_string(),
+                    foam::read_scalar_field(case, mesh, *time, name),
+                ),
+                FieldReader::Vtk { file } => (
+                    file.display().to_string(),
+                    scg_mesh::vtk::read_scalar(file, name),
+                ),
+            };
+            let k = r.map_err(|e| {
+                cx.err(
+                    "flow.wall_function.k",
+                    format!("{shown}: field `{name}`: {e}"),
+                )
+            })?;
+            k.check_non_negative(&shown, name, mesh)
+                .map_err(|e| cx.err("flow.wall_function.k", format!("field `{name}`: {e}")))?;
+            FrictionVelocity::FromK(k.cells)
+        }
+    };
+    Ok(Some(WallFunctionSpec {
+        law,
+        nu: fluid.viscosity / fluid.density,
+        friction,
     }))
 }
 

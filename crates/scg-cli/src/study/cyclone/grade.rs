@@ -136,24 +136,18 @@ pub fn cut_size(classes: &[ClassGrade]) -> Option<f64> {
     d50(&escaped)
 }
 
-/// The corrected (reduced) cut size of Kelsall's bypass correction: the efficiency of the
-/// finest class fed, R, is taken as the share that bypasses the separation (here: fines
-/// held at the walls, which a real cyclone's air would carry out), and d50 is where
-/// η' = (η − R) / (1 − R) first rises through 0.5. `None` without a crossing or when the
-/// finest class has R = 1 (nothing escapes).
-pub fn corrected_cut_size(classes: &[ClassGrade]) -> Option<f64> {
-    let r = classes
-        .iter()
-        .find(|c| c.efficiency.is_finite())?
-        .efficiency;
-    if r >= 1.0 {
-        return None;
+/// Wilson's score interval (95 %, z = 1.96) of a binomial share k/n: (low, high), NaN
+/// for n = 0. Unlike ±2σ it stays inside [0, 1] and is not empty at k = 0 or n.
+pub fn wilson95(k: u64, n: u64) -> (f64, f64) {
+    if n == 0 {
+        return (f64::NAN, f64::NAN);
     }
-    let escaped: Vec<(f64, f64)> = classes
-        .iter()
-        .map(|c| (c.diameter, 1.0 - (c.efficiency - r) / (1.0 - r)))
-        .collect();
-    d50(&escaped)
+    let (z, n) = (1.96_f64, n as f64);
+    let p = k as f64 / n;
+    let d = 1.0 + z * z / n;
+    let c = (p + z * z / (2.0 * n)) / d;
+    let h = z * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt() / d;
+    ((c - h).max(0.0), (c + h).min(1.0))
 }
 
 /// W1 distance between the residence times of `v` and those of `reference` (escaped
@@ -248,13 +242,14 @@ mod tests {
         assert_eq!(cs[0].lost_share(), 0.0);
         // Never through 0.5: no cut.
         assert_eq!(cut_size(&cs[2..]), None);
-        // Corrected: R = 0.2, η' = 0, 0.25, 0.75, 1: 0.5 halfway from 2 to 4 µm; from 4 µm
-        // on R = 0.8, η' = 0, 1: halfway from 4 to 8 µm.
-        let d = corrected_cut_size(&cs).unwrap();
-        assert!((d - 3e-6).abs() < 1e-15, "{d}");
-        let d = corrected_cut_size(&cs[2..]).unwrap();
-        assert!((d - 6e-6).abs() < 1e-15, "{d}");
-        assert_eq!(corrected_cut_size(&cs[3..]), None);
+        // Wilson's 95 % interval: inside [0, 1], about the share, narrower with n
+        let (lo, hi) = wilson95(8, 10);
+        assert!(lo > 0.44 && lo < 0.5 && hi > 0.94 && hi < 0.98, "{lo} {hi}");
+        assert_eq!(wilson95(0, 10).0, 0.0);
+        assert!((wilson95(10, 10).1 - 1.0).abs() < 1e-12);
+        let (a, b) = wilson95(800, 1000);
+        assert!(a < 0.8 && b > 0.8 && b - a < 0.06, "{a} {b}");
+        assert!(wilson95(0, 0).0.is_nan());
     }
 
     #[test]

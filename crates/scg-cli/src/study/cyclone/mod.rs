@@ -18,9 +18,7 @@ pub mod theory;
 
 use std::path::PathBuf;
 
-pub use grade::{
-    ClassGrade, ExternalGrade, corrected_cut_size, cut_size, efficiency, residence_w1,
-};
+pub use grade::{ClassGrade, ExternalGrade, cut_size, efficiency, residence_w1};
 pub use plot::write_plots;
 pub use report::{Criteria, criteria, report, summary, write_tables};
 pub use run::{CycloneRun, Tracker, run_variant};

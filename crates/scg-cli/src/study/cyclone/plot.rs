@@ -9,7 +9,7 @@ use glam::DVec3;
 use plotters::prelude::*;
 use scg_core::frame::PatchSurface;
 
-use super::grade::{ExternalGrade, corrected_cut_size, cut_size};
+use super::grade::{ExternalGrade, cut_size};
 use super::run::CycloneRun;
 use super::theory::Cyclone;
 use crate::chart::legend;
@@ -130,18 +130,6 @@ pub fn plot_partition(
             .map_err(perr)?
             .label(format!("original d50 {x:.1} µm"))
             .legend(|(x, y)| TriangleMarker::new((x + 10, y), 5, BLACK.filled()));
-    }
-    if let Some(d50) = corrected_cut_size(&o.classes) {
-        let x = d50 * 1e6;
-        chart
-            .draw_series(std::iter::once(TriangleMarker::new(
-                (x, 0.5),
-                7,
-                BLACK.stroke_width(2),
-            )))
-            .map_err(perr)?
-            .label(format!("original corrected d50 {x:.1} µm"))
-            .legend(|(x, y)| TriangleMarker::new((x + 10, y), 5, BLACK.stroke_width(2)));
     }
     chart
         .configure_series_labels()

@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::grade::{ClassGrade, ExternalGrade, corrected_cut_size, cut_size, residence_w1};
+use super::grade::{ClassGrade, ExternalGrade, cut_size, residence_w1, wilson95};
 use super::run::{CycloneRun, LATE, MOVING};
 use super::theory::Cyclone;
 
@@ -144,6 +144,16 @@ fn class_json(
             num(100.0 * (c.efficiency - reference.efficiency)),
         );
         m.insert("two_sigma_pp".into(), num(two_sigma_pp(c)));
+        let (lo, hi) = wilson95(c.fed.saturating_sub(c.escaped), c.fed);
+        m.insert(
+            "efficiency_95".into(),
+            serde_json::json!([num(lo), num(hi)]),
+        );
+        let (lo, hi) = wilson95(c.escaped, c.fed);
+        m.insert(
+            "escaped_share_95".into(),
+            serde_json::json!([num(lo), num(hi)]),
+        );
         m.insert("w1_over_mean".into(), num(residence_w1(reference, c)));
         m.extend(e);
     }
@@ -189,7 +199,6 @@ pub fn summary(
                 "particle_steps_per_s": v.particle_steps as f64 / v.total_s,
                 "duration_s": v.duration,
                 "d50": opt_num(cut_size(&v.classes)),
-                "d50_corrected": opt_num(corrected_cut_size(&v.classes)),
                 "unmatched_departures": v.unmatched,
                 "classes": classes,
             }),
@@ -213,7 +222,6 @@ pub fn summary(
         serde_json::json!({
             "code": g.code,
             "d50": opt_num(g.d50.or_else(|| cut_size(&g.classes))),
-            "d50_corrected": opt_num(corrected_cut_size(&g.classes)),
             "particle_steps_per_s": opt_num(g.particle_steps_per_s),
             "classes": classes,
         })
@@ -227,10 +235,11 @@ pub fn summary(
             "w1_over_mean": "1-Wasserstein distance between the class's residence times and the original's, over the original's mean",
             "delta_efficiency_pp": "efficiency minus the original's (OpenFOAM: minus scg original's), percentage points",
             "two_sigma_pp": "two binomial standard errors of the efficiency from the fed count, percentage points",
+            "efficiency_95": "Wilson's 95 % score interval of the efficiency (held or lost over fed)",
+            "escaped_share_95": "Wilson's 95 % score interval of escaped/fed",
             "held_moving": format!("held particles faster than {MOVING} m/s at the end"),
             "escaped_in_last_s": format!("escapes during the last {LATE} s of the run"),
-            "d50": "diameter where the efficiency first rises through 0.5, linear between classes, m",
-            "d50_corrected": "the same for Kelsall's corrected efficiency (eff - R)/(1 - R), R = the finest class's efficiency (the fines held as if they bypassed the separation), m"
+            "d50": "diameter where the efficiency first rises through 0.5, linear between classes, m"
         },
         "theory": {
             "density": rho,
@@ -342,23 +351,15 @@ pub fn report(runs: &[CycloneRun], theory: &Cyclone, openfoam: Option<&ExternalG
     let um = |d: Option<f64>| d.map_or("—".to_string(), |d| format!("{:.2} µm", d * 1e6));
     let _ = writeln!(
         s,
-        "\n{:<9} {:>10} {:>10} {:>10} {:>8} {:>14} {:>12} {:>10}",
-        "variant",
-        "d50",
-        "d50 corr",
-        "total [s]",
-        "ratio",
-        "particle-steps",
-        "steps/s",
-        "unmatched"
+        "\n{:<9} {:>10} {:>10} {:>8} {:>14} {:>12} {:>10}",
+        "variant", "d50", "total [s]", "ratio", "particle-steps", "steps/s", "unmatched"
     );
     for v in runs {
         let _ = writeln!(
             s,
-            "{:<9} {:>10} {:>10} {:>10.1} {:>8.3} {:>14} {:>12.3e} {:>10}   (CPU {})",
+            "{:<9} {:>10} {:>10.1} {:>8.3} {:>14} {:>12.3e} {:>10}   (CPU {})",
             v.name,
             um(cut_size(&v.classes)),
-            um(corrected_cut_size(&v.classes)),
             v.total_s,
             v.total_s / o.total_s,
             v.particle_steps,
@@ -373,10 +374,9 @@ pub fn report(runs: &[CycloneRun], theory: &Cyclone, openfoam: Option<&ExternalG
     if let Some(g) = openfoam {
         let _ = writeln!(
             s,
-            "{:<9} {:>10} {:>10} {:>10} {:>8} {:>14} {:>12}",
+            "{:<9} {:>10} {:>10} {:>8} {:>14} {:>12}",
             g.code,
             um(g.d50.or_else(|| cut_size(&g.classes))),
-            um(corrected_cut_size(&g.classes)),
             "",
             "",
             "",
@@ -389,11 +389,6 @@ pub fn report(runs: &[CycloneRun], theory: &Cyclone, openfoam: Option<&ExternalG
         "cyclone theory at {rho} kg/m³: Lapple d50 = {:.2} µm, Barth–Muschelknautz x50 = {:.2} µm",
         theory.lapple_d50(rho) * 1e6,
         theory.barth_muschelknautz_d50(rho) * 1e6
-    );
-    let _ = writeln!(
-        s,
-        "d50 corr: Kelsall's corrected efficiency (η − R)/(1 − R), R = the finest class's η \
-         (its held fines taken as bypass)"
     );
     let _ = writeln!(s, "\ncriteria (issue 16):");
     for c in criteria(runs) {

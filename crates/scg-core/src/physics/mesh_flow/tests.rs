@@ -188,3 +188,106 @@ fn landing_by_role() {
     };
     assert!(MeshFlow::new(m, &field, Interpolation::CellValue, vec![]).is_err());
 }
+
+/// A channel whose first cell layer (y_c = 15 mm, y⁺_c = 500 at u_τ = 0.5 m/s, ν =
+/// 1.5e-5 m²/s) and the layers above carry the log law at their centres: with the wall
+/// function, the velocity at y⁺ = 30 and 100 inside the first cell is the log law's within
+/// 2 % anywhere in the cell (u_τ from the cell's velocity, or from k = u_τ²/√C_μ);
+/// without it, the
+/// interpolation to the no-slip wall gives a slow layer (far below the log law).
+#[test]
+fn wall_function_follows_the_log_law_in_the_first_cell() {
+    use crate::physics::wall_function::{FrictionVelocity, LogLaw};
+    let (nu, u_tau) = (1.5e-5, 0.5);
+    let law = LogLaw::default();
+    let lam = law.y_plus_lam();
+    let m = BoxMesh::new(DVec3::ZERO, DVec3::new(0.12, 0.3, 0.12), [4, 10, 4])
+        .build()
+        .unwrap();
+    let g = MeshGeometry::new(&m).unwrap();
+    let log = |y: f64| u_tau * law.u_plus(y * u_tau / nu, lam);
+    let cells: Vec<DVec3> = g
+        .cell_centres
+        .iter()
+        .map(|c| DVec3::new(log(c.y), 0.0, 0.0))
+        .collect();
+    // no-slip on `ymin` (zero face values), the other patches carry the owner's value
+    let patches = m
+        .patches
+        .iter()
+        .map(|p| {
+            Some(
+                (p.start..p.start + p.size)
+                    .map(|f| {
+                        if p.name == "ymin" {
+                            DVec3::ZERO
+                        } else {
+                            cells[m.owner[f] as usize]
+                        }
+                    })
+                    .collect(),
+            )
+        })
+        .collect();
+    let field = CellField { cells, patches };
+    let roles: Vec<PatchRole> = m
+        .patches
+        .iter()
+        .map(|p| {
+            if p.name == "ymin" {
+                PatchRole::Wall
+            } else {
+                PatchRole::Lost
+            }
+        })
+        .collect();
+    let k = vec![u_tau * u_tau / law.c_mu.sqrt(); m.n_cells];
+    let with = |friction| {
+        let spec = WallFunctionSpec { law, nu, friction };
+        MeshFlow::with_wall_function(
+            m.clone(),
+            &field,
+            Interpolation::CellPoint,
+            roles.clone(),
+            Some(&spec),
+        )
+        .unwrap()
+    };
+    let plain = MeshFlow::new(m.clone(), &field, Interpolation::CellPoint, roles.clone()).unwrap();
+    for flow in [
+        with(FrictionVelocity::FromVelocity),
+        with(FrictionVelocity::FromK(k)),
+    ] {
+        let (n_cells, n_faces) = flow.wall_cells().unwrap().counts();
+        assert_eq!((n_cells, n_faces), (16, 16));
+        for y_plus in [30.0, 100.0] {
+            let y = y_plus * nu / u_tau;
+            let want = log(y);
+            // on the centre line of a first-layer cell, and off it
+            for (x, z) in [(0.045, 0.045), (0.035, 0.05), (0.031, 0.059)] {
+                let p = DVec3::new(x, y, z);
+                let c = flow.find_cell(p).unwrap();
+                let (u, _) = flow.velocity(c, p);
+                let err = (u.x - want).abs() / want;
+                println!(
+                    "y+ = {y_plus}, (x, z) = ({x}, {z}): {:.4} m/s, log law {want:.4}, {:+.2} %",
+                    u.x,
+                    100.0 * (u.x - want) / want
+                );
+                assert!(err < 0.02, "y+ = {y_plus} at ({x}, {z}): {} vs {want}", u.x);
+                assert!(u.y.abs() < 1e-9 && u.z.abs() < 1e-9, "{u}");
+                // the walk and the landing see the same value
+                assert_eq!(
+                    flow.velocity_walk(c, p).0.x.to_bits() >> 8,
+                    u.x.to_bits() >> 8
+                );
+            }
+            let p = DVec3::new(0.045, y, 0.045);
+            let (u0, _) = plain.velocity(plain.find_cell(p).unwrap(), p);
+            assert!(u0.x < 0.5 * want, "no wall function: {} vs {want}", u0.x);
+        }
+        // at the wall zero, beyond the first centre unchanged
+        let p = DVec3::new(0.045, 1e-12, 0.045);
+        assert!(flow.velocity(flow.find_cell(p).unwrap(), p).0.x < 1e-6);
+    }
+}
