@@ -72,3 +72,47 @@ fn cyclone_tracers_leave_within_five_residence_times() {
         "mean residence {mean} s = {ratio}·V/Q"
     );
 }
+
+/// Bad `[flow.wall_function]` input is an error naming the file, the key and the line.
+#[test]
+fn bad_wall_function_input_names_file_key_and_line() {
+    let text = std::fs::read_to_string(common::repo("cases/cyclone.toml")).unwrap();
+    let good = "[flow.wall_function]\nmodel = \"log_law\"\nk = \"kMean\"\n";
+    assert!(text.contains(good));
+    for (bad, key) in [
+        (
+            "[flow.wall_function]\nmodel = \"spalding\"\n",
+            "flow.wall_function.model",
+        ),
+        (
+            "[flow.wall_function]\nmodel = \"log_law\"\nk = \"nope\"\n",
+            "flow.wall_function.k",
+        ),
+        (
+            "[flow.wall_function]\nmodel = \"none\"\nkappa = 0.4\n",
+            "flow.wall_function.kappa",
+        ),
+        (
+            "[flow.wall_function]\nmodel = \"log_law\"\ne = 0.5\n",
+            "flow.wall_function.e",
+        ),
+        (
+            "[flow.wall_function]\nmodel = \"log_law\"\ny = 1\n",
+            "flow.wall_function",
+        ),
+    ] {
+        let err = scg::scene::parse_in(
+            &text.replace(good, bad),
+            "cases/cyclone.toml",
+            &common::repo("cases"),
+            "cyclone",
+            &[],
+        )
+        .err()
+        .unwrap_or_else(|| panic!("{bad} accepted"))
+        .to_string();
+        println!("{err}");
+        assert!(err.contains("cases/cyclone.toml:"), "{err}");
+        assert!(err.contains(key), "{key}: {err}");
+    }
+}

@@ -332,7 +332,7 @@ fn wall_function(
             "the log law needs the fluid's viscosity: add a [fluid] table",
         ));
     };
-    if !(fluid.density > 0.0) {
+    if fluid.density <= 0.0 {
         return Err(cx.err(
             "fluid.density",
             "the wall function needs ν = viscosity/density: the density must be > 0",
@@ -344,7 +344,7 @@ fn wall_function(
         e: cx.positive("flow.wall_function.e", w.e.unwrap_or(d.e))?,
         c_mu: cx.positive("flow.wall_function.c_mu", w.c_mu.unwrap_or(d.c_mu))?,
     };
-    if !(law.e > 1.0) {
+    if law.e <= 1.0 {
         return Err(cx.err(
             "flow.wall_function.e",
             "must be > 1 (9.8 for a smooth wall)",
