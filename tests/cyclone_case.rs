@@ -31,15 +31,20 @@ fn cyclone_separates_fines_from_coarse() {
     let tally = sim.world.resource::<Tally>().clone();
     let log = sim.world.resource::<OutletLog>().clone();
     let lost: Vec<usize> = log.lost.iter().map(Vec::len).collect();
+    let collect = sim
+        .world
+        .resource::<scg::core::stages::collect::CollectLog>()
+        .clone();
+    let collected: Vec<u64> = (0..ng).map(|g| collect.count(g)).collect();
     println!(
-        "cyclone: resident {resident:?}, drained {:?}, lost {lost:?}, fed {:?}",
+        "cyclone: resident {resident:?}, drained {:?}, collected {collected:?}, lost {lost:?}, fed {:?}",
         tally.drained, tally.fed
     );
     for g in 0..ng {
         assert_eq!(tally.fed[g], 50, "group {g}");
         assert_eq!(
             tally.fed[g],
-            resident[g] as u64 + tally.drained[g] + lost[g] as u64
+            resident[g] as u64 + tally.drained[g] + lost[g] as u64 + collected[g]
         );
     }
     // None blown back out of the inlet.
@@ -93,4 +98,57 @@ fn the_landings_fluid_velocity_equals_locating_the_start_again() {
     assert!(seen > 1000, "{seen} particle-steps");
     assert!(known * 10 > seen * 9, "{known} of {seen} known");
     assert_eq!(kept, wiped);
+}
+
+/// The scene's `[[zones]]`: a particle entering the collecting `dust_outlet` is removed
+/// and logged there; every particle still inside at the end is counted in the first other
+/// zone holding it (`outlet_pipe`) or as airborne; the fates still add up.
+#[test]
+fn cyclone_fates_count_the_zones() {
+    let scene = common::case("cyclone", &["feed_scale=0.25", "duration=1.5"]);
+    assert_eq!(scene.zones.len(), 2);
+    assert!(scene.zones[0].collects && !scene.zones[1].collects);
+    let mut sim = scene.build(false);
+    assert!(
+        sim.plan()
+            .contains(scg::core::step::StepSystem::CollectParticles)
+    );
+    sim.run(scene.steps(), |_| true).unwrap();
+    let ps = sim.particles();
+    let log = sim
+        .world
+        .resource::<scg_core::stages::collect::CollectLog>()
+        .clone();
+    let fates = scg::cli::fates::fates(&scene, &mut sim);
+    let (mut collected, mut piped) = (0u64, 0u64);
+    for (g, f) in fates.iter().enumerate() {
+        assert_eq!(f.accounted(), f.entered(), "{}", f.group);
+        let inside: Vec<_> = ps.iter().filter(|p| p.group as usize == g).collect();
+        // nothing left inside the collecting zone; the collected are the log's
+        assert!(
+            inside
+                .iter()
+                .all(|p| !scene.zones[0].region.contains(p.position))
+        );
+        assert_eq!(f.collected(), log.count(g));
+        assert!(log.collected[0][g].iter().all(|&t| t > 0.0 && t <= 1.5));
+        let pipe = inside
+            .iter()
+            .filter(|p| scene.zones[1].region.contains(p.position))
+            .count() as u64;
+        assert_eq!(f.zones[1].2, pipe);
+        assert_eq!(pipe + f.airborne, inside.len() as u64);
+        collected += f.collected();
+        piped += pipe;
+    }
+    println!("collected {collected}, in the outlet pipe {piped}");
+    // particles reach the dust outlet within 1.5 s
+    assert!(collected > 0, "none collected");
+    let text = scg::cli::fates::render(&fates);
+    assert!(text.contains("collected in zone `dust_outlet`"), "{text}");
+    let j = scg::cli::fates::json(&fates[0]);
+    assert_eq!(j["zones"][0]["zone"], "dust_outlet");
+    assert_eq!(j["collected"], fates[0].collected());
+    let csv = scg::cli::fates::csv(&fates);
+    assert!(csv.contains("d1,collected,dust_outlet,"), "{csv}");
 }

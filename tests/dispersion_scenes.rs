@@ -5,8 +5,14 @@
 
 use std::path::Path;
 
+/// cases/cyclone.toml without its own `[dispersion]` table, with `section` appended.
 fn cyclone_with(section: &str) -> Result<scg::scene::Scene, scg::scene::SceneError> {
-    let text = std::fs::read_to_string("cases/cyclone.toml").unwrap();
+    let full = std::fs::read_to_string("cases/cyclone.toml").unwrap();
+    let start = full
+        .find("\n[dispersion]\n")
+        .expect("the scene's [dispersion]");
+    let end = start + 1 + full[start + 1..].find("\n\n").unwrap();
+    let text = format!("{}{}", &full[..start], &full[end..]);
     scg::scene::parse_in(
         &format!("{text}\n{section}\n"),
         "cases/cyclone.toml",

@@ -3,13 +3,19 @@
 # walls: the wall function (the log law below the wall cells' centres) and turbulent
 # dispersion (OpenFOAM's stochastic eddy model, or the drift-corrected Langevin walk),
 # and the interpolation switch. Writes each variant of cases/cyclone.toml into --out,
-# runs it for 6 s, prints η = 1 − escaped/fed per class with Wilson's 95 % interval.
+# runs it for 6 s, prints η = collected/fed per class (the scene's `dust_outlet` zone)
+# with Wilson's 95 % interval, and 1 − escaped/fed and the undecided share beside it.
 #
 #   bash cases/cyclone/near-wall.sh [--out DIR] [--feed-scale F] [--only NAMES]
 #
-# Variants: nowall (the no-slip ramp, no dispersion: the former scene), wall (the scene
-# as committed), wall_eddy (+ stochastic_ras), wall_langevin (+ langevin),
-# wall_langevin_cv (+ interpolation = cell_value), wall_langevin_mu (+ friction 0.3).
+# Variants (the scene has the wall function and stochastic_ras dispersion):
+#   nowall      the no-slip ramp, no dispersion (the scene before the wall function)
+#   nodisp      the wall function, no dispersion
+#   eddy        the scene as committed (stochastic_ras)
+#   langevin    dispersion by the drift-corrected Langevin walk
+#   eddy_cv     the scene with interpolation = cell_value
+#   e09, mu02, mu05, e09_mu05   the wall rebound: restitution 0.9 and/or friction 0.2, 0.5
+#               (the scene: e = 0.5, no friction)
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
@@ -21,7 +27,7 @@ while [ $# -gt 0 ]; do
     --out) out="$2"; shift 2 ;;
     --feed-scale) feed="$2"; shift 2 ;;
     --only) only="$2"; shift 2 ;;
-    -h|--help) sed -n 2,14p "$0"; exit 0 ;;
+    -h|--help) sed -n 2,20p "$0"; exit 0 ;;
     *) echo "near-wall.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
@@ -35,19 +41,29 @@ src = open(f"{root}/cases/cyclone.toml").read()
 src = src.replace('case = "cyclone/coarse"', f'case = "{root}/cases/cyclone/coarse"')
 wall = '[flow.wall_function]\nmodel = "log_law"\nk = "kMean"\n'
 assert wall in src, "cases/cyclone.toml has no [flow.wall_function]"
-disp = lambda m: f'\n[dispersion]\nmodel = "{m}"\nk = "kMean"\nomega = "omegaMean"\n'
+disp = '[dispersion]\nmodel = "stochastic_ras"\n'
+block = disp + 'k = "kMean"\nomega = "omegaMean"\n'
+assert block in src, "cases/cyclone.toml has no stochastic_ras [dispersion] on kMean, omegaMean"
+nodisp = src.replace(block, "")
+rebound = 'wall_model = "rebound"'
+def walls(e=None, mu=None):
+    extra = (f"\nrestitution = {e}" if e else "") + (f"\nfriction = {mu}" if mu else "")
+    return src.replace(rebound, rebound + extra, 1)
 v = {
-    "nowall": src.replace(wall, '[flow.wall_function]\nmodel = "none"\n'),
-    "wall": src,
-    "wall_eddy": src + disp("stochastic_ras"),
-    "wall_langevin": src + disp("langevin"),
-    "wall_langevin_cv": src.replace('field = "UMean"', 'field = "UMean"\ninterpolation = "cell_value"', 1) + disp("langevin"),
-    "wall_langevin_mu": src.replace('wall_model = "rebound"', 'wall_model = "rebound"\nfriction = 0.3', 1) + disp("langevin"),
+    "nowall": nodisp.replace(wall, '[flow.wall_function]\nmodel = "none"\n'),
+    "nodisp": nodisp,
+    "eddy": src,
+    "langevin": src.replace(disp, '[dispersion]\nmodel = "langevin"\n'),
+    "eddy_cv": src.replace('field = "UMean"', 'field = "UMean"\ninterpolation = "cell_value"', 1),
+    "e09": walls(e=0.9),
+    "mu02": walls(mu=0.2),
+    "mu05": walls(mu=0.5),
+    "e09_mu05": walls(e=0.9, mu=0.5),
 }
 for k, s in v.items():
     open(f"{out}/{k}.toml", "w").write(s)
 PY
-names="nowall wall wall_eddy wall_langevin wall_langevin_cv wall_langevin_mu"
+names="nowall nodisp eddy langevin eddy_cv e09 mu02 mu05 e09_mu05"
 [ -n "$only" ] && names="${only//,/ }"
 for k in $names; do
   [ -f "$out/$k.toml" ] || { echo "near-wall.sh: unknown variant $k" >&2; exit 2; }
@@ -66,15 +82,18 @@ for k in names:
     d = json.load(open(f"{out}/{k}.json"))
     rows[k] = [(g["group"], g["fates"]["fed"], sum(p["escaped"] for p in g["fates"]["patches"] if p["role"] == "outlet")) for g in d["groups"]]
     rows[k + "/wall_s"] = d["wall_s"]
+    rows[k + "/coll"] = [g["fates"].get("collected", 0) for g in d["groups"]]
 groups = [g for g, _, _ in rows[names[0]]]
-print("eta = 1 - escaped/fed [95 % Wilson interval], 6 s, fed", rows[names[0]][0][1], "per class")
-print(f"{'class':<6}" + "".join(f"{k:>24}" for k in names))
+fed0 = rows[names[0]][0][1]
+print(f"eta = collected/fed [95 % Wilson interval] | 1 - escaped/fed | undecided, %, 6 s, fed {fed0} per class")
+print(f"{'class':<6}" + "".join(f"{k:>30}" for k in names))
 for i, g in enumerate(groups):
     line = f"{g:<6}"
     for k in names:
         _, fed, esc = rows[k][i]
-        lo, hi = wilson(fed - esc, fed)
-        line += f"{1 - esc / fed:>10.3f} [{lo:.3f},{hi:.3f}]"
+        c = rows[k + "/coll"][i]
+        lo, hi = wilson(c, fed)
+        line += f"{100 * c / fed:>8.1f} [{100 * lo:4.1f},{100 * hi:5.1f}] {100 - 100 * esc / fed:5.1f} {100 * (fed - c - esc) / fed:5.1f}"
     print(line)
-print(f"{'wall s':<6}" + "".join(f"{rows[k + '/wall_s']:>24.1f}" for k in names))
+print(f"{'wall s':<6}" + "".join(f"{rows[k + '/wall_s']:>30.1f}" for k in names))
 PY

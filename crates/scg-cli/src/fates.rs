@@ -7,6 +7,7 @@
 use scg_core::physics::mesh_flow::PatchRole;
 use scg_core::physics::scaling::sphere_mass;
 use scg_core::sim::Simulation;
+use scg_core::stages::collect::CollectLog;
 use scg_core::stages::impulse_walls::WallLog;
 use scg_core::stages::mesh_flow::PatchLog;
 use scg_scene::Scene;
@@ -29,7 +30,12 @@ pub struct GroupFates {
     /// Lost: left the domain other than through a patch (outside the mesh, or out of an
     /// analytic domain).
     pub lost: u64,
-    /// Still in the domain (moving or resting on a contact wall).
+    /// Per declared zone (`[[zones]]`, in their order): (zone, collects, count). A
+    /// collecting zone counts the particles that entered it (removed then); any other
+    /// zone the particles still in the domain at the end, in the first such zone holding
+    /// the centre.
+    pub zones: Vec<(String, bool, u64)>,
+    /// Still in the domain (moving or resting on a contact wall), in no zone.
     pub airborne: u64,
 }
 
@@ -37,7 +43,13 @@ impl GroupFates {
     /// Particles accounted for at the end.
     pub fn accounted(&self) -> u64 {
         let through: u64 = self.patches.iter().map(|p| p.2 + p.3).sum();
-        through + self.drained + self.lost + self.airborne
+        let zoned: u64 = self.zones.iter().map(|z| z.2).sum();
+        through + self.drained + self.lost + zoned + self.airborne
+    }
+
+    /// Collected: entered a collecting zone (`[[zones]] collects = true`).
+    pub fn collected(&self) -> u64 {
+        self.zones.iter().filter(|z| z.1).map(|z| z.2).sum()
     }
 
     /// Particles that entered the run.
@@ -49,6 +61,40 @@ impl GroupFates {
 /// The fates of every group of `scene` in `sim` at its end.
 pub fn fates(scene: &Scene, sim: &mut Simulation) -> Vec<GroupFates> {
     let counts = GroupCounts::of(sim);
+    // per group and zone: the collected (removed on entering a collecting zone, from
+    // its log), and the particles still in a zone that does not collect (the first
+    // such zone holding the centre)
+    let mut zoned = vec![vec![0u64; scene.zones.len()]; scene.groups.len()];
+    if !scene.zones.is_empty() {
+        let collect = sim.world.get_resource::<CollectLog>().cloned();
+        let collecting: Vec<usize> = (0..scene.zones.len())
+            .filter(|&z| scene.zones[z].collects)
+            .collect();
+        for (k, &z) in collecting.iter().enumerate() {
+            for (g, row) in zoned.iter_mut().enumerate() {
+                row[z] = collect
+                    .as_ref()
+                    .and_then(|l| l.collected.get(k))
+                    .and_then(|v| v.get(g))
+                    .map_or(0, |t| t.len() as u64);
+            }
+        }
+        let mut q = sim.world.query::<(
+            &scg_core::components::GroupId,
+            &scg_core::components::Position,
+        )>();
+        for (g, x) in q.iter(&sim.world) {
+            if let (Some(row), Some(z)) = (
+                zoned.get_mut(g.0 as usize),
+                scene
+                    .zones
+                    .iter()
+                    .position(|z| !z.collects && z.region.contains(x.0)),
+            ) {
+                row[z] += 1;
+            }
+        }
+    }
     let log = sim.world.get_resource::<PatchLog>().cloned();
     let walls = sim.world.get_resource::<WallLog>().cloned();
     let mesh = scene.mesh_flow.as_ref().map(|m| m.flow.clone());
@@ -69,6 +115,13 @@ pub fn fates(scene: &Scene, sim: &mut Simulation) -> Vec<GroupFates> {
             };
             let drained = times(&counts.drained);
             let lost = times(&counts.lost);
+            for (z, zone) in scene.zones.iter().enumerate() {
+                let k = zoned[g][z];
+                f.zones.push((zone.name.clone(), zone.collects, k));
+                if !zone.collects {
+                    f.airborne -= k;
+                }
+            }
             match (&log, &mesh) {
                 (Some(log), Some(flow)) => {
                     let m = flow.mesh();
@@ -154,7 +207,20 @@ pub fn render(fates: &[GroupFates]) -> String {
             line("drained (outlet)".into(), f.drained);
         }
         line("lost (left the domain elsewhere)".into(), f.lost);
-        line("airborne (in the domain)".into(), f.airborne);
+        for (zone, collects, k) in &f.zones {
+            let what = if *collects {
+                format!("collected in zone `{zone}`")
+            } else {
+                format!("in zone `{zone}` at the end")
+            };
+            line(what, *k);
+        }
+        let what = if f.zones.is_empty() {
+            "airborne (in the domain)"
+        } else {
+            "airborne (in the domain, no zone)"
+        };
+        line(what.into(), f.airborne);
         if f.accounted() != n {
             s += &format!(
                 "    warning: {} accounted for, {n} entered\n",
@@ -166,7 +232,9 @@ pub fn render(fates: &[GroupFates]) -> String {
 }
 
 /// The fates as CSV rows `group,fate,patch,count,share,mass_kg` (fate: `entered`,
-/// `escaped`, `stuck`, `drained`, `lost`, `airborne`; share of the entered; mass of the
+/// `escaped`, `stuck`, `drained`, `lost`, `collected` and `zone` (the zone's name in the
+/// patch column),
+/// `airborne`; share of the entered; mass of the
 /// original powder), one row per group and fate (per patch for escaped and stuck).
 pub fn csv(fates: &[GroupFates]) -> String {
     let mut s = String::from("group,fate,patch,count,share,mass_kg\n");
@@ -187,6 +255,9 @@ pub fn csv(fates: &[GroupFates]) -> String {
         }
         row("drained", "", f.drained);
         row("lost", "", f.lost);
+        for (zone, collects, k) in &f.zones {
+            row(if *collects { "collected" } else { "zone" }, zone, *k);
+        }
         row("airborne", "", f.airborne);
     }
     s
@@ -215,6 +286,11 @@ pub fn json(f: &GroupFates) -> serde_json::Value {
         "drained": f.drained,
         "lost": f.lost,
         "lost_mass": m(f.lost),
+        "zones": f.zones.iter().map(|(z, c, k)| serde_json::json!({
+            "zone": z, "collects": c, "count": k, "mass": m(*k),
+        })).collect::<Vec<_>>(),
+        "collected": f.collected(),
+        "collected_mass": m(f.collected()),
         "airborne": f.airborne,
         "airborne_mass": m(f.airborne),
         "conserved": f.accounted() == f.entered(),
@@ -275,6 +351,7 @@ mod tests {
             ],
             drained: 0,
             lost: 0,
+            zones: Vec::new(),
             airborne: 1,
         };
         assert_eq!(f.accounted(), 10);
@@ -292,6 +369,29 @@ mod tests {
         assert!(c.contains("d5,escaped,outlet,6,6e-1,1.2e-11\n"), "{c}");
         assert!(c.contains("d5,stuck,walls,3,3e-1,6e-12\n"), "{c}");
         assert_eq!(j["conserved"], true);
+        // a collecting zone and one counted at the end add to the books
+        let mut z = f.clone();
+        z.patches.pop();
+        z.zones = vec![("bin".into(), true, 2), ("pipe".into(), false, 1)];
+        assert_eq!((z.accounted(), z.collected()), (10, 2));
+        let t = render(std::slice::from_ref(&z));
+        assert!(
+            t.contains("collected in zone `bin`") && t.contains("in zone `pipe` at the end"),
+            "{t}"
+        );
+        assert!(!t.contains("warning"), "{t}");
+        let c = csv(std::slice::from_ref(&z));
+        assert!(
+            c.contains("d5,collected,bin,2,") && c.contains("d5,zone,pipe,1,"),
+            "{c}"
+        );
+        assert_eq!(
+            (
+                json(&z)["collected"].as_u64(),
+                json(&z)["zones"][1]["collects"].as_bool()
+            ),
+            (Some(2), Some(false))
+        );
         f.airborne = 0;
         assert!(render(&[f]).contains("warning: 9 accounted for, 10 entered"));
     }

@@ -30,6 +30,28 @@ pub enum Region {
 }
 
 impl Region {
+    /// Whether x is in the region (its boundary included), m.
+    pub fn contains(&self, x: DVec3) -> bool {
+        match *self {
+            Region::Box { min, max } => x.cmpge(min).all() && x.cmple(max).all(),
+            Region::Cylinder {
+                center,
+                axis,
+                radius_min,
+                radius_max,
+                height,
+            } => {
+                let d = x - center;
+                let h = d.dot(axis);
+                let r2 = (d - h * axis).length_squared();
+                h >= height.0
+                    && h <= height.1
+                    && r2 >= radius_min * radius_min
+                    && r2 <= radius_max * radius_max
+            }
+        }
+    }
+
     /// A point uniformly at random in the region (uniform in area for the annulus).
     ///
     /// Any finite region gives a finite point: a range whose width overflows (a region
@@ -71,5 +93,43 @@ impl Region {
                 center + axis * h + r * (a * phi.cos() + b * phi.sin())
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+
+    #[test]
+    fn sampled_points_are_contained_and_outside_points_are_not() {
+        let regions = [
+            Region::Box {
+                min: DVec3::new(-1.0, 0.0, 2.0),
+                max: DVec3::new(1.0, 0.5, 3.0),
+            },
+            Region::Cylinder {
+                center: DVec3::new(0.0, 0.0, -1.0),
+                axis: DVec3::Z,
+                radius_min: 0.1,
+                radius_max: 0.25,
+                height: (0.0, 0.2),
+            },
+        ];
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for r in &regions {
+            for _ in 0..1000 {
+                let x = r.sample(&mut rng);
+                // sampled on the boundary to rounding: shrink toward the inside by 1e-12
+                assert!(
+                    r.contains(x) || r.contains(x * (1.0 - 1e-12)),
+                    "{x} in {r:?}"
+                );
+            }
+        }
+        assert!(!regions[0].contains(DVec3::new(0.0, 0.6, 2.5)));
+        assert!(!regions[1].contains(DVec3::new(0.05, 0.0, -0.9))); // inside radius_min
+        assert!(!regions[1].contains(DVec3::new(0.2, 0.0, -0.7))); // above the height
+        assert!(regions[1].contains(DVec3::new(0.0, 0.2, -0.9)));
     }
 }

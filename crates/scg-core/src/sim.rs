@@ -70,6 +70,8 @@ pub struct InletOutlet {
     pub seed: u64,
     /// Walls that rebound, stick or escape as impulses (no contact law).
     pub impulse_walls: Vec<crate::stages::impulse_walls::ImpulseWall>,
+    /// Collecting zones: a particle whose centre enters one is removed as collected.
+    pub collect_zones: Vec<crate::region::Region>,
 }
 
 /// Why a run stopped early.
@@ -242,6 +244,9 @@ impl Simulation {
         }
         if let Some(o) = io.outlet {
             outlet::plugin(&mut world, &mut b, o, ng);
+        }
+        if !io.collect_zones.is_empty() {
+            crate::stages::collect::plugin(&mut world, &mut b, io.collect_zones, ng);
         }
         feeder::plugin(&mut world, &mut b, &io.feeders, io.seed);
         if cfg.mesh_flow.as_ref().is_some_and(|m| m.sort_every > 0) && cfg.contacts.is_none() {

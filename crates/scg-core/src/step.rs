@@ -103,6 +103,8 @@ pub enum StepSystem {
     AdvanceClock,
     /// Remove drained and lost particles.
     DrainParticles,
+    /// Remove particles that entered a collecting zone.
+    CollectParticles,
     /// Remove particles that left a mesh flow through an outlet or lost patch.
     MeshBoundary,
     /// Rebound, stick or escape at walls that act as impulses.
@@ -135,6 +137,7 @@ impl StepSystem {
             StepSystem::IntegrateRotation => "integrate_rotation",
             StepSystem::AdvanceClock => "advance_clock",
             StepSystem::DrainParticles => "drain_particles",
+            StepSystem::CollectParticles => "collect_particles",
             StepSystem::MeshBoundary => "mesh_boundary",
             StepSystem::ImpulseWalls => "impulse_walls",
             StepSystem::FeedParticles => "feed_particles",
@@ -149,7 +152,7 @@ impl StepSystem {
     /// The step table: every system with its set, in execution order. The builder places
     /// each system by its row here (whatever order the plugins add them in) and refuses a
     /// system added to another set; `scg run --plan` lists a scene's rows in this order.
-    pub const TABLE: [(StepSet, StepSystem); 20] = {
+    pub const TABLE: [(StepSet, StepSystem); 21] = {
         use StepSet::*;
         use StepSystem::*;
         [
@@ -168,10 +171,12 @@ impl StepSystem {
             (Integration, IntegrateMeshFlow),
             (Integration, IntegrateRotation),
             (Integration, AdvanceClock),
-            // Departures first (mesh patches, impulse walls, the outlet), then arrivals.
+            // Departures first (mesh patches, impulse walls, the outlet, collecting
+            // zones), then arrivals.
             (InletOutlet, MeshBoundary),
             (InletOutlet, ImpulseWalls),
             (InletOutlet, DrainParticles),
+            (InletOutlet, CollectParticles),
             (InletOutlet, FeedParticles),
             // After the feeders: the new particles are sorted in too.
             (InletOutlet, SortByCell),

@@ -9,8 +9,9 @@ use std::path::Path;
 use scg_core::checkpoint::Checkpoint;
 
 const MAGIC: &[u8; 8] = b"SCGCKPT\0";
-/// 2: particle records carry the carrier offset and the dispersion state.
-const FORMAT: u32 = 2;
+/// 2: particle records carry the carrier offset and the dispersion state; 3: the
+/// collecting zones' log.
+const FORMAT: u32 = 3;
 
 /// Write `c` to `path` atomically.
 pub fn write_checkpoint(path: &Path, c: &Checkpoint) -> Result<(), String> {

@@ -97,6 +97,12 @@ impl Scene {
             outlet: self.outlet.as_ref().map(|o| self.outlet_spec(o)),
             seed: self.seed,
             impulse_walls: self.impulse_walls.clone(),
+            collect_zones: self
+                .zones
+                .iter()
+                .filter(|z| z.collects)
+                .map(|z| z.region.clone())
+                .collect(),
         }
     }
 

@@ -22,7 +22,7 @@ mod validate;
 
 pub use error::SceneError;
 pub use model::{
-    DtChoice, Feeder, Group, Outlet, PatchWalls, Placement, Region, Scene, SceneMeshFlow,
+    DtChoice, Feeder, Group, Outlet, PatchWalls, Placement, Region, Scene, SceneMeshFlow, Zone,
 };
 pub use overrides::apply_overrides;
 pub use validate::{DEFAULT_SCENE, load, parse, parse_in};

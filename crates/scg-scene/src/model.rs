@@ -142,6 +142,20 @@ pub struct Scene {
     /// How the dispersion's turbulence was obtained (for `scg check`): e.g. "k and ε from
     /// fields `k`, `epsilon`", "ε = 0.09·k·ω from field `omega`".
     pub dispersion_source: String,
+    /// Named regions the fates count the particles in at the end (`[[zones]]`).
+    pub zones: Vec<Zone>,
+}
+
+/// A named region of the fates (`[[zones]]`): a particle in the domain at the end is
+/// counted in the first zone holding its centre.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Zone {
+    /// Name.
+    pub name: String,
+    /// Whether the particles in it count as collected (a dust bin, a hopper).
+    pub collects: bool,
+    /// Where.
+    pub region: Region,
 }
 
 /// A `scg check` warning a scene may accept knowingly (`[checks] allow = [...]`), e.g. a

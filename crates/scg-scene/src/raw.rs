@@ -41,6 +41,19 @@ pub struct RawScene {
     pub outlet: Option<RawOutlet>,
     pub checks: Option<RawChecks>,
     pub dispersion: Option<RawDispersion>,
+    #[serde(default)]
+    pub zones: Vec<RawZone>,
+}
+
+/// `[[zones]]`: a named region the fates count the particles in at the end.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawZone {
+    pub name: String,
+    /// The particles in it at the end are collected (a dust bin, a hopper).
+    #[serde(default)]
+    pub collects: bool,
+    pub region: RawRegion,
 }
 
 /// `[dispersion]`: turbulent dispersion (docs/dispersion.md).

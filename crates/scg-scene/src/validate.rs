@@ -127,6 +127,28 @@ fn particle_budget(scene: &Scene, cx: &Ctx) -> Result<(), SceneError> {
     Ok(())
 }
 
+/// `[[zones]]`: names non-empty and distinct, regions as the feeders'.
+fn zones(raw: &[crate::raw::RawZone], cx: &Ctx) -> Result<Vec<crate::model::Zone>, SceneError> {
+    let mut out: Vec<crate::model::Zone> = Vec::new();
+    for (i, z) in raw.iter().enumerate() {
+        if z.name.trim().is_empty() {
+            return Err(cx.err(&format!("zones[{i}].name"), "must be a non-empty name"));
+        }
+        if out.iter().any(|o| o.name == z.name) {
+            return Err(cx.err(
+                &format!("zones[{i}].name"),
+                format!("zone `{}` is declared twice", z.name),
+            ));
+        }
+        out.push(crate::model::Zone {
+            name: z.name.clone(),
+            collects: z.collects,
+            region: particles::region(&z.region, &format!("zones[{i}].region"), cx)?,
+        });
+    }
+    Ok(out)
+}
+
 fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
     let duration = cx.positive("duration", raw.duration)?;
     let integrator = raw
@@ -299,6 +321,7 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
             .unwrap_or_default(),
         dispersion,
         dispersion_source,
+        zones: zones(&raw.zones, cx)?,
     };
     if let (Some(c), Some(mat), Some(law)) = (&contacts_raw, material, normal_law) {
         scene.contacts = Some(contacts(c, mat, law, &scene.groups, cx)?);

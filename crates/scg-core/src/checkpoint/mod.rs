@@ -182,6 +182,7 @@ impl Simulation {
             patches: None,
             impulse_walls: None,
             contacts: None,
+            collected: None,
         };
         if let Some(reg) = w.get_resource::<Persistence>() {
             for p in reg.iter() {

@@ -119,6 +119,8 @@ pub struct Checkpoint {
     pub impulse_walls: Option<[Vec<Vec<u64>>; 2]>,
     /// Contact arrays, when the scene has particle contacts.
     pub contacts: Option<ContactRecord>,
+    /// Collecting zones' log: collection times per zone and group, s.
+    pub collected: Option<Vec<Vec<Vec<f64>>>>,
 }
 
 /// A stage's part of a checkpoint: the stage that holds the state saves and restores it.
@@ -148,6 +150,8 @@ pub enum Part {
     ImpulseWalls,
     /// The contact arrays and the step displacement.
     Contacts,
+    /// The collecting zones' log.
+    Collect,
 }
 
 impl Part {
@@ -161,6 +165,7 @@ impl Part {
             }
             Part::ImpulseWalls => "the scene and the checkpoint differ in the impulse walls".into(),
             Part::Contacts => "the scene and the checkpoint differ in particle contacts".into(),
+            Part::Collect => "the scene and the checkpoint differ in the collecting zones".into(),
         }
     }
 }
@@ -174,6 +179,7 @@ impl Checkpoint {
             (Part::Patches, self.patches.is_some()),
             (Part::ImpulseWalls, self.impulse_walls.is_some()),
             (Part::Contacts, self.contacts.is_some()),
+            (Part::Collect, self.collected.is_some()),
         ]
         .into_iter()
         .filter_map(|(p, held)| held.then_some(p))

@@ -3,6 +3,7 @@
 //! systems stay thin and call the pure laws of [`crate::physics`]. They reach the
 //! particles' columns through [`table`], which keeps every particle in one storage table.
 pub mod carrier;
+pub mod collect;
 pub mod contacts;
 pub mod feeder;
 pub mod guard;

@@ -131,7 +131,7 @@ pub(super) fn group(g: &RawGroup, i: usize, cx: &Ctx, fed: bool) -> Result<Group
 }
 
 /// A region at `key` (a group's or a feeder's).
-fn region(r: &RawRegion, key: &str, cx: &Ctx) -> Result<Region, SceneError> {
+pub(super) fn region(r: &RawRegion, key: &str, cx: &Ctx) -> Result<Region, SceneError> {
     let k = |s: &str| format!("{key}.{s}");
     match r.kind {
         RawRegionKind::Box => {

@@ -1,11 +1,14 @@
 //! Grade efficiency of a cyclone per size class, its cut size, and residence-time
 //! distances, in the `grade.json` field names shared with `cases/cyclone/vs-openfoam.sh`.
 //!
-//! A particle fed at the inlet ends one of three ways: **escaped** through the vortex
-//! finder (the `outlet` patch), **lost** back out through the inlet, or **held** inside at
-//! the end of the run (the bottom is closed: collected dust stays in the cyclone). The grade
-//! efficiency of a class is 1 − escaped/fed: held and lost both count as not escaped, and
-//! their shares are reported beside it.
+//! A particle fed at the inlet ends one of four ways: **collected** in the scene's
+//! collecting zone (the dust outlet at the bottom of the cone: `[[zones]] collects =
+//! true`), **escaped** through the vortex finder (the `outlet` patch), **lost** back out
+//! through the inlet, or **held**: still inside at the end, undecided. The grade
+//! efficiency of a class is collected/fed, with escaped/fed and the undecided share beside
+//! it; the two bound the efficiency a longer run would give (collected/fed ≤ η ≤
+//! 1 − escaped/fed). A run without a collecting zone (and another code's `grade.json`
+//! without `collected` counts) has only the upper bound: its efficiency is 1 − escaped/fed.
 
 use serde::{Deserialize, Serialize};
 
@@ -34,7 +37,11 @@ pub struct ClassGrade {
     /// Lost through the inlet (or elsewhere).
     #[serde(default)]
     pub lost: u64,
-    /// 1 − escaped / fed (NaN, written null, when none was fed).
+    /// Collected in a collecting zone (`None`: the run had none, or the file says none).
+    #[serde(default)]
+    pub collected: Option<u64>,
+    /// Grade efficiency: collected / fed where the run collects, else 1 − escaped / fed
+    /// (NaN, written null, when none was fed).
     #[serde(default = "nan", with = "nan_as_null")]
     pub efficiency: f64,
     /// Feed-to-escape times of the escaped particles, s, sorted.
@@ -87,8 +94,37 @@ impl ClassGrade {
             escaped,
             held,
             lost,
+            collected: None,
             efficiency: efficiency(fed, escaped),
             residence_times,
+        }
+    }
+
+    /// The class with `n` particles collected: its efficiency becomes collected / fed.
+    pub fn with_collected(mut self, n: u64) -> Self {
+        self.collected = Some(n);
+        self.efficiency = share(n, self.fed);
+        self
+    }
+
+    /// The efficiency again from the counts (collected / fed, or 1 − escaped / fed).
+    pub fn recompute(&mut self) {
+        self.efficiency = match self.collected {
+            Some(n) => share(n, self.fed),
+            None => efficiency(self.fed, self.escaped),
+        };
+    }
+
+    /// Share of the fed that escaped.
+    pub fn escaped_share(&self) -> f64 {
+        share(self.escaped, self.fed)
+    }
+
+    /// Wilson's 95 % interval of the efficiency.
+    pub fn efficiency95(&self) -> (f64, f64) {
+        match self.collected {
+            Some(n) => wilson95(n, self.fed),
+            None => wilson95(self.fed.saturating_sub(self.escaped), self.fed),
         }
     }
 
@@ -174,14 +210,15 @@ pub struct ExternalGrade {
 
 impl ExternalGrade {
     /// Read `path`; the efficiency of each class is recomputed from its counts when they
-    /// are there (fed > 0), so that both codes use the same definition.
+    /// are there (fed > 0), so that both codes use the same definition (collected / fed
+    /// where the class has `collected`, else 1 − escaped / fed).
     pub fn read(path: &std::path::Path) -> Result<Self, String> {
         let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
         let mut g: ExternalGrade =
             serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
         for c in &mut g.classes {
             if c.fed > 0 {
-                c.efficiency = efficiency(c.fed, c.escaped);
+                c.recompute();
             }
             c.residence_times.sort_by(f64::total_cmp);
         }
@@ -239,6 +276,16 @@ mod tests {
         let d = cut_size(&cs).unwrap();
         assert!((d - 2.5e-6).abs() < 1e-15, "{d}");
         assert_eq!(cs[0].held_share(), 0.2);
+        // Collected 30 of 100: the efficiency is the collected share, the interval its
+        // own; the escaped share stays beside it.
+        let c = cs[0].clone().with_collected(30);
+        assert_eq!((c.efficiency, c.escaped_share()), (0.3, 0.8));
+        assert_eq!(c.efficiency95(), wilson95(30, 100));
+        let mut back: ClassGrade =
+            serde_json::from_str(&serde_json::to_string(&c).unwrap()).unwrap();
+        back.efficiency = 0.0;
+        back.recompute();
+        assert_eq!(back.efficiency, 0.3);
         assert_eq!(cs[0].lost_share(), 0.0);
         // Never through 0.5: no cut.
         assert_eq!(cut_size(&cs[2..]), None);

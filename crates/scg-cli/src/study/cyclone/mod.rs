@@ -1,8 +1,10 @@
 //! `scg study cyclone`: grade efficiency of the OpenFOAM cyclone (`cases/cyclone.toml`) in
 //! five variants (original, SCG α = 2 and 4, no SCG α = 2, parcel α = 2), each feeding the
-//! same mass (1/α³ as many particles for the coarse-grained), with residence times, the
-//! cut size beside cyclone theory and, optionally, OpenFOAM's grade curve on the same
-//! field (`--openfoam grade.json` of `cases/cyclone/vs-openfoam.sh`).
+//! same mass (1/α³ as many particles for the coarse-grained), with the scene's wall
+//! function, turbulent dispersion and collecting dust outlet: per class the collected,
+//! escaped and undecided shares with Wilson intervals, residence times, the cut size
+//! beside cyclone theory and, optionally, OpenFOAM's grade curve on the same field
+//! (`--openfoam grade.json` of `cases/cyclone/vs-openfoam.sh`).
 //!
 //! * `theory.rs`: Lapple and Barth–Muschelknautz cut sizes;
 //! * `grade.rs`: per-class counts, efficiency, d50, residence-time W1, `grade.json`;
@@ -86,6 +88,16 @@ pub fn scene_text() -> Result<String, String> {
         &format!("case = {:?}", dir.display().to_string()),
         1,
     ))
+}
+
+/// The cyclone scene's air field on Barth–Muschelknautz's control surface (the roof at
+/// z = 1 m), 64 × 64 points; `None` when the scene does not load.
+pub fn field_swirl(text: &str) -> Option<(f64, f64)> {
+    let scene = scg_scene::parse(text, "<cyclone>", "cyclone", &[]).ok()?;
+    let flow = scene.mesh_flow.as_ref()?.flow.clone();
+    Cyclone::OPENFOAM_TUTORIAL.control_surface(1.0, 64, |x| {
+        flow.find_cell(x).and_then(|c| flow.velocity_in(c, x))
+    })
 }
 
 /// A finished study read back from `dir`: the runs of its `summary.json`, each with the
@@ -280,7 +292,8 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
     }
     // In the order of VARIANTS (the original first).
     runs.sort_by_key(|r| VARIANTS.iter().position(|v| v.0 == r.name));
-    let theory = Cyclone::OPENFOAM_TUTORIAL;
+    let mut theory = Cyclone::OPENFOAM_TUTORIAL;
+    theory.field_swirl = field_swirl(&text);
     print!("{}", report(&runs, &theory, openfoam.as_ref()));
     let outline = match scg_scene::parse(&text, "<cyclone>", "cyclone", &[]) {
         Ok(s) => s.patch_surfaces(),

@@ -137,6 +137,7 @@ fn class_json(
     let mut j = serde_json::to_value(c).unwrap_or_default();
     if let (Some(m), serde_json::Value::Object(e)) = (j.as_object_mut(), extra) {
         m.insert("held_share".into(), num(c.held_share()));
+        m.insert("escaped_share".into(), num(c.escaped_share()));
         m.insert("lost_share".into(), num(c.lost_share()));
         m.insert("mean_residence_time".into(), num(c.mean_residence()));
         m.insert(
@@ -144,7 +145,7 @@ fn class_json(
             num(100.0 * (c.efficiency - reference.efficiency)),
         );
         m.insert("two_sigma_pp".into(), num(two_sigma_pp(c)));
-        let (lo, hi) = wilson95(c.fed.saturating_sub(c.escaped), c.fed);
+        let (lo, hi) = c.efficiency95();
         m.insert(
             "efficiency_95".into(),
             serde_json::json!([num(lo), num(hi)]),
@@ -230,12 +231,12 @@ pub fn summary(
         "code": "scg",
         "case": "cyclone",
         "definitions": {
-            "efficiency": "1 - escaped/fed (escaped: left through the outlet patch, the vortex finder; held: inside at the end; lost: out through the inlet)",
+            "efficiency": "collected/fed where the scene has a collecting zone (collected: entered it, the dust outlet at the bottom of the cone), else 1 - escaped/fed (escaped: left through the outlet patch, the vortex finder; held: inside at the end, undecided; lost: out through the inlet)",
             "residence_times": "feed-to-escape time of each escaped particle, s (held and lost particles have none)",
             "w1_over_mean": "1-Wasserstein distance between the class's residence times and the original's, over the original's mean",
             "delta_efficiency_pp": "efficiency minus the original's (OpenFOAM: minus scg original's), percentage points",
             "two_sigma_pp": "two binomial standard errors of the efficiency from the fed count, percentage points",
-            "efficiency_95": "Wilson's 95 % score interval of the efficiency (held or lost over fed)",
+            "efficiency_95": "Wilson's 95 % score interval of the efficiency",
             "escaped_share_95": "Wilson's 95 % score interval of escaped/fed",
             "held_moving": format!("held particles faster than {MOVING} m/s at the end"),
             "escaped_in_last_s": format!("escapes during the last {LATE} s of the run"),
@@ -245,6 +246,10 @@ pub fn summary(
             "density": rho,
             "lapple_d50": theory.lapple_d50(rho),
             "barth_muschelknautz_d50": theory.barth_muschelknautz_d50(rho),
+            "barth_muschelknautz_v_theta": theory.bm_tangential_velocity(),
+            "field_v_theta": opt_num(theory.field_swirl.map(|f| f.0)),
+            "field_v_r": opt_num(theory.field_swirl.map(|f| f.1)),
+            "barth_muschelknautz_d50_field_swirl": opt_num(theory.field_swirl.map(|f| theory.bm_d50_with_swirl(rho, f.0))),
         },
         "variants": variants,
         "openfoam": of,
@@ -259,9 +264,15 @@ pub fn summary(
 pub fn report(runs: &[CycloneRun], theory: &Cyclone, openfoam: Option<&ExternalGrade>) -> String {
     let mut s = String::new();
     let o = &runs[0];
+    let collects = o.classes.iter().any(|c| c.collected.is_some());
     let _ = writeln!(
         s,
-        "grade efficiency 1 − escaped/fed, % (simulated {:.1} s; fed per class: {})",
+        "grade efficiency {}, % (simulated {:.1} s; fed per class: {})",
+        if collects {
+            "collected/fed"
+        } else {
+            "1 − escaped/fed"
+        },
         o.duration,
         runs.iter()
             .map(|v| format!("{} {}", v.name, v.classes.first().map_or(0, |c| c.fed)))
@@ -277,8 +288,8 @@ pub fn report(runs: &[CycloneRun], theory: &Cyclone, openfoam: Option<&ExternalG
     }
     let _ = writeln!(
         s,
-        "   | original: held {:>5} lost {:>5} moving {:>5} late",
-        "", "", ""
+        "   | original: {:>15} {:>15} {:>6} {:>6} {:>6} {:>5}",
+        "η [95 %]", "escaped [95 %]", "held", "lost", "moving", "late"
     );
     for (i, c) in o.classes.iter().enumerate() {
         let _ = write!(s, "{:>7.1}", c.diameter * 1e6);
@@ -289,9 +300,17 @@ pub fn report(runs: &[CycloneRun], theory: &Cyclone, openfoam: Option<&ExternalG
             let e = g.matching(c.diameter).map_or(f64::NAN, |m| m.efficiency);
             let _ = write!(s, " {:>9.1}", 100.0 * e);
         }
+        let (lo, hi) = c.efficiency95();
+        let (elo, ehi) = wilson95(c.escaped, c.fed);
         let _ = writeln!(
             s,
-            "   |          {:>5.1}% {:>5.1}% {:>6} {:>5}",
+            "   |           {:>4.0} [{:>3.0},{:>3.0}]  {:>4.0} [{:>3.0},{:>3.0}] {:>5.1}% {:>5.1}% {:>6} {:>5}",
+            100.0 * c.efficiency,
+            100.0 * lo,
+            100.0 * hi,
+            100.0 * c.escaped_share(),
+            100.0 * elo,
+            100.0 * ehi,
             100.0 * c.held_share(),
             100.0 * c.lost_share(),
             o.held_moving[i],
@@ -300,8 +319,9 @@ pub fn report(runs: &[CycloneRun], theory: &Cyclone, openfoam: Option<&ExternalG
     }
     let _ = writeln!(
         s,
-        "(held/lost: shares of the fed; moving: held particles faster than {MOVING} m/s at the \
-         end; late: escapes in the last {LATE} s)"
+        "(η and escaped with Wilson's 95 % interval; held: still inside at the end, undecided; \
+         lost: out through the inlet; all shares of the fed; moving: held particles faster than \
+         {MOVING} m/s at the end; late: escapes in the last {LATE} s)"
     );
     let _ = writeln!(
         s,
@@ -386,10 +406,22 @@ pub fn report(runs: &[CycloneRun], theory: &Cyclone, openfoam: Option<&ExternalG
     }
     let _ = writeln!(
         s,
-        "cyclone theory at {rho} kg/m³: Lapple d50 = {:.2} µm, Barth–Muschelknautz x50 = {:.2} µm",
+        "cyclone theory at {rho} kg/m³: Lapple d50 = {:.2} µm, Barth–Muschelknautz x50 = {:.2} µm \
+         (its swirl v_θCS = {:.1} m/s)",
         theory.lapple_d50(rho) * 1e6,
-        theory.barth_muschelknautz_d50(rho) * 1e6
+        theory.barth_muschelknautz_d50(rho) * 1e6,
+        theory.bm_tangential_velocity()
     );
+    if let Some((vt, vr)) = theory.field_swirl {
+        let _ = writeln!(
+            s,
+            "the air field on the control surface (r = R_x below the vortex finder): v_θ = {vt:.1} m/s, \
+             inward v_r = {vr:.2} m/s (the model's {:.2}); Barth–Muschelknautz with the field's swirl: \
+             x50 = {:.2} µm",
+            theory.bm_radial_velocity(),
+            theory.bm_d50_with_swirl(rho, vt) * 1e6
+        );
+    }
     let _ = writeln!(s, "\ncriteria (issue 16):");
     for c in criteria(runs) {
         let verdict = match c.pass() {

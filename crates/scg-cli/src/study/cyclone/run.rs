@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use glam::DVec3;
 use scg_core::components::{GroupId, ParticleId};
+use scg_core::stages::collect::CollectLog;
 use scg_core::stages::outlet::OutletLog;
 use scg_core::state::Tally;
 
@@ -17,9 +18,10 @@ use super::grade::ClassGrade;
 /// Each step, every present particle is shown to [`Tracker::observe`] with the outlet log.
 /// A particle seen for the first time was fed that step; one seen before and absent now
 /// left that step. The log says how many of each group escaped and how many were lost in
-/// the step; when a group has only escapes (or only losses) the departed ids are
-/// unambiguous, else (escapes and losses of one group in the same step, or counts that do
-/// not match) their residence times are left out and counted in `unmatched`.
+/// the step, and the collect log how many were collected; when a group has only escapes
+/// (or none) the departed ids are unambiguous, else (escapes and losses or collections of
+/// one group in the same step, or counts that do not match) their residence times are left
+/// out and counted in `unmatched`.
 #[derive(Clone, Debug, Default)]
 pub struct Tracker {
     fed_at: Vec<f64>,
@@ -29,6 +31,7 @@ pub struct Tracker {
     epoch: u64,
     drained_seen: Vec<usize>,
     lost_seen: Vec<usize>,
+    collected_seen: Vec<u64>,
     /// Feed-to-escape times per group, s, in order of escape.
     pub residence: Vec<Vec<f64>>,
     /// Departed particles whose escape could not be told from a loss.
@@ -41,14 +44,22 @@ impl Tracker {
         Tracker {
             drained_seen: vec![0; groups],
             lost_seen: vec![0; groups],
+            collected_seen: vec![0; groups],
             residence: vec![Vec::new(); groups],
             ..Default::default()
         }
     }
 
-    /// The particles `present` (id, group) after a step ending at time `t`, and the
-    /// outlet log then.
-    pub fn observe(&mut self, t: f64, present: impl Iterator<Item = (u32, u32)>, log: &OutletLog) {
+    /// The particles `present` (id, group) after a step ending at time `t`, the outlet
+    /// log then and the particles collected so far per group (`&[]` without collecting
+    /// zones).
+    pub fn observe(
+        &mut self,
+        t: f64,
+        present: impl Iterator<Item = (u32, u32)>,
+        log: &OutletLog,
+        collected: &[u64],
+    ) {
         self.epoch += 1;
         for (id, g) in present {
             let k = id as usize;
@@ -83,7 +94,11 @@ impl Tracker {
                 .get(g)
                 .map_or(&[][..], |v| &v[self.drained_seen[g]..]);
             let lost = log.lost.get(g).map_or(0, |v| v.len() - self.lost_seen[g]);
-            if ids.len() == drained.len() + lost && (lost == 0 || drained.is_empty()) {
+            let now = collected.get(g).copied().unwrap_or(0);
+            let coll = (now - self.collected_seen[g]) as usize;
+            self.collected_seen[g] = now;
+            let others = lost + coll;
+            if ids.len() == drained.len() + others && (others == 0 || drained.is_empty()) {
                 for (id, td) in ids.iter().zip(drained) {
                     self.residence[g].push(td - self.fed_at[*id as usize]);
                 }
@@ -175,8 +190,12 @@ pub fn run_variant(
     for step in 1..=steps {
         sim.step().map_err(|e| e.to_string())?;
         let t = sim.time();
+        let collected: Vec<u64> = sim
+            .world
+            .get_resource::<CollectLog>()
+            .map_or(Vec::new(), |l| (0..ng).map(|g| l.count(g)).collect());
         let present = query.iter(&sim.world).map(|(id, g)| (id.0, g.0));
-        tracker.observe(t, present, sim.world.resource::<OutletLog>());
+        tracker.observe(t, present, sim.world.resource::<OutletLog>(), &collected);
         if step == snap_step {
             snapshot = (
                 t,
@@ -192,6 +211,7 @@ pub fn run_variant(
     sim.finish_recorders().map_err(|e| e.to_string())?;
     let log = sim.world.resource::<OutletLog>().clone();
     let fed = sim.world.resource::<Tally>().fed.clone();
+    let collect = sim.world.get_resource::<CollectLog>().cloned();
     let end = sim.time();
     let ps = sim.particles();
     let mut held = vec![0u64; ng];
@@ -208,7 +228,7 @@ pub fn run_variant(
         .iter()
         .enumerate()
         .map(|(g, grp)| {
-            ClassGrade::new(
+            let c = ClassGrade::new(
                 &grp.name,
                 grp.diameter,
                 grp.density,
@@ -219,7 +239,11 @@ pub fn run_variant(
                     log.lost[g].len() as u64,
                 ],
                 std::mem::take(&mut tracker.residence[g]),
-            )
+            );
+            match &collect {
+                Some(l) => c.with_collected(l.count(g)),
+                None => c,
+            }
         })
         .collect();
     let escaped_late = log
@@ -271,37 +295,46 @@ mod tests {
         };
         let mut tr = Tracker::new(2);
         // t = 1: ids 0 (group 0), 1 (group 1) fed.
-        tr.observe(1.0, [(0, 0), (1, 1)].into_iter(), &log);
+        tr.observe(1.0, [(0, 0), (1, 1)].into_iter(), &log, &[]);
         // t = 2: id 2 (group 0) fed.
-        tr.observe(2.0, [(0, 0), (1, 1), (2, 0)].into_iter(), &log);
+        tr.observe(2.0, [(0, 0), (1, 1), (2, 0)].into_iter(), &log, &[]);
         // t = 3: id 0 escaped.
         log.drained[0].push(3.0);
-        tr.observe(3.0, [(1, 1), (2, 0)].into_iter(), &log);
+        tr.observe(3.0, [(1, 1), (2, 0)].into_iter(), &log, &[]);
         assert_eq!(tr.residence[0], vec![2.0]);
         // t = 4: id 1 lost (no residence time), id 3 (group 1) fed.
         log.lost[1].push(4.0);
-        tr.observe(4.0, [(2, 0), (3, 1)].into_iter(), &log);
+        tr.observe(4.0, [(2, 0), (3, 1)].into_iter(), &log, &[]);
         assert!(tr.residence[1].is_empty());
         assert_eq!(tr.unmatched, 0);
         // t = 5: id 2 escaped and id 3 escaped (different groups, both unambiguous).
         log.drained[0].push(5.0);
         log.drained[1].push(5.0);
-        tr.observe(5.0, std::iter::empty(), &log);
+        tr.observe(5.0, std::iter::empty(), &log, &[]);
         assert_eq!(tr.residence[0], vec![2.0, 3.0]);
         assert_eq!(tr.residence[1], vec![1.0]);
         // t = 6, 7: ids 4, 5 of group 0 fed; t = 8: one escapes and one is lost in the
         // same step: which is which is unknown, both unmatched.
-        tr.observe(6.0, [(4, 0)].into_iter(), &log);
-        tr.observe(7.0, [(4, 0), (5, 0)].into_iter(), &log);
+        tr.observe(6.0, [(4, 0)].into_iter(), &log, &[]);
+        tr.observe(7.0, [(4, 0), (5, 0)].into_iter(), &log, &[]);
         log.drained[0].push(8.0);
         log.lost[0].push(8.0);
-        tr.observe(8.0, std::iter::empty(), &log);
+        tr.observe(8.0, std::iter::empty(), &log, &[]);
         assert_eq!(tr.unmatched, 2);
         assert_eq!(tr.residence[0].len(), 2);
         // Later steps go on pairing from where the log was.
-        tr.observe(9.0, [(6, 0)].into_iter(), &log);
+        tr.observe(9.0, [(6, 0)].into_iter(), &log, &[]);
         log.drained[0].push(9.5);
-        tr.observe(9.5, std::iter::empty(), &log);
+        tr.observe(9.5, std::iter::empty(), &log, &[]);
         assert_eq!(tr.residence[0], vec![2.0, 3.0, 0.5]);
+        // t = 10: id 7 fed; t = 11: it is collected (no residence time, not unmatched);
+        // t = 12: id 8 fed; t = 13: it escapes while another is collected: unmatched.
+        tr.observe(10.0, [(7, 0)].into_iter(), &log, &[0, 0]);
+        tr.observe(11.0, std::iter::empty(), &log, &[1, 0]);
+        assert_eq!((tr.unmatched, tr.residence[0].len()), (2, 3));
+        tr.observe(12.0, [(8, 0), (9, 0)].into_iter(), &log, &[1, 0]);
+        log.drained[0].push(13.0);
+        tr.observe(13.0, std::iter::empty(), &log, &[2, 0]);
+        assert_eq!((tr.unmatched, tr.residence[0].len()), (4, 3));
     }
 }

@@ -37,6 +37,9 @@ pub struct Cyclone {
     pub gas_viscosity: f64,
     /// Wall friction factor f of Barth–Muschelknautz (0.005 for clean gas).
     pub friction: f64,
+    /// The CFD field's own velocities on the control surface, (tangential, inward radial)
+    /// m/s, where measured ([`Cyclone::control_surface`]).
+    pub field_swirl: Option<(f64, f64)>,
 }
 
 impl Cyclone {
@@ -56,6 +59,7 @@ impl Cyclone {
         gas_density: 1.2,
         gas_viscosity: 1.8e-5,
         friction: 0.005,
+        field_swirl: None,
     };
 
     /// Gas flow rate Q = a·b·v_in, m³/s.
@@ -126,9 +130,45 @@ impl Cyclone {
     /// surface balances the Stokes drag of the inward flow,
     /// x50 = √(18 μ v_rCS R_x / ((ρ_p − ρ) v_θCS²)), m.
     pub fn barth_muschelknautz_d50(&self, particle_density: f64) -> f64 {
+        self.bm_d50_with_swirl(particle_density, self.bm_tangential_velocity())
+    }
+
+    /// Barth–Muschelknautz's cut size with the tangential velocity at the control surface
+    /// given (`v_theta`, m/s: e.g. the CFD field's own), the radial one from the flow rate, m.
+    pub fn bm_d50_with_swirl(&self, particle_density: f64, v_theta: f64) -> f64 {
         (18.0 * self.gas_viscosity * self.bm_radial_velocity() * self.vortex_finder_radius
-            / ((particle_density - self.gas_density) * self.bm_tangential_velocity().powi(2)))
-        .sqrt()
+            / ((particle_density - self.gas_density) * v_theta * v_theta))
+            .sqrt()
+    }
+
+    /// A flow's mean velocities on Barth–Muschelknautz's control surface, the cylinder of
+    /// radius R_x from the vortex finder's bottom down to the cone's bottom, for a cyclone
+    /// on the z axis with its roof at `roof_z`: (|mean tangential|, mean inward radial), m/s,
+    /// from `n` × `n` points evenly over its height and angle where `velocity` knows the
+    /// flow (`None` when it knows it nowhere).
+    pub fn control_surface(
+        &self,
+        roof_z: f64,
+        n: usize,
+        velocity: impl Fn(glam::DVec3) -> Option<glam::DVec3>,
+    ) -> Option<(f64, f64)> {
+        let rx = self.vortex_finder_radius;
+        let top = roof_z - self.vortex_finder_length;
+        let bottom = roof_z - self.total_height;
+        let (mut vt, mut vr, mut k) = (0.0, 0.0, 0usize);
+        for i in 0..n {
+            let z = bottom + (i as f64 + 0.5) / n as f64 * (top - bottom);
+            for j in 0..n {
+                let a = 2.0 * PI * (j as f64 + 0.5) / n as f64;
+                let (sn, cs) = a.sin_cos();
+                if let Some(u) = velocity(glam::DVec3::new(rx * cs, rx * sn, z)) {
+                    vt += -sn * u.x + cs * u.y;
+                    vr -= cs * u.x + sn * u.y;
+                    k += 1;
+                }
+            }
+        }
+        (k > 0).then(|| ((vt / k as f64).abs(), vr / k as f64))
     }
 }
 
@@ -157,6 +197,27 @@ mod tests {
         assert!((c.friction_area() - 6.47).abs() < 0.005);
         assert!((c.bm_tangential_velocity() - 26.5).abs() < 0.05);
         assert!((c.bm_radial_velocity() - 0.53).abs() < 0.005);
+        // With half the swirl, twice the cut size.
+        let half = c.bm_d50_with_swirl(2000.0, 0.5 * c.bm_tangential_velocity());
+        assert!((half / c.barth_muschelknautz_d50(2000.0) - 2.0).abs() < 1e-12);
+        // A forced vortex Ω = 10 rad/s with a sink flow of 1 m/s at R_x, roof at z = 1:
+        // v_θ = Ω·R_x, v_r = 1 (inward), sampled everywhere; nothing known: None.
+        let (vt, vr) = c
+            .control_surface(1.0, 16, |x| {
+                assert!(x.z > -1.0 && x.z < 0.6 && (x.truncate().length() - 0.15).abs() < 1e-12);
+                let r = x.truncate().length();
+                Some(glam::DVec3::new(
+                    -10.0 * x.y - x.x / r,
+                    10.0 * x.x - x.y / r,
+                    3.0,
+                ))
+            })
+            .unwrap();
+        assert!(
+            (vt - 1.5).abs() < 1e-12 && (vr - 1.0).abs() < 1e-12,
+            "{vt} {vr}"
+        );
+        assert!(c.control_surface(1.0, 4, |_| None).is_none());
         // Lapple: d50 ∝ √(1/(ρ_p − ρ)) exactly.
         let r = c.lapple_d50(1000.0) / c.lapple_d50(4000.0);
         assert!((r - ((4000.0 - 1.2) / (1000.0 - 1.2f64)).sqrt()).abs() < 1e-12);
