@@ -45,7 +45,7 @@ pub const VARIANTS: [(&str, f64, &str); 5] = [
 
 /// Feed scale of the full study (on the scene's 200 particles/s per class for 1 s) and
 /// its simulated duration, s.
-pub const FULL: (f64, f64) = (10.0, 4.0);
+pub const FULL: (f64, f64) = (10.0, 12.0);
 /// The same for `--quick`.
 pub const QUICK: (f64, f64) = (0.5, 2.0);
 /// Steps between recorded frames in the study's MCAPs (0.1 s).

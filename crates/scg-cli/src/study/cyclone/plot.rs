@@ -37,11 +37,13 @@ pub fn plot_partition(
     let (lo, hi) = (d[0] * 0.8, d[d.len() - 1] * 1.25);
     let rho = o.classes[0].density;
     let root = svg_root(path, (760, 520))?;
+    let title = if o.classes.iter().any(|c| c.collected.is_some()) {
+        "cyclone grade efficiency (collected/fed)"
+    } else {
+        "cyclone grade efficiency (1 − escaped/fed)"
+    };
     let mut chart = ChartBuilder::on(&root)
-        .caption(
-            "cyclone grade efficiency (1 − escaped/fed)",
-            ("sans-serif", 18),
-        )
+        .caption(title, ("sans-serif", 18))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(50)
@@ -95,18 +97,26 @@ pub fn plot_partition(
             grey.stroke_width(1),
         ))
         .map_err(perr)?;
-    for (label, x, style) in [
-        ("Lapple", theory.lapple_d50(rho) * 1e6, 0),
+    let mut lines = vec![
+        ("Lapple".to_string(), theory.lapple_d50(rho) * 1e6, 0),
         (
-            "Barth–Muschelknautz",
+            "Barth–Muschelknautz".to_string(),
             theory.barth_muschelknautz_d50(rho) * 1e6,
             1,
         ),
-    ] {
-        let col = if style == 0 {
-            RGBColor(120, 120, 120)
-        } else {
-            RGBColor(180, 130, 60)
+    ];
+    if let Some((vt, _)) = theory.field_swirl {
+        lines.push((
+            format!("B–M, the field's swirl {vt:.1} m/s,"),
+            theory.bm_d50_with_swirl(rho, vt) * 1e6,
+            2,
+        ));
+    }
+    for (label, x, style) in lines {
+        let col = match style {
+            0 => RGBColor(120, 120, 120),
+            1 => RGBColor(180, 130, 60),
+            _ => RGBColor(120, 60, 160),
         };
         chart
             .draw_series(DashedLineSeries::new(
