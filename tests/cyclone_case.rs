@@ -152,3 +152,41 @@ fn cyclone_fates_count_the_zones() {
     let csv = scg::cli::fates::csv(&fates);
     assert!(csv.contains("d1,collected,dust_outlet,"), "{csv}");
 }
+
+/// Bad `[[zones]]` input is an error naming the file, the key (with its line) and what is
+/// wrong: a name given twice, an empty name, an unknown key, a region without its keys.
+#[test]
+fn bad_zones_name_file_key_and_line() {
+    let text = std::fs::read_to_string(common::repo("cases/cyclone.toml")).unwrap();
+    let err = |extra: &str| {
+        scg::scene::parse_in(
+            &format!("{text}\n{extra}\n"),
+            "cases/cyclone.toml",
+            &common::repo("cases"),
+            "cyclone",
+            &[],
+        )
+        .unwrap_err()
+        .to_string()
+    };
+    let region = r#"region = { kind = "box", min = [0.0, 0.0, 0.0], max = [1.0, 1.0, 1.0] }"#;
+    let e = err(&format!("[[zones]]\nname = \"dust_outlet\"\n{region}"));
+    assert!(
+        e.contains("cases/cyclone.toml") && e.contains("zones[2].name") && e.contains("twice"),
+        "{e}"
+    );
+    let e = err(&format!("[[zones]]\nname = \" \"\n{region}"));
+    assert!(
+        e.contains("zones[2].name") && e.contains("non-empty"),
+        "{e}"
+    );
+    let e = err(&format!(
+        "[[zones]]\nname = \"z\"\ncollect = true\n{region}"
+    ));
+    assert!(
+        e.contains("collect") && e.contains("cases/cyclone.toml:"),
+        "{e}"
+    );
+    let e = err("[[zones]]\nname = \"z\"\nregion = { kind = \"box\", min = [0.0, 0.0, 0.0] }");
+    assert!(e.contains("max"), "{e}");
+}
