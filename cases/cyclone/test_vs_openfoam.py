@@ -297,5 +297,56 @@ ExecutionTime = 0.30 s  ClockTime = 0 s
         self.assertEqual(vs.sampling_pp(400, 1.0, 400, 1.0), 0.0)
 
 
+class LikeForLike(unittest.TestCase):
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp()
+
+    def tearDown(self):
+        shutil.rmtree(self.tmp)
+
+    def test_the_scene_loses_what_openfoam_cannot_run_and_nothing_else(self):
+        import tomllib
+        src = os.path.join(HERE, "..", "cyclone.toml")
+        with open(src, "rb") as f:
+            orig = tomllib.load(f)
+        # TOML written back reads as the same dict
+        self.assertEqual(tomllib.loads(vs.toml_dump(orig)), orig)
+        # the committed scene as is: refused, naming the key
+        with self.assertRaises(vs.SceneError) as e:
+            vs.read_scene(src)
+        self.assertIn("flow.wall_function.model", str(e.exception))
+        dest = os.path.join(self.tmp, "scene.toml")
+        changes = vs.like(src, dest)
+        self.assertEqual(len(changes), 3, changes)
+        self.assertTrue(changes[0].startswith("flow.wall_function") and changes[2].startswith("zones[0]"))
+        self.assertIn("cell_point_idw", changes[1])
+        with open(dest, "rb") as f:
+            got = tomllib.load(f)
+        self.assertNotIn("wall_function", got["flow"])
+        self.assertEqual(got["flow"]["interpolation"], "cell_point_idw")
+        self.assertEqual([z.get("collects", False) for z in got["zones"]], [False, False])
+        self.assertTrue(os.path.isabs(got["flow"]["case"]) and os.path.isdir(got["flow"]["case"]))
+        # everything else as it was: dispersion, walls, feeders, groups
+        for k in ("dispersion", "groups", "feeders", "drag", "gravity", "material", "fluid", "dt", "duration"):
+            self.assertEqual(got[k], orig[k], k)
+        self.assertEqual(got["flow"]["patches"], orig["flow"]["patches"])
+        sc = vs.read_scene(dest)
+        self.assertEqual(sc["dispersion"]["model"], "stochastic_ras")
+        self.assertEqual(len(sc["classes"]), 10)
+        # a collecting zone alone is refused too
+        zone = os.path.join(self.tmp, "zone.toml")
+        with open(FIXTURE) as f:
+            text = f.read()
+        with open(zone, "w") as f:
+            f.write(text.replace('case = "coarse"', f'case = "{os.path.join(HERE, "coarse")}"')
+                    + '\n[[zones]]\nname = "bin"\ncollects = true\nregion = { kind = "box", min = [0.0, 0.0, 0.0], max = [1.0, 1.0, 1.0] }\n')
+        with self.assertRaises(vs.SceneError) as e:
+            vs.read_scene(zone)
+        self.assertIn("zones.0.collects", str(e.exception))
+        # nothing to change: no line, the same dict
+        plain = os.path.join(self.tmp, "plain.toml")
+        self.assertEqual(vs.like(dest, plain), [])
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -7,7 +7,9 @@
 #   bash cases/cyclone/vs-openfoam.sh [--scene cases/cyclone.toml] [--quick] [--out DIR]
 #                                     [--scg PATH] [--openfoam-only] [--split "A B C"]
 #
-#   --scene FILE  the scg scene (default cases/cyclone.toml): [flow] kind = "openfoam" with
+#   --scene FILE  the scg scene (default cases/cyclone.toml; what OpenFOAM's tracker has no
+#                 model for — scg's [flow.wall_function], [[zones]] that collect — is
+#                 switched off in both, written to OUT/scene.toml): [flow] kind = "openfoam" with
 #                 a fixed dt, one [[feeders]] with `patch` per [[groups]] size class,
 #                 [flow.patches] walls (wall_model "rebound", [material] restitution),
 #                 outlets, inlets; [drag], [gravity], [fluid]; [dispersion] model =
@@ -80,6 +82,11 @@ done
 scene=$(realpath "$scene")
 mkdir -p "$out"
 out=$(realpath "$out")
+# The scene as both codes run it: what OpenFOAM's tracker has no model for (scg's wall
+# function, a collecting zone) is switched off in scg too (vs_openfoam.py like).
+python3 "$root/cases/cyclone/vs_openfoam.py" like "$scene" "$out/scene.toml" | sed 's/^/like for like: /'
+echo "scene as run by both: $out/scene.toml (from $scene)"
+scene=$out/scene.toml
 
 # --- OpenFOAM (as cases/cyclone/build.sh) ---------------------------------------------------
 # shellcheck source=../foam-env.sh

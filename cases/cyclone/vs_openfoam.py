@@ -10,6 +10,13 @@ bench/foam.py's helpers (dictionary header, timed run, list reader) are imported
       of the same time folder are the frozen k and omega (epsilon) of a RAS model that is
       constructed and never solved, and the cloud's dispersionModel is
       stochasticDispersionRAS (below)
+  python3 vs_openfoam.py like SCENE OUT.toml
+      the scene as both codes run it side by side, written to OUT.toml (one line printed per
+      change): what OpenFOAM's tracker has no model for is switched off in scg too — the
+      log-law wall function ([flow.wall_function], scg-only: OpenFOAM interpolates to the
+      walls' no-slip values) and collecting zones ([[zones]] collects, a trap OpenFOAM's
+      cloud has not: both then count 1 - escaped/fed) —, cell_point interpolation becomes
+      cell_point_idw (OpenFOAM's cellPoint point values), and flow.case is made absolute
   python3 vs_openfoam.py grade DIR OUT.json
       reads each run's log and patchPostProcessing output and writes grade.json
   python3 vs_openfoam.py summary GRADE.json [PARALLEL.json [CONCURRENT.json]]
@@ -86,14 +93,28 @@ def bad(path, key, msg):
     raise SceneError(f"{path}: {key}: {msg}")
 
 
-def read_scene(path, duration=None, feed_scale=None, dt=None):
-    """The comparison's settings from an scg scene (dict). Classes: one per [[groups]],
-    each fed by exactly one [[feeders]] with `patch`."""
+def read_toml(path):
     try:
         with open(path, "rb") as f:
-            s = tomllib.load(f)
+            return tomllib.load(f)
     except (OSError, tomllib.TOMLDecodeError) as e:
         raise SceneError(f"{path}: {e}")
+
+
+def read_scene(path, duration=None, feed_scale=None, dt=None):
+    """The comparison's settings from an scg scene (dict). Classes: one per [[groups]],
+    each fed by exactly one [[feeders]] with `patch`. A scene with what OpenFOAM's tracker
+    cannot run (a wall function, a collecting zone) is refused: `like` writes the scene
+    without them."""
+    s = read_toml(path)
+    wf = s.get("flow", {}).get("wall_function", {})
+    if wf.get("model", "none") != "none":
+        bad(path, "flow.wall_function.model", f"{wf.get('model')!r} has no OpenFOAM counterpart "
+            "(vs_openfoam.py like writes the scene without it)")
+    for i, z in enumerate(s.get("zones", [])):
+        if z.get("collects"):
+            bad(path, f"zones.{i}.collects", "OpenFOAM's cloud has no trap zone "
+                "(vs_openfoam.py like writes the scene without it)")
     base = os.path.dirname(os.path.abspath(path))
     if feed_scale is None:  # as scg's --set feed_scale=F: replaces the scene's
         feed_scale = float(s.get("feed_scale", 1.0))
@@ -204,6 +225,86 @@ def read_scene(path, duration=None, feed_scale=None, dt=None):
         "drag": s.get("drag", {}).get("law", "stokes"), "classes": classes,
         "feed_scale": feed_scale, "dispersion": dispersion,
     }
+
+
+def toml_key(k):
+    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else json.dumps(k)
+
+
+def toml_value(v):
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        if isinstance(v, float) and not math.isfinite(v):
+            raise ValueError(f"{v} has no TOML form here")
+        return repr(v)
+    if isinstance(v, str):
+        return json.dumps(v, ensure_ascii=False)
+    if isinstance(v, list):
+        return "[" + ", ".join(toml_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "{ " + ", ".join(f"{toml_key(k)} = {toml_value(x)}" for k, x in v.items()) + " }"
+    raise ValueError(f"{v!r} has no TOML form here")
+
+
+def toml_dump(d):
+    """TOML text of a dict as tomllib reads it (tables, arrays of tables, inline values);
+    tomllib.loads(toml_dump(d)) == d."""
+    out = []
+
+    def is_aot(v):
+        return isinstance(v, list) and v and all(isinstance(x, dict) for x in v)
+
+    def body(prefix, t):
+        for k, v in t.items():
+            if not isinstance(v, dict) and not is_aot(v):
+                out.append(f"{toml_key(k)} = {toml_value(v)}")
+        for k, v in t.items():
+            name = f"{prefix}.{toml_key(k)}" if prefix else toml_key(k)
+            if isinstance(v, dict):
+                out.append(f"\n[{name}]")
+                body(name, v)
+        for k, v in t.items():
+            name = f"{prefix}.{toml_key(k)}" if prefix else toml_key(k)
+            if is_aot(v):
+                for x in v:
+                    out.append(f"\n[[{name}]]")
+                    for kk, vv in x.items():
+                        out.append(f"{toml_key(kk)} = {toml_value(vv)}")
+
+    body("", d)
+    return "\n".join(out) + "\n"
+
+
+def like(path, dest):
+    """The scene of `path` as both codes run it side by side, written to `dest`; returns
+    one line per change (see the module's doc)."""
+    s = read_toml(path)
+    changes = []
+    flow = s.get("flow", {})
+    wf = flow.get("wall_function")
+    if wf is not None and wf.get("model", "none") != "none":
+        del flow["wall_function"]
+        changes.append(f"flow.wall_function: model {wf.get('model')!r} off (OpenFOAM's tracker "
+                       "interpolates to the walls' no-slip values; scg does the same)")
+    if flow.get("kind") == "openfoam" and flow.get("interpolation", "cell_point") == "cell_point":
+        flow["interpolation"] = "cell_point_idw"
+        changes.append("flow.interpolation: cell_point -> cell_point_idw (OpenFOAM's cellPoint: "
+                       "its inverse-distance point values)")
+    for i, z in enumerate(s.get("zones", [])):
+        if z.get("collects"):
+            z["collects"] = False
+            changes.append(f"zones[{i}] ({z.get('name')}): collects off (OpenFOAM's cloud has "
+                           "no trap zone; both codes count 1 - escaped/fed)")
+    if "case" in flow and not os.path.isabs(flow["case"]):
+        flow["case"] = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(path)), flow["case"]))
+    with open(dest, "w", encoding="utf-8") as f:
+        f.write(f"# {os.path.abspath(path)} as scg and OpenFOAM both run it "
+                "(cases/cyclone/vs_openfoam.py like)\n")
+        for c in changes:
+            f.write(f"# {c}\n")
+        f.write(toml_dump(s))
+    return changes
 
 
 def time_file(case, time, name):
@@ -1100,6 +1201,9 @@ def main(argv):
     c.add_argument("--duration", type=float)
     c.add_argument("--feed-scale", type=float)
     c.add_argument("--dt", type=float)
+    lk = sub.add_parser("like")
+    lk.add_argument("scene")
+    lk.add_argument("out")
     g = sub.add_parser("grade")
     g.add_argument("dir")
     g.add_argument("out")
@@ -1126,6 +1230,9 @@ def main(argv):
             plan = make_cases(read_scene(a.scene, a.duration, a.feed_scale, a.dt), a.dir)
             for r in plan["runs"]:
                 print(r["dir"])
+        elif a.cmd == "like":
+            for c in like(a.scene, a.out):
+                print(c)
         elif a.cmd == "grade":
             grade(a.dir, a.out)
         elif a.cmd == "parallel":
