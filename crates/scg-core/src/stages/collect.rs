@@ -20,6 +20,9 @@ pub struct CollectZones(pub Vec<Region>);
 pub struct CollectLog {
     /// Times the particles were collected, s.
     pub collected: Vec<Vec<Vec<f64>>>,
+    /// Ids of the particles collected in the last step, in id order (scratch: cleared
+    /// every step, not in checkpoints), for callers that follow particles by id.
+    pub last_step_ids: Vec<u32>,
 }
 
 impl CollectLog {
@@ -64,6 +67,7 @@ pub fn plugin(world: &mut World, b: &mut StepBuilder, zones: Vec<Region>, groups
     Persistence::register(world, CollectPart);
     world.insert_resource(CollectLog {
         collected: vec![vec![Vec::new(); groups]; n],
+        last_step_ids: Vec::new(),
     });
     b.add(
         StepSet::InletOutlet,
@@ -91,12 +95,14 @@ pub fn collect_particles(
         .iter()
         .filter_map(|(e, id, g, x)| zone_of(&zones.0, x.0).map(|z| (id.0, g.0, e, z)))
         .collect();
+    log.last_step_ids.clear();
     if gone.is_empty() {
         return;
     }
     gone.sort_unstable_by_key(|g| g.0);
     let t = clock.time();
-    for (_, g, e, z) in gone {
+    for (id, g, e, z) in gone {
+        log.last_step_ids.push(id);
         if let Some(v) = log.collected.get_mut(z).and_then(|z| z.get_mut(g as usize)) {
             v.push(t);
         }

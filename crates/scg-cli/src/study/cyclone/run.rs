@@ -18,10 +18,10 @@ use super::grade::ClassGrade;
 /// Each step, every present particle is shown to [`Tracker::observe`] with the outlet log.
 /// A particle seen for the first time was fed that step; one seen before and absent now
 /// left that step. The log says how many of each group escaped and how many were lost in
-/// the step, and the collect log how many were collected; when a group has only escapes
-/// (or none) the departed ids are unambiguous, else (escapes and losses or collections of
-/// one group in the same step, or counts that do not match) their residence times are left
-/// out and counted in `unmatched`.
+/// the step, and the collect log which ids were collected; when a group's other departures
+/// are only escapes (or only losses) the departed ids are unambiguous, else (escapes and
+/// losses of one group in the same step, or counts that do not match) their residence times
+/// are left out and counted in `unmatched`.
 #[derive(Clone, Debug, Default)]
 pub struct Tracker {
     fed_at: Vec<f64>,
@@ -31,7 +31,6 @@ pub struct Tracker {
     epoch: u64,
     drained_seen: Vec<usize>,
     lost_seen: Vec<usize>,
-    collected_seen: Vec<u64>,
     /// Feed-to-escape times per group, s, in order of escape.
     pub residence: Vec<Vec<f64>>,
     /// Departed particles whose escape could not be told from a loss.
@@ -44,21 +43,19 @@ impl Tracker {
         Tracker {
             drained_seen: vec![0; groups],
             lost_seen: vec![0; groups],
-            collected_seen: vec![0; groups],
             residence: vec![Vec::new(); groups],
             ..Default::default()
         }
     }
 
     /// The particles `present` (id, group) after a step ending at time `t`, the outlet
-    /// log then and the particles collected so far per group (`&[]` without collecting
-    /// zones).
+    /// log then and the ids collected in the step (`&[]` without collecting zones).
     pub fn observe(
         &mut self,
         t: f64,
         present: impl Iterator<Item = (u32, u32)>,
         log: &OutletLog,
-        collected: &[u64],
+        collected: &[u32],
     ) {
         self.epoch += 1;
         for (id, g) in present {
@@ -81,6 +78,8 @@ impl Tracker {
             let k = id as usize;
             if self.stamp[k] == epoch {
                 true
+            } else if collected.binary_search(&id).is_ok() {
+                false // collected: no residence time, nothing to pair
             } else {
                 if let Some(v) = gone.get_mut(self.group[k] as usize) {
                     v.push(id);
@@ -94,11 +93,7 @@ impl Tracker {
                 .get(g)
                 .map_or(&[][..], |v| &v[self.drained_seen[g]..]);
             let lost = log.lost.get(g).map_or(0, |v| v.len() - self.lost_seen[g]);
-            let now = collected.get(g).copied().unwrap_or(0);
-            let coll = (now - self.collected_seen[g]) as usize;
-            self.collected_seen[g] = now;
-            let others = lost + coll;
-            if ids.len() == drained.len() + others && (others == 0 || drained.is_empty()) {
+            if ids.len() == drained.len() + lost && (lost == 0 || drained.is_empty()) {
                 for (id, td) in ids.iter().zip(drained) {
                     self.residence[g].push(td - self.fed_at[*id as usize]);
                 }
@@ -190,10 +185,10 @@ pub fn run_variant(
     for step in 1..=steps {
         sim.step().map_err(|e| e.to_string())?;
         let t = sim.time();
-        let collected: Vec<u64> = sim
+        let collected = sim
             .world
             .get_resource::<CollectLog>()
-            .map_or(Vec::new(), |l| (0..ng).map(|g| l.count(g)).collect());
+            .map_or(Vec::new(), |l| l.last_step_ids.clone());
         let present = query.iter(&sim.world).map(|(id, g)| (id.0, g.0));
         tracker.observe(t, present, sim.world.resource::<OutletLog>(), &collected);
         if step == snap_step {
@@ -328,13 +323,14 @@ mod tests {
         tr.observe(9.5, std::iter::empty(), &log, &[]);
         assert_eq!(tr.residence[0], vec![2.0, 3.0, 0.5]);
         // t = 10: id 7 fed; t = 11: it is collected (no residence time, not unmatched);
-        // t = 12: id 8 fed; t = 13: it escapes while another is collected: unmatched.
-        tr.observe(10.0, [(7, 0)].into_iter(), &log, &[0, 0]);
-        tr.observe(11.0, std::iter::empty(), &log, &[1, 0]);
+        // t = 12: ids 8, 9 fed; t = 13: 8 escapes while 9 is collected: told apart by id.
+        tr.observe(10.0, [(7, 0)].into_iter(), &log, &[]);
+        tr.observe(11.0, std::iter::empty(), &log, &[7]);
         assert_eq!((tr.unmatched, tr.residence[0].len()), (2, 3));
-        tr.observe(12.0, [(8, 0), (9, 0)].into_iter(), &log, &[1, 0]);
+        tr.observe(12.0, [(8, 0), (9, 0)].into_iter(), &log, &[]);
         log.drained[0].push(13.0);
-        tr.observe(13.0, std::iter::empty(), &log, &[2, 0]);
-        assert_eq!((tr.unmatched, tr.residence[0].len()), (4, 3));
+        tr.observe(13.0, std::iter::empty(), &log, &[9]);
+        assert_eq!(tr.unmatched, 2);
+        assert_eq!(tr.residence[0], vec![2.0, 3.0, 0.5, 1.0]);
     }
 }
