@@ -119,11 +119,29 @@ fn cut_size_theory_and_openfoam_column() {
     let runs = vec![mk("original", vec![1.0, 1.5]), scg2];
     let out = dir.join("out");
     std::fs::create_dir_all(&out).unwrap();
-    cyclone::write_tables(&runs, &t, Some(&g), &out).unwrap();
+    let tracers = cyclone::TracerCheck {
+        diameter: 1e-7,
+        fed: 100,
+        escaped: 90,
+        within: 89,
+        collected: 8,
+        lost: 0,
+        held: 2,
+        v_over_q: 1.5,
+        mean_residence: 1.65,
+        mean_residence_95: 0.1,
+        total_s: 1.0,
+    };
+    assert!(!tracers.leave() && (tracers.ratio() - 1.1).abs() < 1e-12);
+    cyclone::write_tables(&runs, &t, Some(&g), Some(&tracers), &out).unwrap();
     cyclone::write_plots(&runs, Some(&g), &t, &[], &out).unwrap();
     let report = std::fs::read_to_string(out.join("report.txt")).unwrap();
     println!("{report}");
     assert!(report.contains("openfoam"), "{report}");
+    assert!(
+        report.contains("89.0 % within 5·V/Q: FAIL") && report.contains("= 1.100·V/Q (FAIL"),
+        "{report}"
+    );
     // The 2 µm row: original 30.0, scg2 30.0, openfoam 40.0.
     assert!(
         report
@@ -134,6 +152,12 @@ fn cut_size_theory_and_openfoam_column() {
     );
     let s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["tracers"]["collected"], 8);
+    assert_eq!(
+        cyclone::read_tracers(&out).as_ref(),
+        Some(&tracers),
+        "read back from summary.json"
+    );
     let of_classes = s["openfoam"]["classes"].as_array().unwrap();
     assert_eq!(of_classes[0]["efficiency"], 0.4);
     assert!((of_classes[0]["delta_efficiency_pp"].as_f64().unwrap() - 10.0).abs() < 1e-9);
@@ -206,4 +230,24 @@ fn bad_input_exits_2_naming_it() {
     let (code, err) = scg(&["study", "classifier", "--openfoam", "x.json"]);
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("`scg study cyclone` only"), "{err}");
+}
+
+/// The study's tracer check, reduced (100 tracers over the first second, the scene's
+/// models): the books add up, V/Q is the committed mesh's over the inlet's 0.8 m³/s, and
+/// most tracers leave (the eddy model lets some reach the dust outlet: docs/cyclone.md).
+#[test]
+fn the_tracer_check_runs_with_the_studys_models() {
+    let text = cyclone::scene_text().expect("cyclone mesh");
+    let t = cyclone::run_tracers(&text, &[], 100.0).unwrap();
+    println!("{}", t.text());
+    assert_eq!(t.fed, 100);
+    assert_eq!(t.fed, t.escaped + t.collected + t.lost + t.held);
+    assert!(t.within <= t.escaped);
+    assert!(
+        (t.v_over_q - 1.146 / 0.8).abs() < 0.02,
+        "V/Q {}",
+        t.v_over_q
+    );
+    assert!(t.escaped >= 75, "{t:?}");
+    assert!(t.mean_residence > 0.5 * t.v_over_q && t.mean_residence < 2.0 * t.v_over_q);
 }

@@ -10,13 +10,15 @@
 //! * `grade.rs`: per-class counts, efficiency, d50, residence-time W1, `grade.json`;
 //! * `run.rs`: one variant, every particle tracked from feed to escape;
 //! * `report.rs`: `report.txt`, `summary.json`, `grade.csv`, the criteria;
-//! * `plot.rs`: the partition curves, residence times, top and side views.
+//! * `plot.rs`: the partition curves, residence times, top and side views;
+//! * `tracers.rs`: the sanity check, fluid tracers with the study's models.
 
 pub mod grade;
 mod plot;
 mod report;
 pub mod run;
 pub mod theory;
+pub mod tracers;
 
 use std::path::PathBuf;
 
@@ -25,6 +27,7 @@ pub use plot::write_plots;
 pub use report::{Criteria, criteria, report, summary, write_tables};
 pub use run::{CycloneRun, Tracker, run_variant};
 pub use theory::Cyclone;
+pub use tracers::{TracerCheck, run_tracers};
 
 use super::StudyArgs;
 use crate::EXIT_BAD_INPUT;
@@ -48,6 +51,11 @@ pub const VARIANTS: [(&str, f64, &str); 5] = [
 pub const FULL: (f64, f64) = (10.0, 12.0);
 /// The same for `--quick`.
 pub const QUICK: (f64, f64) = (0.5, 2.0);
+/// Tracers per second over the feed window in the study's tracer check (`--quick`: the
+/// second).
+pub const TRACERS: f64 = 1000.0;
+/// The same for `--quick`.
+pub const TRACERS_QUICK: f64 = 100.0;
 /// Steps between recorded frames in the study's MCAPs (0.1 s).
 pub const RECORD_EVERY: u64 = 500;
 /// Time of the top / side view snapshot, s (the end of the feed: the spiral is full).
@@ -98,6 +106,13 @@ pub fn field_swirl(text: &str) -> Option<(f64, f64)> {
     Cyclone::OPENFOAM_TUTORIAL.control_surface(1.0, 64, |x| {
         flow.find_cell(x).and_then(|c| flow.velocity_in(c, x))
     })
+}
+
+/// The tracer check of a finished study's `summary.json` in `dir`, if it has one.
+pub fn read_tracers(dir: &std::path::Path) -> Option<TracerCheck> {
+    let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
+    let s: serde_json::Value = serde_json::from_str(&text).ok()?;
+    serde_json::from_value(s.get("tracers")?.clone()).ok()
 }
 
 /// A finished study read back from `dir`: the runs of its `summary.json`, each with the
@@ -294,7 +309,30 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
     runs.sort_by_key(|r| VARIANTS.iter().position(|v| v.0 == r.name));
     let mut theory = Cyclone::OPENFOAM_TUTORIAL;
     theory.field_swirl = field_swirl(&text);
-    print!("{}", report(&runs, &theory, openfoam.as_ref()));
+    // The tracer check: read back with `--from` when no variant runs, else run.
+    let mut tracers = if to_run.is_empty() {
+        a.from.as_ref().and_then(|d| read_tracers(d))
+    } else {
+        None
+    };
+    if tracers.is_none() {
+        eprintln!("study cyclone: the tracer check…");
+        let rate = if a.quick { TRACERS_QUICK } else { TRACERS };
+        match run_tracers(&text, &a.set, rate) {
+            Ok(t) => {
+                eprintln!("  tracers done in {:.1} s", t.total_s);
+                tracers = Some(t);
+            }
+            Err(e) => {
+                eprintln!("error: the tracer check: {e}");
+                return 1;
+            }
+        }
+    }
+    print!(
+        "{}",
+        report(&runs, &theory, openfoam.as_ref(), tracers.as_ref())
+    );
     let outline = match scg_scene::parse(&text, "<cyclone>", "cyclone", &[]) {
         Ok(s) => s.patch_surfaces(),
         Err(e) => {
@@ -302,7 +340,7 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
             return 1;
         }
     };
-    if let Err(e) = write_tables(&runs, &theory, openfoam.as_ref(), &out)
+    if let Err(e) = write_tables(&runs, &theory, openfoam.as_ref(), tracers.as_ref(), &out)
         .and_then(|_| write_plots(&runs, openfoam.as_ref(), &theory, &outline, &out))
     {
         eprintln!("error: {e}");

@@ -7,6 +7,7 @@ use std::path::Path;
 use super::grade::{ClassGrade, ExternalGrade, cut_size, residence_w1, wilson95};
 use super::run::{CycloneRun, LATE, MOVING};
 use super::theory::Cyclone;
+use super::tracers::TracerCheck;
 
 fn num(x: f64) -> serde_json::Value {
     if x.is_finite() {
@@ -167,6 +168,7 @@ pub fn summary(
     runs: &[CycloneRun],
     theory: &Cyclone,
     openfoam: Option<&ExternalGrade>,
+    tracers: Option<&TracerCheck>,
 ) -> serde_json::Value {
     let o = &runs[0];
     let rho = o.classes.first().map_or(2000.0, |c| c.density);
@@ -253,6 +255,7 @@ pub fn summary(
         },
         "variants": variants,
         "openfoam": of,
+        "tracers": tracers.map(|t| serde_json::to_value(t).unwrap_or_default()),
         "criteria": criteria(runs).iter().map(|c| serde_json::json!({
             "what": c.what, "value": num(c.value), "limit": opt_num(c.limit), "pass": c.pass(),
         })).collect::<Vec<_>>(),
@@ -261,7 +264,12 @@ pub fn summary(
 
 /// Text report: the grade efficiency table, the shares held and lost, the residence
 /// times, d50s, wall times and the criteria.
-pub fn report(runs: &[CycloneRun], theory: &Cyclone, openfoam: Option<&ExternalGrade>) -> String {
+pub fn report(
+    runs: &[CycloneRun],
+    theory: &Cyclone,
+    openfoam: Option<&ExternalGrade>,
+    tracers: Option<&TracerCheck>,
+) -> String {
     let mut s = String::new();
     let o = &runs[0];
     let collects = o.classes.iter().any(|c| c.collected.is_some());
@@ -422,6 +430,9 @@ pub fn report(runs: &[CycloneRun], theory: &Cyclone, openfoam: Option<&ExternalG
             theory.bm_d50_with_swirl(rho, vt) * 1e6
         );
     }
+    if let Some(t) = tracers {
+        s += &t.text();
+    }
     let _ = writeln!(s, "\ncriteria (issue 16):");
     for c in criteria(runs) {
         let verdict = match c.pass() {
@@ -447,6 +458,7 @@ pub fn write_tables(
     runs: &[CycloneRun],
     theory: &Cyclone,
     openfoam: Option<&ExternalGrade>,
+    tracers: Option<&TracerCheck>,
     out: &Path,
 ) -> Result<(), String> {
     let w = |name: &str, text: String| {
@@ -487,9 +499,9 @@ pub fn write_tables(
     w("grade.csv", csv)?;
     w(
         "summary.json",
-        serde_json::to_string_pretty(&summary(runs, theory, openfoam))
+        serde_json::to_string_pretty(&summary(runs, theory, openfoam, tracers))
             .map_err(|e| e.to_string())?
             + "\n",
     )?;
-    w("report.txt", report(runs, theory, openfoam))
+    w("report.txt", report(runs, theory, openfoam, tracers))
 }
