@@ -251,3 +251,25 @@ fn the_tracer_check_runs_with_the_studys_models() {
     assert!(t.escaped >= 75, "{t:?}");
     assert!(t.mean_residence > 0.5 * t.v_over_q && t.mean_residence < 2.0 * t.v_over_q);
 }
+
+/// The sampling control: `sample2` feeds originals (α = 1, the scg law) at the simulated
+/// count of `scg2` (1/8 of the feed), and the run is labelled `sample`.
+#[test]
+fn the_sampling_variant_feeds_originals_at_the_coarse_grained_count() {
+    let s = variant_overrides(2.0, "sample", 10.0, 4.0);
+    let c = variant_overrides(2.0, "scg", 10.0, 4.0);
+    assert_eq!(s[0], "coarse_grain.alpha=1");
+    assert_eq!(s[1], "coarse_grain.law=\"scg\"");
+    assert_eq!((&s[2], &s[3]), (&c[2], &c[3]));
+    assert!(
+        cyclone::VARIANTS
+            .iter()
+            .any(|v| *v == ("sample2", 2.0, "sample"))
+    );
+    let text = cyclone::scene_text().expect("cyclone mesh");
+    let mut o = variant_overrides(2.0, "sample", 0.8, 0.05);
+    o.push("dispersion.model=\"langevin\"".into());
+    let r = run_variant("sample2", &text, &o, 0.0, None).unwrap();
+    assert_eq!((r.alpha, r.law.as_str()), (1.0, "sample"));
+    assert!(r.classes.iter().all(|c| c.fed == 1), "{:?}", r.classes);
+}

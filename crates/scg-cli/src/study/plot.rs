@@ -26,13 +26,15 @@ pub(crate) fn svg_root(
 }
 
 /// Line colours of the variants, in order (black for the original).
-pub(crate) const VARIANT_COLORS: [plotters::style::RGBColor; 6] = [
+pub(crate) const VARIANT_COLORS: [plotters::style::RGBColor; 8] = [
     plotters::style::RGBColor(0, 0, 0),
     plotters::style::RGBColor(31, 119, 180),
     plotters::style::RGBColor(214, 39, 40),
     plotters::style::RGBColor(44, 160, 44),
     plotters::style::RGBColor(148, 103, 189),
     plotters::style::RGBColor(255, 127, 14),
+    plotters::style::RGBColor(140, 86, 75),
+    plotters::style::RGBColor(23, 190, 207),
 ];
 
 /// Fig. 10: per class, the radial distribution of each variant (fraction per bin vs r/R).

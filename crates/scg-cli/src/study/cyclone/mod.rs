@@ -1,6 +1,7 @@
 //! `scg study cyclone`: grade efficiency of the OpenFOAM cyclone (`cases/cyclone.toml`) in
-//! five variants (original, SCG α = 2 and 4, no SCG α = 2, parcel α = 2), each feeding the
-//! same mass (1/α³ as many particles for the coarse-grained), with the scene's wall
+//! seven variants (original, SCG α = 2 and 4, no SCG α = 2, parcel α = 2, and the sampling
+//! controls: originals at 1/8 and 1/64 of the feed), the coarse-grained feeding the same
+//! mass (1/α³ as many particles), with the scene's wall
 //! function, turbulent dispersion and collecting dust outlet: per class the collected,
 //! escaped and undecided shares with Wilson intervals, residence times, the cut size
 //! beside cyclone theory and, optionally, OpenFOAM's grade curve on the same field
@@ -37,13 +38,17 @@ use crate::points::{Points, map};
 /// resolved against `cases/`, see [`scene_text`]).
 pub const CYCLONE: &str = include_str!("../../../../../cases/cyclone.toml");
 
-/// The variants: name, α, law.
-pub const VARIANTS: [(&str, f64, &str); 5] = [
+/// The variants: name, α, law. Law `sample` is the sampling control: originals (α = 1)
+/// fed at 1/α³ of the rate, as many simulated particles as the coarse-grained variant of
+/// that α, no model error (SCG pays only where it beats this).
+pub const VARIANTS: [(&str, f64, &str); 7] = [
     ("original", 1.0, "scg"),
     ("scg2", 2.0, "scg"),
     ("scg4", 4.0, "scg"),
     ("none2", 2.0, "none"),
     ("parcel2", 2.0, "parcel"),
+    ("sample2", 2.0, "sample"),
+    ("sample4", 4.0, "sample"),
 ];
 
 /// Feed scale of the full study (on the scene's 200 particles/s per class for 1 s) and
@@ -62,10 +67,16 @@ pub const RECORD_EVERY: u64 = 500;
 pub const SNAPSHOT_AT: f64 = 1.0;
 
 /// The scene overrides of one variant: α, law, feed scaled by `feed / α³`, duration.
+/// Law `sample`: α = 1 (originals) at the same `feed / α³`.
 pub fn variant_overrides(alpha: f64, law: &str, feed: f64, duration: f64) -> Vec<String> {
+    let (a, l) = if law == "sample" {
+        (1.0, "scg")
+    } else {
+        (alpha, law)
+    };
     vec![
-        format!("coarse_grain.alpha={alpha}"),
-        format!("coarse_grain.law=\"{law}\""),
+        format!("coarse_grain.alpha={a}"),
+        format!("coarse_grain.law=\"{l}\""),
         format!("feed_scale={:e}", feed / alpha.powi(3)),
         format!("duration={duration}"),
     ]

@@ -87,6 +87,8 @@ pub fn criteria(runs: &[CycloneRun]) -> Vec<Criteria> {
         ("scg4", Some(5.0)),
         ("none2", None),
         ("parcel2", None),
+        ("sample2", None),
+        ("sample4", None),
     ] {
         if let Some(v) = find(name) {
             c.push(Criteria {
@@ -96,7 +98,7 @@ pub fn criteria(runs: &[CycloneRun]) -> Vec<Criteria> {
             });
         }
     }
-    for name in ["scg2", "scg4", "none2", "parcel2"] {
+    for name in ["scg2", "scg4", "none2", "parcel2", "sample2", "sample4"] {
         if let Some(v) = find(name) {
             c.push(Criteria {
                 what: format!("{name}: max W1(residence times) / original mean"),

@@ -247,10 +247,15 @@ pub fn run_variant(
         .map(|v| v.iter().filter(|&&t| t > end - LATE).count() as u64)
         .collect();
     let g0 = &scene.groups[0];
+    let sampled = g0.alpha == 1.0 && name.starts_with("sample");
     Ok(CycloneRun {
         name: name.to_string(),
         alpha: g0.alpha,
-        law: g0.law.name().to_string(),
+        law: if sampled {
+            "sample".to_string()
+        } else {
+            g0.law.name().to_string()
+        },
         classes,
         total_s,
         cpu_s,
