@@ -60,6 +60,7 @@ fn config(
         mesh_flow: None,
         gravity: None,
         buoyancy: false,
+        scg_at_original: false,
         walls: None,
         contacts: None,
         record_every: None,

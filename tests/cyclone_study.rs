@@ -261,11 +261,7 @@ fn the_sampling_variant_feeds_originals_at_the_coarse_grained_count() {
     assert_eq!(s[0], "coarse_grain.alpha=1");
     assert_eq!(s[1], "coarse_grain.law=\"scg\"");
     assert_eq!((&s[2], &s[3]), (&c[2], &c[3]));
-    assert!(
-        cyclone::VARIANTS
-            .iter()
-            .any(|v| *v == ("sample2", 2.0, "sample"))
-    );
+    assert!(cyclone::VARIANTS.contains(&("sample2", 2.0, "sample")));
     let text = cyclone::scene_text().expect("cyclone mesh");
     let mut o = variant_overrides(2.0, "sample", 0.8, 0.05);
     o.push("dispersion.model=\"langevin\"".into());

@@ -43,6 +43,7 @@ fn sim(dt: f64, model: Model, turbulence: Turbulence, seed: u64) -> Simulation {
         mesh_flow: None,
         gravity: None,
         buoyancy: false,
+        scg_at_original: false,
         walls: None,
         contacts: None,
         record_every: None,

@@ -30,6 +30,7 @@ fn sim(dt: f64, integrator: Integrator, u: DVec3, v0: DVec3) -> Simulation {
         mesh_flow: None,
         gravity: None,
         buoyancy: false,
+        scg_at_original: false,
         walls: None,
         contacts: None,
         record_every: None,

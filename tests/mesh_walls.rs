@@ -102,6 +102,7 @@ fn run(
         mesh_flow: None,
         gravity,
         buoyancy: false,
+        scg_at_original: false,
         contacts: None,
         walls: Some(WallSet {
             walls: shapes
@@ -751,6 +752,7 @@ fn wall_cost_mesh_vs_analytic() {
                 mesh_flow: None,
                 gravity: None,
                 buoyancy: false,
+                scg_at_original: false,
                 contacts: None,
                 walls: Some(WallSet {
                     walls: shapes

@@ -36,6 +36,7 @@ fn sim(
         mesh_flow: None,
         gravity,
         buoyancy: false,
+        scg_at_original: false,
         contacts: None,
         walls: Some(WallSet {
             walls: vec![Wall {

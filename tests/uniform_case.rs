@@ -65,3 +65,99 @@ fn table_1_diameters_and_densities() {
         assert!(rel(m(k + 6), m(0)) < 1e-14, "mass law keeps mass");
     }
 }
+
+/// Beyond Stokes drag (issue 37): under Schiller–Naumann at the original's Re ≈ 67 (1 mm
+/// in 1 m/s air), with gravity and buoyancy, SCG particles whose forces are evaluated as
+/// the original's (`[coarse_grain] forces_at = "original"`) follow the original's velocity
+/// to 1e-12 at every frame; evaluated for the simulated sphere (`"coarse"`, the default)
+/// the α = 8 particle's correction is taken at 8·Re and its buoyancy at its own density,
+/// and it departs from the original by more than 10 %.
+#[test]
+fn scg_forces_at_the_original_keep_equal_acceleration_under_schiller_naumann() {
+    let set = [
+        "drag.law=\"schiller_naumann\"",
+        "gravity.acceleration=[0.0, 0.0, -9.81]",
+        "gravity.buoyancy=true",
+    ];
+    let run = |forces_at: &str| {
+        let mut s: Vec<&str> = set.to_vec();
+        let f = format!("coarse_grain.forces_at=\"{forces_at}\"");
+        s.push(&f);
+        let scene = common::case("uniform", &s);
+        assert_eq!(scene.scg_at_original, forces_at == "original");
+        common::run_frames(&scene).1
+    };
+    let gap = |frames: &[scg::core::frame::Frame], k: usize| {
+        frames
+            .iter()
+            .filter(|f| f.time > 0.0)
+            .map(|f| {
+                let (a, b) = (f.velocity[0], f.velocity[k]);
+                let d =
+                    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+                d / (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+            })
+            .fold(0.0, f64::max)
+    };
+    let original = run("original");
+    let coarse = run("coarse");
+    for k in 1..=3 {
+        assert!(
+            gap(&original, k) < 1e-12,
+            "α group {k}: {}",
+            gap(&original, k)
+        );
+    }
+    println!(
+        "forces_at = \"coarse\": largest relative velocity gap of α = 2, 4, 8: {:.3e} {:.3e} {:.3e}",
+        gap(&coarse, 1),
+        gap(&coarse, 2),
+        gap(&coarse, 3)
+    );
+    assert!(gap(&coarse, 3) > 0.1, "{}", gap(&coarse, 3));
+    // The laws that do not claim equal acceleration are untouched by the option.
+    for k in 4..=9 {
+        assert_eq!(gap(&original, k), gap(&coarse, k), "group {k}");
+    }
+}
+
+/// `coarse_grain.forces_at` takes "original" or "coarse": anything else is an error naming
+/// the file, the key and the line.
+#[test]
+fn bad_forces_at_names_the_key() {
+    let e = scg::scene::load(
+        &common::repo("cases/uniform.toml"),
+        &["coarse_grain.forces_at=\"simulated\"".to_string()],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("uniform.toml") && e.contains("forces_at") && e.contains("simulated"),
+        "{e}"
+    );
+}
+
+/// `scg check` says which `forces_at` is in force for each SCG group beyond Stokes drag,
+/// and what the other would change (none under Stokes drag, where they agree).
+#[test]
+fn check_names_the_forces_at_in_force() {
+    let msgs = |set: &[&str]| {
+        let scene = common::case("uniform", set);
+        scg::scene::check::check(&scene).messages().join("\n")
+    };
+    let m = msgs(&[
+        "drag.law=\"schiller_naumann\"",
+        "coarse_grain.forces_at=\"original\"",
+    ]);
+    assert!(
+        m.contains("group `scg_8mm` (SCG α = 8): forces_at = \"original\"")
+            && m.contains("would take it at"),
+        "{m}"
+    );
+    let m = msgs(&["drag.law=\"schiller_naumann\""]);
+    assert!(
+        m.contains("forces_at = \"coarse\": the drag correction at the simulated"),
+        "{m}"
+    );
+    assert!(!msgs(&[]).contains("forces_at"));
+}

@@ -43,6 +43,7 @@ fn bounce(
         mesh_flow: None,
         gravity: None,
         buoyancy: false,
+        scg_at_original: false,
         contacts: None,
         walls: Some(WallSet {
             walls: vec![Wall {

@@ -81,6 +81,10 @@ pub struct CoarseGrain {
 pub struct FluidCoupling {
     /// Diameter the drag law is evaluated for, m.
     pub drag_diameter: f64,
+    /// Diameter the particle Reynolds number of the drag law's correction is taken at, m:
+    /// `drag_diameter`, or the original's for an SCG particle whose forces are evaluated
+    /// as the original's (`SimConfig::scg_at_original`).
+    pub reynolds_diameter: f64,
     /// Factor applied to the fluid force, dimensionless.
     pub force_scale: f64,
     /// Stokes momentum response time τ = m / (3π·μ·d_drag·force_scale), s (∞ without drag).

@@ -34,6 +34,7 @@
 //!     mesh_flow: None,
 //!     gravity: None,
 //!     buoyancy: false,
+//!     scg_at_original: false,
 //!     walls: None,
 //!     contacts: None,
 //!     record_every: None,

@@ -47,6 +47,11 @@ pub struct SimConfig {
     pub gravity: Option<DVec3>,
     /// Reduce gravity by the buoyancy of the fluid (ρ_f/ρ_p).
     pub buoyancy: bool,
+    /// Evaluate an SCG particle's Reynolds-dependent drag correction and its buoyancy as
+    /// the original particle's (`[coarse_grain] forces_at = "original"`): its acceleration
+    /// is then the original's under any drag law, not only Stokes'. `false`: as the
+    /// simulated sphere's.
+    pub scg_at_original: bool,
     /// Walls, if any.
     pub walls: Option<WallSet>,
     /// Particle–particle contacts, if declared.
@@ -211,6 +216,7 @@ impl Simulation {
             gravity: cfg.gravity,
             buoyancy: cfg.buoyancy,
             fluid: cfg.fluid,
+            scg_at_original: cfg.scg_at_original,
             mesh: cfg.mesh_flow.is_some(),
             carrier_offset: cfg.carrier.is_some(),
             dispersion: cfg

@@ -45,6 +45,9 @@ pub struct SpawnRules {
     pub buoyancy: bool,
     /// The fluid, if any (drag response time, buoyancy).
     pub fluid: Option<Fluid>,
+    /// SCG particles' Reynolds-dependent drag correction and buoyancy as the original's
+    /// (`SimConfig::scg_at_original`).
+    pub scg_at_original: bool,
     /// A flow on a mesh: every particle has a [`CellHint`] (spawned unlocated).
     pub mesh: bool,
     /// A carrier modifier: every particle has a [`CarrierOffset`] (zero at spawn).
@@ -56,10 +59,13 @@ pub struct SpawnRules {
 
 /// The simulated quantities of an original particle coarse-grained by `law` with ratio
 /// `alpha`, for time step `dt`: diameter, density, mass, fluid coupling, Stokes factors.
+/// With `at_original`, an SCG particle's drag correction is taken at its original
+/// diameter's Reynolds number (the SCG premise, equal acceleration, under any drag law).
 pub fn coarse_grained(
     cg: &CoarseGrain,
     fluid: Option<&Fluid>,
     dt: f64,
+    at_original: bool,
 ) -> (Diameter, Density, Mass, FluidCoupling, StokesFactors) {
     let s = coarse_grain(cg.law, cg.alpha, cg.original_diameter, cg.original_density);
     let mass = s.mass();
@@ -76,6 +82,11 @@ pub fn coarse_grained(
         Mass(mass),
         FluidCoupling {
             drag_diameter: s.drag_diameter,
+            reynolds_diameter: if at_original && cg.law == CoarseGrainLaw::Scg {
+                cg.original_diameter
+            } else {
+                s.drag_diameter
+            },
             force_scale: s.force_scale,
             tau,
         },
@@ -183,8 +194,14 @@ macro_rules! spawn_bundle {
             original_diameter: spec.diameter,
             original_density: spec.density,
         };
-        let scaled = coarse_grained(&cg, rules.fluid.as_ref(), $dt);
-        let gravity = BodyAcceleration(rules.body_acceleration(scaled.1.0));
+        let scaled = coarse_grained(&cg, rules.fluid.as_ref(), $dt, rules.scg_at_original);
+        // buoyancy of the original under `scg_at_original` (equal acceleration)
+        let buoyant = if rules.scg_at_original && cg.law == CoarseGrainLaw::Scg {
+            cg.original_density
+        } else {
+            scaled.1.0
+        };
+        let gravity = BodyAcceleration(rules.body_acceleration(buoyant));
         let mut e = $spawner.spawn((
             ParticleId($id),
             GroupId(spec.group),

@@ -60,6 +60,7 @@ fn config(dt: f64, contacts: Option<ContactConfig>, walls: Option<WallSet>) -> S
         mesh_flow: None,
         gravity: None,
         buoyancy: false,
+        scg_at_original: false,
         walls,
         contacts,
         record_every: None,

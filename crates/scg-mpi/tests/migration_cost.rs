@@ -21,6 +21,7 @@ fn sim() -> Simulation {
         mesh_flow: None,
         gravity: Some(DVec3::new(0.0, 0.0, -9.81)),
         buoyancy: false,
+        scg_at_original: false,
         walls: None,
         contacts: None,
         record_every: None,

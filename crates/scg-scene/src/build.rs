@@ -121,6 +121,7 @@ impl Scene {
             }),
             gravity: self.gravity,
             buoyancy: self.buoyancy,
+            scg_at_original: self.scg_at_original,
             walls: (self.contact_walls().next().is_some()).then(|| WallSet {
                 walls: self.contact_walls().cloned().collect(),
                 law: self.normal_law.unwrap_or(NormalLaw::hertz(1.0)),

@@ -112,6 +112,9 @@ pub struct Scene {
     pub gravity: Option<DVec3>,
     /// Buoyancy with gravity.
     pub buoyancy: bool,
+    /// SCG particles' Reynolds-dependent drag correction and buoyancy as the original's
+    /// (`[coarse_grain] forces_at = "original"`; default `"coarse"`).
+    pub scg_at_original: bool,
     /// Contact material (required with walls).
     pub material: Option<Material>,
     /// Normal contact law derived from the material.

@@ -115,6 +115,18 @@ pub struct RawCoarseGrain {
     pub alpha: Option<f64>,
     #[serde(default, deserialize_with = "some_name")]
     pub law: Option<RawLaw>,
+    /// Where an SCG particle's Reynolds-dependent drag correction and buoyancy are
+    /// evaluated: for the original particle or for the simulated sphere.
+    #[serde(default, deserialize_with = "some_name")]
+    pub forces_at: Option<RawForcesAt>,
+}
+
+/// `coarse_grain.forces_at`.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum RawForcesAt {
+    Original,
+    Coarse,
 }
 
 #[derive(Deserialize, Debug, Clone)]

@@ -304,6 +304,11 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
         drag,
         gravity,
         buoyancy,
+        scg_at_original: raw
+            .coarse_grain
+            .as_ref()
+            .and_then(|c| c.forces_at)
+            .is_some_and(|f| f == crate::raw::RawForcesAt::Original),
         material,
         normal_law,
         walls,

@@ -67,10 +67,11 @@ impl<C: Carrier> Carrier for WithOffset<C> {
 }
 
 /// Response time under `law` for the slip speed `slip` (m/s), s: the particle's Stokes τ
-/// divided by the law's correction at the particle Reynolds number of its drag diameter.
+/// divided by the law's correction at the particle Reynolds number of its
+/// `reynolds_diameter` (its drag diameter, or an SCG particle's original diameter).
 #[inline]
 pub fn effective_tau(law: DragLaw, fc: &FluidCoupling, fluid: &Fluid, slip: f64) -> f64 {
-    let re = particle_reynolds(fc.drag_diameter, slip, fluid.density, fluid.viscosity);
+    let re = particle_reynolds(fc.reynolds_diameter, slip, fluid.density, fluid.viscosity);
     fc.tau / law.correction(re)
 }
 
@@ -210,6 +211,7 @@ mod tests {
         let dt = 5e-4;
         let fc = FluidCoupling {
             drag_diameter: 1e-5,
+            reynolds_diameter: 1e-5,
             force_scale: 1.0,
             tau,
         };

@@ -375,6 +375,7 @@ mod tests {
         let fcs: Vec<FluidCoupling> = (0..n)
             .map(|i| FluidCoupling {
                 drag_diameter: 1e-4,
+                reynolds_diameter: 1e-4,
                 force_scale: 1.0,
                 tau: if ballistic && i % 7 == 3 {
                     f64::INFINITY
