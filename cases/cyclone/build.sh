@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Build the air flow of the OpenFOAM "MPPICFoam/cyclone" tutorial geometry for scg.
 #
-#   bash cases/cyclone/build.sh [--coarse|--full] [--out DIR] [--iterations N] [--np N] [--keep]
+#   bash cases/cyclone/build.sh [--coarse|--full] [--layers N] [--out DIR] [--iterations N]
+#                               [--np N] [--keep]
 #
 #   --coarse      (default) the tutorial's mesh: background blocks 33x33x63 (dx = 33 mm),
 #                 snappyHexMesh at level 0, 30.8k cells; simpleFoam 800 iterations, U, k and
@@ -10,6 +11,10 @@
 #                 averaged over the last 500, on --np processes (default 2: decomposePar +
 #                 mpirun -np 2 + reconstructPar); about 1.2 s CPU per iteration and process,
 #                 so about 20 minutes on 2 idle cores; 23 MB, not committed
+#   --layers N    N inflation layers on the walls (snappyHexMesh addLayers: expansion 1.2,
+#                 the outermost 0.4 of the cell outside, none thinner than 0.1 of it), so the
+#                 wall-adjacent cells' centres sit in the log layer (y+ of tens, not hundreds);
+#                 checkMesh must still say "Mesh OK."; 0 (default): none, the tutorial's
 #   --out DIR     where the case scg reads goes (default cases/cyclone/coarse or .../full);
 #                 it is replaced
 #   --iterations  SIMPLE iterations (simpleFoam stops earlier when the residualControl
@@ -38,6 +43,7 @@ out=""
 iterations=""
 average_from=""
 np=""
+layers=0
 keep=0
 while [ $# -gt 0 ]; do
     case "$1" in
@@ -46,6 +52,7 @@ while [ $# -gt 0 ]; do
         --out) out="$2"; shift ;;
         --iterations) iterations="$2"; shift ;;
         --np) np="$2"; shift ;;
+        --layers) layers="$2"; shift ;;
         --average-from) average_from="$2"; shift ;;
         --keep) keep=1 ;;
         -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
@@ -86,6 +93,27 @@ grep -q "($blocks)" "$work/system/blockMeshDict" || { echo "build.sh: blockMeshD
 zcat "$tutorial/system/snappyHexMeshDict.gz" \
     | sed -e 's/maxLocalCells [0-9]*;/maxLocalCells 4000000;/' \
           -e 's/maxGlobalCells [0-9]*;/maxGlobalCells 8000000;/' > "$work/system/snappyHexMeshDict"
+if [ "$layers" -gt 0 ]; then
+    # inflation layers on the wall patch `walls` (the tutorial's dictionary adds none)
+    python3 - "$work/system/snappyHexMeshDict" "$layers" <<'PY'
+import re, sys
+path, n = sys.argv[1], int(sys.argv[2])
+s = open(path).read()
+subs = [
+    (r"addLayers\s+false;", "addLayers       true;"),
+    (r"layers\s*\{\s*\}", "layers\n    {\n        walls { nSurfaceLayers %d; }\n    }" % n),
+    (r"expansionRatio\s+[0-9.]+;", "expansionRatio 1.2;"),
+    (r"finalLayerThickness\s+[0-9.]+;", "finalLayerThickness 0.4;"),
+    (r"minThickness\s+[0-9.]+;", "minThickness 0.1;"),
+]
+for pat, rep in subs:
+    s, k = re.subn(pat, rep, s, count=1)
+    if k != 1:
+        sys.exit(f"build.sh: snappyHexMeshDict: no match for {pat}")
+open(path, "w").write(s)
+PY
+    echo "== $layers inflation layers on walls"
+fi
 sed -i -e "s/ITERATIONS/$iterations/g" -e "s/AVERAGE_START/$average_from/" "$work/system/controlDict"
 cat > "$work/system/decomposeParDict" <<DICT
 FoamFile { version 2.0; format ascii; class dictionary; object decomposeParDict; }
@@ -121,8 +149,12 @@ done
 # the last iteration's initial residuals and the inlet/outlet volume flows
 summary="$work/summary.txt"
 {
-    echo "variant: $variant; blocks ($blocks); cells: $cells; processes: $np"
+    echo "variant: $variant; blocks ($blocks); inflation layers: $layers; cells: $cells; processes: $np"
     echo "turbulence: RAS kOmegaSST, steady (simpleFoam, SIMPLEC), nu = 1.5e-5 m^2/s, inlet U = (-10 0 0) m/s"
+    if [ "$layers" -gt 0 ]; then
+        echo "layers added by snappyHexMesh (log.snappyHexMesh):"
+        grep -A5 -E "^patch +faces +layers" log.snappyHexMesh | tail -6 | sed 's/^/   /'
+    fi
     echo "final iteration: $final (of $iterations max)"
     if grep -q "reached convergence" log.simpleFoam; then grep "reached convergence" log.simpleFoam; fi
     echo "UMean, kMean, omegaMean: U, k, omega averaged over iterations $average_from..$final"
