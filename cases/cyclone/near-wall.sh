@@ -6,7 +6,10 @@
 # runs it for 6 s, prints η = collected/fed per class (the scene's `dust_outlet` zone)
 # with Wilson's 95 % interval, and 1 − escaped/fed and the undecided share beside it.
 #
-#   bash cases/cyclone/near-wall.sh [--out DIR] [--feed-scale F] [--only NAMES]
+#   bash cases/cyclone/near-wall.sh [--out DIR] [--feed-scale F] [--only NAMES] [--case DIR]
+#
+#   --case DIR  another build of the field (e.g. build.sh --full --layers 3 --out DIR)
+#               instead of the committed cases/cyclone/coarse
 #
 # Variants (the scene has the wall function and stochastic_ras dispersion):
 #   nowall      the no-slip ramp, no dispersion (the scene before the wall function)
@@ -22,23 +25,26 @@ root="$(cd "$here/../.." && pwd)"
 out=/tmp/scg-cyclone-near-wall
 feed=1
 only=""
+case_dir=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --out) out="$2"; shift 2 ;;
     --feed-scale) feed="$2"; shift 2 ;;
     --only) only="$2"; shift 2 ;;
-    -h|--help) sed -n 2,20p "$0"; exit 0 ;;
+    --case) case_dir="$(cd "$2" && pwd)"; shift 2 ;;
+    -h|--help) sed -n 2,23p "$0"; exit 0 ;;
     *) echo "near-wall.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
 mkdir -p "$out"
 scg="$root/target/release/scg"
 [ -x "$scg" ] || (cd "$root" && cargo build --release --quiet)
-python3 - "$root" "$out" <<'PY'
+python3 - "$root" "$out" "${case_dir:-$root/cases/cyclone/coarse}" <<'PY'
 import sys
-root, out = sys.argv[1], sys.argv[2]
+root, out, case = sys.argv[1], sys.argv[2], sys.argv[3]
 src = open(f"{root}/cases/cyclone.toml").read()
-src = src.replace('case = "cyclone/coarse"', f'case = "{root}/cases/cyclone/coarse"')
+assert 'case = "cyclone/coarse"' in src, "cases/cyclone.toml: no case = \"cyclone/coarse\""
+src = src.replace('case = "cyclone/coarse"', f'case = "{case}"')
 wall = '[flow.wall_function]\nmodel = "log_law"\nk = "kMean"\n'
 assert wall in src, "cases/cyclone.toml has no [flow.wall_function]"
 disp = '[dispersion]\nmodel = "stochastic_ras"\n'
