@@ -32,7 +32,7 @@ while [ $# -gt 0 ]; do
     --feed-scale) feed="$2"; shift 2 ;;
     --only) only="$2"; shift 2 ;;
     --case) case_dir="$(cd "$2" && pwd)"; shift 2 ;;
-    -h|--help) sed -n 2,23p "$0"; exit 0 ;;
+    -h|--help) sed -n 2,21p "$0"; exit 0 ;;
     *) echo "near-wall.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
