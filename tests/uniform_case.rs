@@ -69,7 +69,7 @@ fn table_1_diameters_and_densities() {
 /// Beyond Stokes drag (issue 37): under Schiller–Naumann at the original's Re ≈ 67 (1 mm
 /// in 1 m/s air), with gravity and buoyancy, SCG particles whose forces are evaluated as
 /// the original's (`[coarse_grain] forces_at = "original"`) follow the original's velocity
-/// to 1e-12 at every frame; evaluated for the simulated sphere (`"coarse"`, the default)
+/// to 1e-12 at every frame (the default); evaluated for the simulated sphere (`"coarse"`)
 /// the α = 8 particle's correction is taken at 8·Re and its buoyancy at its own density,
 /// and it departs from the original by more than 10 %.
 #[test]
@@ -154,10 +154,16 @@ fn check_names_the_forces_at_in_force() {
             && m.contains("would take it at"),
         "{m}"
     );
-    let m = msgs(&["drag.law=\"schiller_naumann\""]);
+    let m = msgs(&[
+        "drag.law=\"schiller_naumann\"",
+        "coarse_grain.forces_at=\"coarse\"",
+    ]);
     assert!(
         m.contains("forces_at = \"coarse\": the drag correction at the simulated"),
         "{m}"
     );
+    // the default is "original"
+    let m = msgs(&["drag.law=\"schiller_naumann\""]);
+    assert!(m.contains("forces_at = \"original\""), "{m}");
     assert!(!msgs(&[]).contains("forces_at"));
 }

@@ -113,7 +113,8 @@ pub struct Scene {
     /// Buoyancy with gravity.
     pub buoyancy: bool,
     /// SCG particles' Reynolds-dependent drag correction and buoyancy as the original's
-    /// (`[coarse_grain] forces_at = "original"`; default `"coarse"`).
+    /// (`[coarse_grain] forces_at = "original"`, the default; `"coarse"`: as the
+    /// simulated sphere's).
     pub scg_at_original: bool,
     /// Contact material (required with walls).
     pub material: Option<Material>,

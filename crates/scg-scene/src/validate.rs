@@ -308,7 +308,7 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
             .coarse_grain
             .as_ref()
             .and_then(|c| c.forces_at)
-            .is_some_and(|f| f == crate::raw::RawForcesAt::Original),
+            .is_none_or(|f| f == crate::raw::RawForcesAt::Original),
         material,
         normal_law,
         walls,
