@@ -60,6 +60,11 @@ fn falling_particles_are_collected_at_the_analytic_step() {
             expect(z0)
         );
     }
+    let notes = scg::scene::check::check(&scene).messages().join("\n");
+    assert!(
+        notes.contains("zone `bin`: collects") && notes.contains("zone `shelf`: counts"),
+        "{notes}"
+    );
     let fates = scg::cli::fates::fates(&scene, &mut sim);
     let f = &fates[0];
     assert_eq!(f.collected(), 2);

@@ -623,6 +623,19 @@ pub fn check(scene: &Scene) -> Report {
         }
     }
     findings.extend(forces_at_findings(scene, &groups));
+    findings.extend(scene.zones.iter().map(|z| Finding {
+        level: Level::Note,
+        message: format!(
+            "zone `{}`: {} ({:?})",
+            z.name,
+            if z.collects {
+                "collects: a particle whose centre enters it is removed and counted as collected"
+            } else {
+                "counts the particles inside at the end"
+            },
+            z.region
+        ),
+    }));
     findings.extend(mesh_flow_findings(scene));
     findings.extend(dispersion::findings(scene));
     for (code, n) in allowed {
