@@ -88,13 +88,14 @@ enum Command {
     Cost(cost::CostArgs),
     /// Studies: `classifier`, `classifier-psd` (paper Section 5, Figs 8–10),
     /// `classifier-cut` (the steady-state cut size) and `cyclone` (grade efficiency of
-    /// cases/cyclone.toml in five coarse-graining variants).
+    /// cases/cyclone.toml in seven variants: coarse-graining laws and sampling).
     #[command(after_help = "Examples:\n  \
         scg study classifier --quick               the paper's Table 3, reduced (minutes)\n  \
         scg study classifier-psd                   size distribution and partition curve\n  \
-        scg study cyclone --quick                  grade efficiency, five variants\n  \
+        scg study cyclone --quick                  grade efficiency, seven variants\n  \
         scg study cyclone --from recordings/study-cyclone --openfoam /tmp/scg-cyclone-vs-openfoam/grade.json\n  \
-        scg study cyclone --run scg2 --from recordings/study-cyclone   re-run one variant\n\n\
+        scg study cyclone --run scg2 --from recordings/study-cyclone   re-run one variant\n  \
+        scg study cyclone --from docs/data/cyclone-study --markdown   the tables docs/cyclone.md quotes\n\n\
         What each study writes: docs/cli.md; the cyclone study: docs/cyclone.md.")]
     Study(study::StudyArgs),
     /// Work from an MCAP recording: rebuild .rrd, analyse, verify.

@@ -35,7 +35,7 @@ pub const CLASSIFIER_CUT: &str = include_str!("../../../../cases/classifier-cut.
 pub struct StudyArgs {
     /// `classifier` (paper Table 3), `classifier-psd` (size distribution, partition curve),
     /// `classifier-cut` (classes at the cut: the steady-state d50) or `cyclone` (grade
-    /// efficiency of cases/cyclone.toml in five variants).
+    /// efficiency of cases/cyclone.toml in seven variants and the tracer check).
     pub study: String,
     /// Fewer particles (feed rates scaled down): a few minutes in all.
     #[arg(long)]
@@ -58,13 +58,17 @@ pub struct StudyArgs {
     #[arg(long, value_name = "DIR")]
     pub from: Option<PathBuf>,
     /// `cyclone` only: run just these variants (comma-separated: original, scg2, scg4,
-    /// none2, parcel2), replacing those read with `--from`.
+    /// none2, parcel2, sample2, sample4), replacing those read with `--from`.
     #[arg(long, value_name = "NAMES")]
     pub run: Option<String>,
     /// `cyclone` only: feed the coarse-grained variants this many times the same-mass
     /// count (more particles: less sampling noise, no longer the same cost).
     #[arg(long, value_name = "F", default_value_t = 1.0)]
     pub cg_feed: f64,
+    /// `cyclone` only, with `--from` and no `--run`: print the study's tables in Markdown
+    /// (as docs/cyclone.md quotes them) and write nothing.
+    #[arg(long)]
+    pub markdown: bool,
 }
 
 /// One study: its scene and windows.
@@ -133,9 +137,10 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
         );
         return EXIT_BAD_INPUT;
     };
-    if a.openfoam.is_some() || a.from.is_some() || a.run.is_some() || a.cg_feed != 1.0 {
+    if a.openfoam.is_some() || a.from.is_some() || a.run.is_some() || a.cg_feed != 1.0 || a.markdown
+    {
         eprintln!(
-            "error: --openfoam, --from, --run and --cg-feed are for `scg study cyclone` only"
+            "error: --openfoam, --from, --run, --cg-feed and --markdown are for `scg study cyclone` only"
         );
         return EXIT_BAD_INPUT;
     }

@@ -25,7 +25,7 @@ use std::path::PathBuf;
 
 pub use grade::{ClassGrade, ExternalGrade, cut_size, efficiency, residence_w1};
 pub use plot::write_plots;
-pub use report::{Criteria, criteria, report, summary, write_tables};
+pub use report::{Criteria, criteria, markdown, report, summary, write_tables};
 pub use run::{CycloneRun, Tracker, run_variant};
 pub use theory::Cyclone;
 pub use tracers::{TracerCheck, run_tracers};
@@ -209,6 +209,22 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
             return EXIT_BAD_INPUT;
         }
     };
+    if a.markdown {
+        let (Some(from), None) = (&a.from, &a.run) else {
+            eprintln!("error: --markdown prints a finished study: give --from DIR, without --run");
+            return EXIT_BAD_INPUT;
+        };
+        return match read_study(from) {
+            Ok(runs) => {
+                print!("{}", markdown(&runs));
+                0
+            }
+            Err(e) => {
+                eprintln!("error: --from {e}");
+                EXIT_BAD_INPUT
+            }
+        };
+    }
     let out = a.out.clone().unwrap_or_else(|| {
         PathBuf::from(format!(
             "recordings/study-cyclone{}",

@@ -507,3 +507,58 @@ pub fn write_tables(
     )?;
     w("report.txt", report(runs, theory, openfoam, tracers))
 }
+
+/// The study's tables in Markdown, as docs/cyclone.md quotes them (`scg study cyclone
+/// --from DIR --markdown`): the original's grade curve with Wilson's 95 % interval, the
+/// escaped and undecided shares; then per variant its largest |Δη| to the original, d50
+/// and wall time against the original's.
+pub fn markdown(runs: &[CycloneRun]) -> String {
+    let mut s = String::new();
+    let o = &runs[0];
+    let g = |x: f64| {
+        let t = format!("{x:.1}");
+        t.strip_suffix(".0").map_or(t.clone(), str::to_string)
+    };
+    let pc = |x: f64| g(100.0 * x);
+    let eta = if o.classes.iter().any(|c| c.collected.is_some()) {
+        "η = collected/fed"
+    } else {
+        "η = 1 − escaped/fed"
+    };
+    let _ = writeln!(
+        s,
+        "| d [µm] | {eta} [95 %] | escaped/fed | held (undecided) |\n|---|---|---|---|"
+    );
+    for c in &o.classes {
+        let (lo, hi) = c.efficiency95();
+        let _ = writeln!(
+            s,
+            "| {} | {} [{:.0}, {:.0}] | {} | {} % |",
+            g(c.diameter * 1e6),
+            pc(c.efficiency),
+            100.0 * lo,
+            100.0 * hi,
+            pc(c.escaped_share()),
+            pc(c.held_share())
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\n| variant | max \\|Δη\\| to the original, pp | d50 [µm] | wall time / the original's |\n|---|---|---|---|"
+    );
+    for v in runs {
+        let d = if v.name == o.name {
+            "—".to_string()
+        } else {
+            format!("{:.2}", max_delta_pp(o, v))
+        };
+        let _ = writeln!(
+            s,
+            "| {} | {d} | {} | {:.3} |",
+            v.name,
+            cut_size(&v.classes).map_or("—".to_string(), |x| format!("{:.2}", x * 1e6)),
+            v.total_s / o.total_s
+        );
+    }
+    s
+}
