@@ -41,7 +41,7 @@ fn markdown_needs_a_finished_study() {
         no_record: true,
         set: Vec::new(),
         openfoam: None,
-        from: from.map(|f| common::repo(f)),
+        from: from.map(common::repo),
         run: run.map(str::to_string),
         cg_feed: 1.0,
         markdown: true,
