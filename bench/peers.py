@@ -15,6 +15,10 @@
                                                         γ(e), the restitution to hand to
                                                         LAMMPS's `damping tsuji` so that its
                                                         α polynomial equals γ, and √(4G*/E*)
+  python3 bench/peers.py hertz-history E V              "KN KT GN" of LAMMPS's pair
+                                                        gran/hertz/history: Hertz's 4E*/3,
+                                                        Mindlin's 8G*, and the damping γn that
+                                                        gives restitution E head-on at V m/s
 """
 import math
 import sys
@@ -160,6 +164,34 @@ def tsuji(e):
     return gamma, 0.5 * (lo + hi), math.sqrt(4.0 * g_star / e_star), alpha(e)
 
 
+def hertz_history(e, v0):
+    """LAMMPS's gran/hertz/history with scg's stiffness: kn = 4E*/3 (Hertz), kt = 8G*
+    (Mindlin), and its damping m*·γn·v_n·√(R*δ) set (bisection on a head-on collision of two
+    spheres, integrated at 1/2500 of the contact time) to give restitution `e` at `v0`;
+    unlike Tsuji's damping its restitution grows as the impact slows."""
+    e_star = E / (2.0 * (1.0 - NU * NU))
+    g_star = (E / (2.0 * (1.0 + NU))) / (2.0 * (2.0 - NU))
+    kn, kt = 4.0 / 3.0 * e_star, 8.0 * g_star
+    m_eff, r_eff = RHO * math.pi / 6.0 * D**3 / 2.0, D / 4.0
+
+    def restitution(g):
+        x, v, dt = 0.0, v0, 2e-9 / v0 ** 0.2
+        while True:
+            v -= math.sqrt(r_eff * max(x, 0.0)) * (kn * x + m_eff * g * v) / m_eff * dt
+            x += v * dt
+            if x <= 0.0 and v < 0.0:
+                return -v / v0
+
+    lo, hi = 1.0, 1e12
+    for _ in range(60):
+        mid = math.sqrt(lo * hi)
+        if restitution(mid) > e:
+            lo = mid
+        else:
+            hi = mid
+    return kn, kt, math.sqrt(lo * hi)
+
+
 def main(argv):
     cmd = argv[1]
     if cmd == "dense-scene":
@@ -180,6 +212,9 @@ def main(argv):
     elif cmd == "tsuji":
         gamma, e_l, xgt, a_e = tsuji(float(argv[2]))
         print(f"{gamma:.17g} {e_l:.17g} {xgt:.17g} {a_e:.17g}")
+    elif cmd == "hertz-history":
+        kn, kt, gn = hertz_history(float(argv[2]), float(argv[3]))
+        print(f"{kn:.17g} {kt:.17g} {gn:.17g}")
     else:
         sys.exit(f"unknown command {cmd}")
 

@@ -25,8 +25,9 @@
 #    parsing, atom creation and the run's setup — first neighbour build, communication
 #    set-up — excluded). Every peer run prints its MPI processor grid and atoms per rank;
 #    a rank without atoms fails the script.
-# The last two lines are `dense ratio: X` and `dilute ratio: Y`: scg (2 threads) divided by
-# the fastest peer (2 ranks).
+# The last lines are `dense ratio: X` and `dilute ratio: Y`: scg (2 threads) divided by the
+# fastest peer with scg's physics (2 ranks), then the same against `lammps-fast`, LAMMPS's
+# fastest granular style (pair gran/hertz/history: the same stiffness, its own damping).
 set -euo pipefail
 self=$(realpath "$0")
 cd "$(dirname "$self")/.."
@@ -85,6 +86,11 @@ py() { python3 "$root/bench/peers.py" "$@"; }
 # hertz/material takes E* = E/(2(1−ν)) instead of E/(2(1−ν²)): E/(1+ν) corrects it; and its
 # `tangential mindlin NULL` is not 8·G*, so the wall gets k_t = 8·G* explicitly.
 read -r GAMMA EDAMP XGT ALPHA_E < <(py tsuji 0.9)
+# LAMMPS's fastest granular style, as a LAMMPS user picks it for speed: pair
+# gran/hertz/history with the same Hertz and Mindlin stiffness (4E*/3, 8G*) and its own
+# damping m*·γn·v_n·√(R*δ), γn set for e = 0.9 head-on at 1 m/s (its restitution then
+# grows as impacts slow: 0.94 at 0.1 m/s; γt = γn/2). Timed only, not in the physics check.
+read -r KN KT GN < <(py hertz-history 0.9 1.0)
 EWALL=$(python3 -c "print(repr(1e8/1.3))")
 KTWALL=$(python3 -c "g = 1e8 / 2.6; print(repr(8 / (2 * 1.7 / g)))")
 echo
@@ -97,6 +103,9 @@ echo "            its Tsuji polynomial gives α(0.9) = $ALPHA_E ≠ γ, so it is
 echo "            (α(e') = γ); x = √(4G*/E*) = $XGT (scg's tangential dashpot);"
 echo "            floor: fix wall/gran with E = $EWALL (= E/(1+ν), see above) and"
 echo "            tangential mindlin $KTWALL (= 8·G*) instead of NULL"
+echo "  lammps-fast (timed only): pair gran/hertz/history kn = $KN (4E*/3), kt = $KT (8G*),"
+echo "            γn = $GN (e = 0.9 at 1 m/s; velocity-dependent), γt = γn/2, dampflag 1;"
+echo "            floor fix wall/gran hertz/history with the same constants"
 echo "  neighbour lists (peers): neighbor 0.0001 bin (skin 0.1·d, as scg), neigh_modify delay 0"
 echo "            every 1 check yes (rebuilt when an atom moved skin/2, as scg); newton off"
 echo "            (LIGGGHTS's history pair needs it; the same for LAMMPS)"
@@ -152,7 +161,8 @@ import math
 n = $N_DILUTE; side = round(n ** (1 / 3)); l = (n * math.pi / 6 * 1e-9 / 0.01) ** (1 / 3); a = l / side
 print(side, repr(a), repr(0.45 * (a - 1e-3)))")
 N_DILUTE=$(( SIDE * SIDE * SIDE ))
-LMP_MODEL=(-var EDAMP "$EDAMP" -var XGT "$XGT")
+LMP_MODEL=(-var EDAMP "$EDAMP" -var XGT "$XGT" -var FAST 0 -var KN 0 -var KT 0 -var GN 0)
+LMP_FAST=(-var EDAMP "$EDAMP" -var XGT "$XGT" -var FAST 1 -var KN "$KN" -var KT "$KT" -var GN "$GN")
 dense_vars=(-var NZ "$NZ" -var ZHI "$ZHI" -var PZ 1)
 dilute_vars=(-var SIDE "$SIDE" -var A "$A" -var J "$J")
 
@@ -254,15 +264,14 @@ for rep in $(seq "$REPS"); do
       r=$(scg_rate "$np" "$scene" "$n")
       runs[scg,$scene,$np]+="$r "
       echo "  rep $rep $scene np=$np scg      $r particle-steps/s"
-      for code in liggghts lammps; do
-        if [ "$scene" = dense ]; then
-          vars=("${dense_vars[@]}")
-          [ "$code" = lammps ] && vars+=("${LMP_MODEL[@]}" -var EWALL "$EWALL" -var KTWALL "$KTWALL")
-        else
-          vars=("${dilute_vars[@]}")
-          [ "$code" = lammps ] && vars+=("${LMP_MODEL[@]}")
-        fi
-        peer_run "$code" "$np" "$root/bench/$code/in.$scene" "${vars[@]}" -var S "$STEPS" -var CHECK 0 -var DUMP none
+      for code in liggghts lammps lammps-fast; do
+        if [ "$scene" = dense ]; then vars=("${dense_vars[@]}"); else vars=("${dilute_vars[@]}"); fi
+        case "$code" in
+          lammps) vars+=("${LMP_MODEL[@]}") ;;
+          lammps-fast) vars+=("${LMP_FAST[@]}") ;;
+        esac
+        [ "$scene" = dense ] && [ "$code" != liggghts ] && vars+=(-var EWALL "$EWALL" -var KTWALL "$KTWALL")
+        peer_run "$code" "$np" "$root/bench/${code%-fast}/in.$scene" "${vars[@]}" -var S "$STEPS" -var CHECK 0 -var DUMP none
         line=$(peer_rate "$np")  # in a command substitution, so that a FAIL stops the script
         read -r r grid rest <<< "$line"
         runs[$code,$scene,$np]+="$r "
@@ -276,24 +285,28 @@ best() { tr ' ' '\n' | grep . | sort -g | tail -1; }
 declare -A top
 echo
 echo "== best of $REPS (particle-steps/s; N dense = $N_DENSE, dilute = $N_DILUTE)"
-printf '  %-7s %-9s %12s %12s %8s\n' scene code "1 thread" "2 threads" "2/1"
+printf '  %-7s %-11s %12s %12s %8s\n' scene code "1 thread" "2 threads" "2/1"
 for scene in dense dilute; do
-  for code in scg liggghts lammps; do
+  for code in scg liggghts lammps lammps-fast; do
     b1=$(echo "${runs[$code,$scene,1]}" | best)
     b2=$(echo "${runs[$code,$scene,2]}" | best)
     top[$code,$scene]=$b2
-    printf '  %-7s %-9s %12s %12s %8s\n' "$scene" "$code" "$b1" "$b2" "$(python3 -c "print(f'{$b2 / $b1:.2f}')")"
+    printf '  %-7s %-11s %12s %12s %8s\n' "$scene" "$code" "$b1" "$b2" "$(python3 -c "print(f'{$b2 / $b1:.2f}')")"
   done
 done
 echo "  (peers: threads = MPI ranks; neither Debian build has OpenMP styles)"
 for scene in dense dilute; do
-  python3 - "$scene" "${top[scg,$scene]}" "${top[liggghts,$scene]}" "${top[lammps,$scene]}" <<'EOF'
+  python3 - "$scene" "${top[scg,$scene]}" "${top[liggghts,$scene]}" "${top[lammps,$scene]}" "${top[lammps-fast,$scene]}" <<'EOF'
 import sys
-scene, s, g, l = sys.argv[1], *map(float, sys.argv[2:])
+scene, s, g, l, f = sys.argv[1], *map(float, sys.argv[2:])
 peer, p = max(("liggghts", g), ("lammps", l), key=lambda t: t[1])
-print(f"{scene}: scg {s:.4e} / fastest peer {peer} {p:.4e} (2 threads/ranks)")
+print(f"{scene}: scg {s:.4e} / fastest peer with the same physics {peer} {p:.4e}; "
+      f"/ lammps-fast (gran/hertz/history, its own damping) {f:.4e} (2 threads/ranks)")
 EOF
 done
 for scene in dense dilute; do
   python3 -c "print(f'$scene ratio: {${top[scg,$scene]} / max(${top[liggghts,$scene]}, ${top[lammps,$scene]}):.3f}')"
+done
+for scene in dense dilute; do
+  python3 -c "print(f'$scene ratio to lammps-fast: {${top[scg,$scene]} / ${top[lammps-fast,$scene]}:.3f}')"
 done
