@@ -59,13 +59,14 @@ pub struct SpawnRules {
 
 /// The simulated quantities of an original particle coarse-grained by `law` with ratio
 /// `alpha`, for time step `dt`: diameter, density, mass, fluid coupling, Stokes factors.
-/// With `at_original`, an SCG particle's drag correction is taken at its original
-/// diameter's Reynolds number (the SCG premise, equal acceleration, under any drag law).
+/// With `as_original` (an SCG particle under `scg_at_original`: [`SpawnRules::as_original`])
+/// the drag correction is taken at the original diameter's Reynolds number (the SCG
+/// premise, equal acceleration, under any drag law).
 pub fn coarse_grained(
     cg: &CoarseGrain,
     fluid: Option<&Fluid>,
     dt: f64,
-    at_original: bool,
+    as_original: bool,
 ) -> (Diameter, Density, Mass, FluidCoupling, StokesFactors) {
     let s = coarse_grain(cg.law, cg.alpha, cg.original_diameter, cg.original_density);
     let mass = s.mass();
@@ -82,7 +83,7 @@ pub fn coarse_grained(
         Mass(mass),
         FluidCoupling {
             drag_diameter: s.drag_diameter,
-            reynolds_diameter: if at_original && cg.law == CoarseGrainLaw::Scg {
+            reynolds_diameter: if as_original {
                 cg.original_diameter
             } else {
                 s.drag_diameter
@@ -95,6 +96,12 @@ pub fn coarse_grained(
 }
 
 impl SpawnRules {
+    /// Whether the particle `cg` takes its Reynolds-dependent drag correction and its
+    /// buoyancy as its original's: an SCG particle under `scg_at_original`.
+    pub fn as_original(&self, cg: &CoarseGrain) -> bool {
+        self.scg_at_original && cg.law == CoarseGrainLaw::Scg
+    }
+
     /// Body acceleration of a particle of simulated density `density` (kg/m³), m/s².
     pub fn body_acceleration(&self, density: f64) -> DVec3 {
         let reduce = match self.fluid {
@@ -194,9 +201,10 @@ macro_rules! spawn_bundle {
             original_diameter: spec.diameter,
             original_density: spec.density,
         };
-        let scaled = coarse_grained(&cg, rules.fluid.as_ref(), $dt, rules.scg_at_original);
-        // buoyancy of the original under `scg_at_original` (equal acceleration)
-        let buoyant = if rules.scg_at_original && cg.law == CoarseGrainLaw::Scg {
+        let as_original = rules.as_original(&cg);
+        let scaled = coarse_grained(&cg, rules.fluid.as_ref(), $dt, as_original);
+        // buoyancy of the original when its forces are (equal acceleration)
+        let buoyant = if as_original {
             cg.original_density
         } else {
             scaled.1.0

@@ -17,10 +17,12 @@ use slip::{fluid_velocity, terminal_slip};
 
 mod dispersion;
 mod dt;
+mod forces_at;
 mod mesh;
 mod overlaps;
 mod render;
 mod slip;
+mod zones;
 
 pub use dt::auto_dt;
 use mesh::mesh_flow_findings;
@@ -315,59 +317,6 @@ fn group_report(scene: &Scene, g: &crate::Group) -> GroupReport {
     }
 }
 
-/// Notes on `[coarse_grain] forces_at` for the SCG groups with α > 1 under a Reynolds-
-/// dependent drag law: which is in force and, at the group's estimated slip, how much the
-/// other would change the drag correction.
-fn forces_at_findings(scene: &Scene, reports: &[GroupReport]) -> Vec<Finding> {
-    let (Some(law), Some(f)) = (scene.drag, scene.fluid) else {
-        return Vec::new();
-    };
-    if law == DragLaw::Stokes {
-        return Vec::new();
-    }
-    let (now, other) = if scene.scg_at_original {
-        ("original", "coarse")
-    } else {
-        ("coarse", "original")
-    };
-    scene
-        .groups
-        .iter()
-        .zip(reports)
-        .filter(|(g, r)| g.law == scg_core::physics::scaling::CoarseGrainLaw::Scg && g.alpha != 1.0 && r.slip > 0.0)
-        .map(|(g, r)| {
-            let re = |d: f64| particle_reynolds(d, r.slip, f.density, f.viscosity);
-            let (orig, cg) = (
-                law.correction(re(g.diameter)),
-                law.correction(re(g.alpha * g.diameter)),
-            );
-            let (a, b) = if scene.scg_at_original { (orig, cg) } else { (cg, orig) };
-            let buoy = if scene.gravity.is_some() && scene.buoyancy {
-                format!(
-                    ", buoyancy ρ_f/ρ_p {:.3e} (original) against {:.3e} (simulated)",
-                    f.density / g.density,
-                    f.density / r.density
-                )
-            } else {
-                String::new()
-            };
-            Finding {
-                level: Level::Note,
-                message: format!(
-                    "group `{}` (SCG α = {}): forces_at = \"{now}\": the drag correction at the {} particle's Re ({:.3}); forces_at = \"{other}\" would take it at {:.3} and change the drag by {:+.1} % at the slip {:.3e} m/s{buoy}",
-                    g.name,
-                    g.alpha,
-                    if scene.scg_at_original { "original" } else { "simulated" },
-                    a,
-                    b,
-                    100.0 * (b / a - 1.0),
-                    r.slip
-                ),
-            }
-        })
-        .collect()
-}
-
 /// Shortest particle–particle contact time over all pairs of groups (the stiffest pair),
 /// s, when the scene declares `[contacts]`: Hertz t_c with m*, R* of the pair at the
 /// approach speed known before the run (the largest difference of the two groups' initial
@@ -622,20 +571,8 @@ pub fn check(scene: &Scene) -> Report {
             }
         }
     }
-    findings.extend(forces_at_findings(scene, &groups));
-    findings.extend(scene.zones.iter().map(|z| Finding {
-        level: Level::Note,
-        message: format!(
-            "zone `{}`: {} ({:?})",
-            z.name,
-            if z.collects {
-                "collects: a particle whose centre enters it is removed and counted as collected"
-            } else {
-                "counts the particles inside at the end"
-            },
-            z.region
-        ),
-    }));
+    findings.extend(forces_at::findings(scene, &groups));
+    findings.extend(zones::findings(scene));
     findings.extend(mesh_flow_findings(scene));
     findings.extend(dispersion::findings(scene));
     for (code, n) in allowed {

@@ -109,12 +109,10 @@ pub fn scene_text() -> Result<String, String> {
     ))
 }
 
-/// The cyclone scene's air field (with the study's `set` overrides) on
-/// Barth–Muschelknautz's control surface (the roof at z = 1 m), 64 × 64 points; `None`
-/// when the scene does not load.
-pub fn field_swirl(text: &str, set: &[String]) -> Option<(f64, f64)> {
-    let scene = scg_scene::parse(text, "<cyclone>", "cyclone", set).ok()?;
-    let flow = scene.mesh_flow.as_ref()?.flow.clone();
+/// The cyclone scene's air field on Barth–Muschelknautz's control surface (the roof at
+/// z = 1 m), 64 × 64 points; `None` without a mesh flow.
+pub fn field_swirl(scene: &scg_scene::Scene) -> Option<(f64, f64)> {
+    let flow = &scene.mesh_flow.as_ref()?.flow;
     Cyclone::OPENFOAM_TUTORIAL.control_surface(1.0, 64, |x| {
         flow.find_cell(x).and_then(|c| flow.velocity_in(c, x))
     })
@@ -335,8 +333,16 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
     }
     // In the order of VARIANTS (the original first).
     runs.sort_by_key(|r| VARIANTS.iter().position(|v| v.0 == r.name));
+    // the scene as the variants ran it: its field's swirl, its outline for the plots
+    let scene = match scg_scene::parse(&text, "<cyclone>", "cyclone", &a.set) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 1;
+        }
+    };
     let mut theory = Cyclone::OPENFOAM_TUTORIAL;
-    theory.field_swirl = field_swirl(&text, &a.set);
+    theory.field_swirl = field_swirl(&scene);
     // The tracer check: read back with `--from` when no variant runs, else run.
     let mut tracers = if to_run.is_empty() {
         a.from.as_ref().and_then(|d| read_tracers(d))
@@ -361,13 +367,7 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
         "{}",
         report(&runs, &theory, openfoam.as_ref(), tracers.as_ref())
     );
-    let outline = match scg_scene::parse(&text, "<cyclone>", "cyclone", &a.set) {
-        Ok(s) => s.patch_surfaces(),
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 1;
-        }
-    };
+    let outline = scene.patch_surfaces();
     if let Err(e) = write_tables(&runs, &theory, openfoam.as_ref(), tracers.as_ref(), &out)
         .and_then(|_| write_plots(&runs, openfoam.as_ref(), &theory, &outline, &out))
     {

@@ -188,9 +188,9 @@ pub fn run_variant(
         let collected = sim
             .world
             .get_resource::<CollectLog>()
-            .map_or(Vec::new(), |l| l.last_step_ids.clone());
+            .map_or(&[][..], |l| &l.last_step_ids);
         let present = query.iter(&sim.world).map(|(id, g)| (id.0, g.0));
-        tracker.observe(t, present, sim.world.resource::<OutletLog>(), &collected);
+        tracker.observe(t, present, sim.world.resource::<OutletLog>(), collected);
         if step == snap_step {
             snapshot = (
                 t,
