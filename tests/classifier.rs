@@ -43,7 +43,7 @@ fn run(variant: usize, mcap: Option<&std::path::Path>) -> study::VariantRun {
 fn reduced_classifier_orders_classes_and_separates_scg_from_none() {
     let dir = tempfile::tempdir().unwrap();
     let mcap = dir.path().join("classifier-original.mcap");
-    let runs: Vec<study::VariantRun> = (0..3)
+    let runs: Vec<study::VariantRun> = (0..4)
         .map(|v| run(v, (v == 0).then_some(mcap.as_path())))
         .collect();
     print!("{}", study::report(&runs));
@@ -87,6 +87,28 @@ fn reduced_classifier_orders_classes_and_separates_scg_from_none() {
             < 0.5 * runs[1].result.classes[0].drained_fraction
     );
 
+    // The sampling control (originals, 8 times fewer) agrees with the originals within
+    // the sampling noise in every class (a permutation test over particles), and its cut
+    // size lies within the intervals; without SCG the 100 µm class is far beyond it.
+    let iv_sample = classify::w1_intervals(orig, &runs[3].result);
+    let iv_none = classify::w1_intervals(orig, &runs[2].result);
+    let w_sample = study::w1_to(orig, &runs[3].result);
+    for (c, (w, (_, noise))) in w_sample.iter().zip(&iv_sample).enumerate() {
+        assert!(w <= noise, "class {c}: sample W1 {w} > noise {noise}");
+    }
+    assert!(
+        w_none[0] > 3.0 * iv_none[0].1,
+        "none {w_none:?} {iv_none:?}"
+    );
+    if let (Some(d), Some((lo, hi))) = (
+        classify::cut_size(orig),
+        classify::cut_size95(&runs[3].result),
+    ) {
+        let (rlo, rhi) = classify::cut_size95(orig).unwrap();
+        println!("d50 original {d} [{rlo}, {rhi}], sample [{lo}, {hi}]");
+        assert!(lo.is_nan() || hi.is_nan() || (lo <= rhi && rlo <= hi));
+    }
+
     // The recording gives the same analysis, to the last digit.
     let rec = scg::record::read_mcap(&mcap).unwrap();
     let replayed = classify::analyze_recording(&rec, WINDOW.0, WINDOW.1).unwrap();
@@ -124,6 +146,31 @@ fn feeders_are_deterministic_and_exact() {
     .unwrap();
     for (o, c) in scene.feeders.iter().zip(&cg.feeders) {
         assert!((o.rate / c.rate - 8.0).abs() < 1e-9);
+    }
+    // So does sampling (each original stands for 8), its particles keep their size and
+    // density.
+    let sample = scg::scene::parse(
+        study::CLASSIFIER,
+        "<classifier>",
+        "classifier",
+        &overrides(3, &[]),
+    )
+    .unwrap();
+    assert_eq!(sample.groups[0].law.name(), "sample");
+    for (o, c) in scene.feeders.iter().zip(&sample.feeders) {
+        assert!((o.rate / c.rate - 8.0).abs() < 1e-9);
+    }
+    let mut sim = sample.build(false);
+    sim.run(sample.steps() / 20, |_| true).unwrap();
+    let mut q = sim.world.query::<(
+        &scg::core::components::Diameter,
+        &scg::core::components::Density,
+    )>();
+    let sizes: Vec<(f64, f64)> = q.iter(&sim.world).map(|(d, r)| (d.0, r.0)).collect();
+    assert!(!sizes.is_empty());
+    for (d, rho) in sizes {
+        assert!(sample.groups.iter().any(|g| g.diameter == d), "{d}");
+        assert_eq!(rho, sample.groups[0].density);
     }
 }
 

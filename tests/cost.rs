@@ -200,6 +200,16 @@ fn sweep_checks(case: &str, dir: &Path) {
     };
     for a in ["2", "4", "8"] {
         assert!(err_of("scg", a) < 1e-12, "scg α={a}: {}", err_of("scg", a));
+        // The sampling control: its particle 0 is the original itself (no model error),
+        // and it simulates as many particles as SCG does.
+        assert!(err_of("sample", a) < 1e-12, "sample α={a}");
+        let particles = |l: &str| {
+            rows.iter()
+                .find(|r| r[law] == l && r[alpha] == a && &r[dt] == base_dt)
+                .unwrap()[col("particles")]
+            .clone()
+        };
+        assert_eq!(particles("sample"), particles("scg"), "α={a}");
     }
     for l in ["none", "mass"] {
         let e: Vec<f64> = ["2", "4", "8"].iter().map(|a| err_of(l, a)).collect();
@@ -215,6 +225,12 @@ fn sweep_checks(case: &str, dir: &Path) {
         assert!(md.contains("| forces | (nothing — no cost) |"), "{md}");
     }
     assert!(md.contains("Speed-up of each α"));
+    // Without contacts SCG is no better than sampling: both exact, the same count.
+    assert!(md.contains("## Against plain sampling"), "{md}");
+    assert!(
+        md.contains("| 2 | scg |") && !md.contains("| yes |"),
+        "{md}"
+    );
     let svg = std::fs::read_to_string(dir.join("cost.svg")).unwrap();
     assert!(svg.contains("Pareto front"));
 }

@@ -256,6 +256,88 @@ fn spatial_share_matches_area_ratio_over_many_particles() {
     );
 }
 
+/// `weight = "flux"`: with 1 m/s through the inlet's lower face (y < 0.3 L, area 0.3 L²)
+/// and 2 m/s through its upper one (cell values), the positions follow u·n, not the
+/// area: the share on the lower face is 0.3·1 / (0.3·1 + 0.7·2) = 0.176 (by area: 0.3),
+/// within 4σ of 10^5; within each face they stay uniform by area.
+#[test]
+fn flux_weighted_feed_follows_the_inflow() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = split_box();
+    let step = |x: DVec3| DVec3::new(if x.y < Y_SPLIT { 1.0 } else { 2.0 }, 0.0, 0.0);
+    let field = sample(&mesh, step);
+    write_case(
+        dir.path().join("case"),
+        &mesh,
+        Some(("U", &field)),
+        Format::Binary,
+    )
+    .unwrap();
+    let text = scene_text(0.0011).replace("cell_point_linear_exact", "cell_value");
+    std::fs::write(dir.path().join("scene.toml"), &text).unwrap();
+    let mut scene = scg::scene::load(&dir.path().join("scene.toml"), &[]).unwrap();
+    scene.feeders.truncate(1);
+    scene.feeders[0].rate = 1.0e8;
+    scene.feeders[0].by_flux = true;
+    let mut sim = scene.build(false);
+    sim.run(100, |_| true).unwrap();
+    let ps: Vec<_> = sim
+        .particles()
+        .into_iter()
+        .filter(|p| p.group == 0)
+        .collect();
+    let n = ps.len() as f64;
+    let share = ps.iter().filter(|p| p.position.y < Y_SPLIT).count() as f64 / n;
+    let expected = 0.3 / (0.3 + 0.7 * 2.0);
+    let sigma = (expected * (1.0 - expected) / n).sqrt();
+    println!("flux-weighted: {share:.4} below the split, expected {expected:.4} (σ {sigma:.1e})");
+    assert!(n >= 99_000.0);
+    assert!(
+        (share - expected).abs() < 4.0 * sigma,
+        "{share} vs {expected}"
+    );
+    let upper: Vec<f64> = ps
+        .iter()
+        .filter(|p| p.position.y >= Y_SPLIT)
+        .map(|p| p.position.y)
+        .collect();
+    let mid = 0.5 * (Y_SPLIT + L);
+    let below = upper.iter().filter(|y| **y < mid).count() as f64;
+    let m = upper.len() as f64;
+    assert!(
+        (below - 0.5 * m).abs() < 4.0 * (0.25 * m).sqrt(),
+        "{below} of {m}"
+    );
+    // the bad word names the key
+    let text = scene_text(0.001).replace(
+        "velocity = \"field\"",
+        "velocity = \"field\"\nweight = \"mass\"",
+    );
+    std::fs::write(dir.path().join("bad.toml"), &text).unwrap();
+    let e = scg::scene::load(&dir.path().join("bad.toml"), &[])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("feeders[0].weight") && e.contains("\"mass\""),
+        "{e}"
+    );
+    // a region feeder has no flux to weight by
+    let e = scg::scene::parse(
+        "duration = 0.1\ndt = 1e-3\n[[groups]]\nname = \"a\"\ndiameter = 1e-5\ndensity = 1000.0\n\
+         [[feeders]]\ngroup = \"a\"\nrate = 10.0\nweight = \"flux\"\n\
+         region = { kind = \"box\", min = [0.0, 0.0, 0.0], max = [1.0, 1.0, 1.0] }\n",
+        "s.toml",
+        "s",
+        &[],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("feeders[0].weight") && e.contains("patch"),
+        "{e}"
+    );
+}
+
 #[test]
 fn box_with_inlet_and_outlet_conserves_particles_and_loses_none_fed() {
     // (5) uniform u = (1, 0, 0) m/s: fed particles cross the 10 mm box in ≈ 10 ms and

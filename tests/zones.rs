@@ -105,3 +105,76 @@ fn the_collect_log_survives_a_checkpoint() {
     let mut d = scene.build(false);
     assert!(d.restore(&other.checkpoint()).is_err());
 }
+
+/// `collects_after`: no gravity, no fluid (constant velocities). A particle at rest in the
+/// bin is collected after the wait, logged at the time it entered; one crossing the bin's
+/// 2 m in 0.2 s (10 m/s) is collected too, at its entry time 0.05 s; one crossing it in
+/// 0.05 s (40 m/s) is not: it leaves before the wait of 0.1 s. A checkpoint taken while
+/// one waits restores the wait.
+#[test]
+fn a_zone_that_waits_takes_what_stays() {
+    const WAITS: &str = r#"
+name = "waits"
+duration = 1.0
+dt = 1.0e-3
+
+[[zones]]
+name = "bin"
+collects = true
+collects_after = 0.1
+region = { kind = "box", min = [-1.0, -1.0, -2.0], max = [1.0, 1.0, 0.0] }
+
+[[groups]]
+name = "a"
+diameter = 1.0e-3
+density = 1000.0
+positions = [[0.0, 0.0, -1.0], [0.0, 0.0, 0.5], [0.5, 0.0, 0.5]]
+velocities = [[0.0, 0.0, 0.0], [0.0, 0.0, -10.0], [0.0, 0.0, -40.0]]
+"#;
+    let scene = scg::scene::parse(WAITS, "waits.toml", "waits", &[]).expect("scene");
+    let notes = scg::scene::check::check(&scene).messages().join("\n");
+    assert!(notes.contains("stays in it 0.1 s (100 steps)"), "{notes}");
+    let mut sim = scene.build(false);
+    sim.run(99, |_| true).unwrap();
+    // the resting one entered at the first step and has waited 98 steps, the 10 m/s one
+    // entered at step 50: both still there, waiting
+    assert_eq!(sim.particles().len(), 3);
+    assert_eq!(sim.world.resource::<CollectLog>().count(0), 0);
+    let c = sim.checkpoint();
+    assert_eq!(c.collect_inside, vec![(0, 0, 1), (1, 0, 50)]);
+    sim.run(scene.steps() - 99, |_| true).unwrap();
+    let log = sim.world.resource::<CollectLog>().clone();
+    let t = &log.collected[0][0];
+    assert_eq!(t.len(), 2, "{t:?}");
+    assert!((t[0] - scene.dt).abs() < 1e-12, "{t:?}");
+    assert!((t[1] - 0.05).abs() <= scene.dt + 1e-12, "{t:?}");
+    let left = sim.particles();
+    assert_eq!(left.len(), 1);
+    assert!(left[0].position.z < -30.0, "{:?}", left[0].position);
+    // restored mid-wait, the run ends the same
+    let mut b = scene.build(false);
+    b.restore(&c).unwrap();
+    b.run(scene.steps() - 99, |_| true).unwrap();
+    assert_eq!(b.world.resource::<CollectLog>().collected, log.collected);
+    // without the wait all three are collected on entry
+    let now = scg::scene::parse(
+        WAITS,
+        "waits.toml",
+        "waits",
+        &["zones.0.collects_after=0".into()],
+    )
+    .unwrap();
+    let mut sim = now.build(false);
+    sim.run(now.steps(), |_| true).unwrap();
+    assert_eq!(sim.world.resource::<CollectLog>().count(0), 3);
+    // a wait on a zone that does not collect names the key
+    let e = scg::scene::parse(
+        WAITS,
+        "waits.toml",
+        "waits",
+        &["zones.0.collects=false".into()],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("zones[0].collects_after"), "{e}");
+}

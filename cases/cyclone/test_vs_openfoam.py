@@ -119,6 +119,7 @@ class Scene(unittest.TestCase):
             (base.replace('walls = ["walls"]', 'walls = []'), "flow.patches.walls"),
             (base.replace('outlets = ["outlet"]', 'outlets = ["top"]'), "flow.patches.outlets"),
             (base.replace('group = "d20"\n', 'group = "d10"\n'), "groups.2"),
+            (base.replace('patch = "inlet"\n', 'patch = "inlet"\nweight = "flux"\n', 1), "feeders.0.weight"),
         ]
         for text, key in cases:
             with self.subTest(key=key):
@@ -325,6 +326,16 @@ class LikeForLike(unittest.TestCase):
         self.assertNotIn("wall_function", got["flow"])
         self.assertEqual(got["flow"]["interpolation"], "cell_point_idw")
         self.assertEqual([z.get("collects", False) for z in got["zones"]], [False, False])
+        # a waiting trap (collects_after) goes with it
+        waits = os.path.join(self.tmp, "waits.toml")
+        with open(src, encoding="utf-8") as f:
+            text = f.read().replace("collects = true\n", "collects = true\ncollects_after = 0.2\n", 1)
+        self.assertIn("collects_after", text)
+        with open(waits, "w", encoding="utf-8") as f:
+            f.write(text)
+        vs.like(waits, os.path.join(self.tmp, "waits-like.toml"))
+        with open(os.path.join(self.tmp, "waits-like.toml"), "rb") as f:
+            self.assertNotIn("collects_after", tomllib.load(f)["zones"][0])
         self.assertTrue(os.path.isabs(got["flow"]["case"]) and os.path.isdir(got["flow"]["case"]))
         # everything else as it was: dispersion, walls, feeders, groups
         for k in ("dispersion", "groups", "feeders", "drag", "gravity", "material", "fluid", "dt", "duration"):

@@ -205,6 +205,9 @@ def read_scene(path, duration=None, feed_scale=None, dt=None):
         v = f.get("velocity")
         if not (isinstance(v, list) and len(v) == 3):
             bad(path, f"feeders.{j}.velocity", "needs a vector (OpenFOAM's U0)")
+        if f.get("weight", "area") != "area":
+            bad(path, f"feeders.{j}.weight", f"{f.get('weight')!r}: OpenFOAM's patchInjection "
+                "places parcels uniformly by area")
         if float(gr.get("alpha", 1.0)) != 1.0:
             bad(path, f"groups.{i}.alpha", "the comparison is of the original particles (alpha = 1)")
         start = float(f.get("start", 0.0))
@@ -294,6 +297,7 @@ def like(path, dest):
     for i, z in enumerate(s.get("zones", [])):
         if z.get("collects"):
             z["collects"] = False
+            z.pop("collects_after", None)
             changes.append(f"zones[{i}] ({z.get('name')}): collects off (OpenFOAM's cloud has "
                            "no trap zone; both codes count 1 - escaped/fed)")
     if "case" in flow and not os.path.isabs(flow["case"]):

@@ -77,7 +77,7 @@ enum Command {
         scg bench mesh --cells 100000 --particles 300000 --steps 100 --dispersion stochastic-ras\n  \
         scg bench dense --particles 32000 --threads 1\n  \
         scg bench dilute --scene-out dilute.toml   the scene, e.g. for mpirun -np 2 scg run dilute.toml\n\n\
-        The last line is `particle-steps/s: N`. Peers and history: docs/performance.md.")]
+        The last line is `particle-steps/s: N`. Peers: docs/performance.md; earlier figures: CHANGELOG.md.")]
     Bench(bench::BenchArgs),
     /// What accuracy costs in time: sweep α, law, dt, integrator and stiffness on a scene.
     #[command(after_help = "Examples:\n  \

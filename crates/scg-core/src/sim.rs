@@ -75,8 +75,9 @@ pub struct InletOutlet {
     pub seed: u64,
     /// Walls that rebound, stick or escape as impulses (no contact law).
     pub impulse_walls: Vec<crate::stages::impulse_walls::ImpulseWall>,
-    /// Collecting zones: a particle whose centre enters one is removed as collected.
-    pub collect_zones: Vec<crate::region::Region>,
+    /// Collecting zones and the steps a particle's centre must stay in each before it is
+    /// removed as collected (0: on entry).
+    pub collect_zones: Vec<(crate::region::Region, u64)>,
 }
 
 /// Why a run stopped early.

@@ -76,6 +76,7 @@ impl Scene {
                 center: v.center,
                 omega: v.axis * (v.omega * f.swirl),
             }),
+            by_flux: f.by_flux,
             start: f.window.0,
             stop: f.window.1,
             every: self.interval_steps(f.interval),
@@ -101,7 +102,11 @@ impl Scene {
                 .zones
                 .iter()
                 .filter(|z| z.collects)
-                .map(|z| z.region.clone())
+                .map(|z| {
+                    // whole steps, rounded up: at least the time asked
+                    let steps = (z.collects_after / self.dt - 1e-9).ceil().max(0.0) as u64;
+                    (z.region.clone(), steps)
+                })
                 .collect(),
         }
     }

@@ -158,6 +158,9 @@ pub struct Zone {
     pub name: String,
     /// Whether the particles in it count as collected (a dust bin, a hopper).
     pub collects: bool,
+    /// A collecting zone takes a particle once its centre has stayed inside this long, s
+    /// (0: on entry).
+    pub collects_after: f64,
     /// Where.
     pub region: Region,
 }
@@ -205,6 +208,9 @@ pub struct Feeder {
     pub window: (f64, f64),
     /// Time between releases, s (0 = every step).
     pub interval: f64,
+    /// Patch feeders: positions weighted by the inward flux u·n (`weight = "flux"`)
+    /// instead of uniformly by area.
+    pub by_flux: bool,
 }
 
 /// The outlet: removes particles that drain through the nozzle or leave the domain.

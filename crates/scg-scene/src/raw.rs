@@ -53,6 +53,9 @@ pub struct RawZone {
     /// The particles in it at the end are collected (a dust bin, a hopper).
     #[serde(default)]
     pub collects: bool,
+    /// With `collects`: a particle is collected once its centre has stayed in the region
+    /// this long, s (default 0: on entry).
+    pub collects_after: Option<f64>,
     pub region: RawRegion,
 }
 
@@ -145,6 +148,8 @@ pub struct RawFeeder {
     pub start: Option<f64>,
     pub stop: Option<f64>,
     pub interval: Option<f64>,
+    /// Patch feeders: `"area"` (default) or `"flux"`.
+    pub weight: Option<String>,
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -451,6 +456,7 @@ pub enum RawLaw {
     None,
     Mass,
     Parcel,
+    Sample,
 }
 
 impl From<RawLaw> for CoarseGrainLaw {
@@ -460,6 +466,7 @@ impl From<RawLaw> for CoarseGrainLaw {
             RawLaw::None => CoarseGrainLaw::None,
             RawLaw::Mass => CoarseGrainLaw::Mass,
             RawLaw::Parcel => CoarseGrainLaw::Parcel,
+            RawLaw::Sample => CoarseGrainLaw::Sample,
         }
     }
 }

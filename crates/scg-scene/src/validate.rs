@@ -140,9 +140,20 @@ fn zones(raw: &[crate::raw::RawZone], cx: &Ctx) -> Result<Vec<crate::model::Zone
                 format!("zone `{}` is declared twice", z.name),
             ));
         }
+        let after = match z.collects_after {
+            None => 0.0,
+            Some(_) if !z.collects => {
+                return Err(cx.err(
+                    &format!("zones[{i}].collects_after"),
+                    "goes with `collects = true`",
+                ));
+            }
+            Some(t) => cx.non_negative(&format!("zones[{i}].collects_after"), t)?,
+        };
         out.push(crate::model::Zone {
             name: z.name.clone(),
             collects: z.collects,
+            collects_after: after,
             region: particles::region(&z.region, &format!("zones[{i}].region"), cx)?,
         });
     }

@@ -2,6 +2,7 @@
 //! fractions after a finite time and its cut size d50, the steady-state partition of
 //! decided fates and its cut size, and the W1 distances to a reference run.
 
+use super::interval::{ClassCount, RESAMPLES, d50_interval, w1_interval, w1_noise95};
 use super::radial::Result;
 use super::stats::wasserstein1;
 
@@ -25,6 +26,43 @@ pub fn d50(points: &[(f64, f64)]) -> Option<f64> {
         }
     }
     None
+}
+
+/// The [`partition`] curve as counts (drained of the cohort), for its intervals.
+pub fn partition_counts(r: &Result) -> Vec<ClassCount> {
+    r.classes
+        .iter()
+        .map(|c| ClassCount {
+            diameter: c.diameter,
+            k: c.drained,
+            n: c.cohort,
+        })
+        .collect()
+}
+
+/// Bootstrap 95 % interval of [`cut_size`] ([`d50_interval`], [`RESAMPLES`] redraws, a
+/// fixed seed): `None` when the curve does not cross 0.5, a NaN bound where it is open.
+pub fn cut_size95(r: &Result) -> Option<(f64, f64)> {
+    d50_interval(&partition_counts(r), RESAMPLES, 0x5c6_d50)
+}
+
+/// Per class of `v`: the 95 % bootstrap interval of its W1 to the same class of
+/// `reference` and the W1 the two would show from sampling noise alone (the permutation
+/// test's 95 % quantile), both / the reference's radius ([`super::interval`]).
+pub fn w1_intervals(reference: &Result, v: &Result) -> Vec<((f64, f64), f64)> {
+    let r = reference.params.radius;
+    reference
+        .classes
+        .iter()
+        .zip(&v.classes)
+        .enumerate()
+        .map(|(i, (a, b))| {
+            let seed = 0x5c6_0001 + i as u64;
+            let (lo, hi) = w1_interval(&a.clusters, &b.clusters, RESAMPLES, seed);
+            let noise = w1_noise95(&a.clusters, &b.clusters, RESAMPLES, seed);
+            ((lo / r, hi / r), noise / r)
+        })
+        .collect()
 }
 
 /// The cut size d50 of a run's [`partition`] curve, m.

@@ -25,10 +25,14 @@ pub fn group_stats(rec: &Recording, from: f64, to: f64) -> Result<(String, Strin
     }
     let ng = rec.meta.groups.len();
     let mut r: Vec<Vec<f64>> = vec![Vec::new(); ng];
+    // the same samples per particle (id → its distances), for the intervals
+    let mut by_id: Vec<std::collections::BTreeMap<u32, Vec<f64>>> = vec![Default::default(); ng];
     for f in &frames {
         for (i, g) in f.group.iter().enumerate() {
             if let Some(v) = r.get_mut(*g as usize) {
-                v.push(axis.distance(f.position[i]));
+                let d = axis.distance(f.position[i]);
+                v.push(d);
+                by_id[*g as usize].entry(f.id[i]).or_default().push(d);
             }
         }
     }
@@ -48,7 +52,10 @@ pub fn group_stats(rec: &Recording, from: f64, to: f64) -> Result<(String, Strin
         "p50",
         "p90"
     );
-    let mut csv = String::from("group,count,drained,samples,mean_r_m,p10_m,p50_m,p90_m");
+    let mut csv = String::from(
+        "group,count,drained,samples,mean_r_m,p10_m,p50_m,p90_m,particles,mean_r_lo_m,\
+         mean_r_hi_m,p10_lo_m,p10_hi_m,p50_lo_m,p50_hi_m,p90_lo_m,p90_hi_m",
+    );
     for b in 0..BINS {
         csv.push_str(&format!(",bin{b}"));
     }
@@ -74,6 +81,17 @@ pub fn group_stats(rec: &Recording, from: f64, to: f64) -> Result<(String, Strin
             p50,
             p90
         ));
+        let clusters: Vec<Vec<f64>> = std::mem::take(&mut by_id[gi]).into_values().collect();
+        let ((mlo, mhi), qi) = super::interval::mean_and_quantiles95(
+            &clusters,
+            &[0.1, 0.5, 0.9],
+            super::interval::RESAMPLES,
+            0x5c6_0a11,
+        );
+        csv.push_str(&format!(",{},{mlo:e},{mhi:e}", clusters.len()));
+        for (lo, hi) in qi {
+            csv.push_str(&format!(",{lo:e},{hi:e}"));
+        }
         for h in histogram_counts(v, rmax, BINS) {
             csv.push_str(&format!(",{h}"));
         }

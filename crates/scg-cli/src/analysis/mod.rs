@@ -9,17 +9,22 @@
 //! * `fate.rs`: each particle's fate (fine at the nozzle, coarse at the wall, undecided);
 //! * `classes.rs`: partition curves (finite-time drained, steady-state fates), their d50,
 //!   W1 of every class to a reference;
+//! * `interval.rs`: Wilson, bootstrap (by particle) and permutation intervals;
 //! * `groups.rs`: per-group statistics of a recording (`scg replay --analyze`).
 
 mod axis;
 mod classes;
 mod fate;
 mod groups;
+pub mod interval;
 mod radial;
 mod stats;
 
 pub use axis::FlowAxis;
-pub use classes::{cut_size, d50, partition, steady_cut_size, steady_partition, undecided, w1_to};
+pub use classes::{
+    cut_size, cut_size95, d50, partition, partition_counts, steady_cut_size, steady_partition,
+    undecided, w1_intervals, w1_to,
+};
 pub use fate::{Fate, FateBounds, FateCounts, Fates, WALL_ZONE};
 pub use groups::group_stats;
 pub use radial::{

@@ -88,6 +88,8 @@ pub struct Analysis {
     groups: Vec<String>,
     diameters: Vec<f64>,
     samples: Vec<Vec<f64>>,
+    /// The id of each sample of `samples`.
+    sample_ids: Vec<Vec<u32>>,
     frames_in_window: usize,
     /// Group + 1 of each id first seen by `cohort_until` (0 = not in the cohort).
     cohort: Vec<u32>,
@@ -116,6 +118,10 @@ pub struct ClassResult {
     pub drained_fraction: f64,
     /// Histogram over [0, radius]: fraction of the samples per bin.
     pub histogram: Vec<f64>,
+    /// The same radii per particle (in id order, each particle's in time order): what
+    /// intervals resample ([`super::interval`]). Not written to files.
+    #[serde(skip)]
+    pub clusters: Vec<super::interval::Cluster>,
     /// Fates of every particle of the class seen (fine, coarse, undecided by the last
     /// frame): the steady-state partition.
     pub fates: FateCounts,
@@ -148,6 +154,7 @@ impl Analysis {
             groups: meta.groups.iter().map(|g| g.name.clone()).collect(),
             diameters: meta.groups.iter().map(|g| g.original_diameter).collect(),
             samples: vec![Vec::new(); ng],
+            sample_ids: vec![Vec::new(); ng],
             frames_in_window: 0,
             cohort: Vec::new(),
             last_ids: Vec::new(),
@@ -167,6 +174,7 @@ impl Analysis {
                 let r = self.axis.distance(f.position[i]);
                 if let Some(v) = self.samples.get_mut(*g as usize) {
                     v.push(r);
+                    self.sample_ids[*g as usize].push(f.id[i]);
                 }
             }
         }
@@ -226,6 +234,7 @@ impl Analysis {
             .map(|gi| {
                 let mut radii = self.samples[gi].clone();
                 radii.sort_by(f64::total_cmp);
+                let clusters = clusters(&self.sample_ids[gi], &self.samples[gi]);
                 let mean_r = mean(&radii);
                 let drained = cohort[gi] - remaining[gi];
                 ClassResult {
@@ -233,6 +242,7 @@ impl Analysis {
                     diameter: self.diameters[gi],
                     histogram: histogram(&radii, self.params.radius, self.params.bins),
                     radii,
+                    clusters,
                     mean_r,
                     cohort: cohort[gi],
                     drained,
@@ -255,14 +265,36 @@ impl Analysis {
     }
 }
 
+/// The samples `r` grouped by their particle `ids` (ids in increasing order).
+fn clusters(ids: &[u32], r: &[f64]) -> Vec<super::interval::Cluster> {
+    let mut order: Vec<usize> = (0..ids.len()).collect();
+    order.sort_by_key(|&i| ids[i]); // stable: each particle's samples stay in time order
+    let mut out: Vec<super::interval::Cluster> = Vec::new();
+    let mut last = None;
+    for i in order {
+        if last != Some(ids[i]) {
+            out.push(Vec::new());
+            last = Some(ids[i]);
+        }
+        if let Some(c) = out.last_mut() {
+            c.push(r[i]);
+        }
+    }
+    out
+}
+
 /// The radial-distance table of one run as CSV: per class, the sample count, mean,
-/// quantiles, cohort and drained counts, then the histogram (shortest round-trip floats,
+/// quantiles, cohort and drained counts, fates, the particles behind the samples and the
+/// 95 % intervals of the mean and quantiles (bootstrap over particles) and of the drained
+/// share (Wilson), then the histogram (shortest round-trip floats,
 /// so equal results give equal text).
 pub fn radial_csv(r: &Result) -> String {
     let bins = r.params.bins;
     let mut s = String::from(
         "class,diameter_m,samples,mean_r_m,p10_m,p50_m,p90_m,cohort,drained,drained_fraction,\
-         fate_fine,fate_coarse,fate_undecided,fate_fine_fraction",
+         fate_fine,fate_coarse,fate_undecided,fate_fine_fraction,particles,mean_r_lo_m,\
+         mean_r_hi_m,p10_lo_m,p10_hi_m,p50_lo_m,p50_hi_m,p90_lo_m,p90_hi_m,drained_lo,\
+         drained_hi",
     );
     for b in 0..bins {
         s.push_str(&format!(",bin{b}"));
@@ -287,6 +319,19 @@ pub fn radial_csv(r: &Result) -> String {
             c.fates.undecided,
             c.fates.fine_fraction()
         ));
+        // 95 % intervals: mean and quantiles resampling particles, Wilson on the share
+        let ((mlo, mhi), qi) = super::interval::mean_and_quantiles95(
+            &c.clusters,
+            &[0.1, 0.5, 0.9],
+            super::interval::RESAMPLES,
+            0x5c6_0a11,
+        );
+        let (dlo, dhi) = super::interval::wilson95(c.drained, c.cohort);
+        s.push_str(&format!(",{},{mlo:e},{mhi:e}", c.clusters.len()));
+        for (lo, hi) in qi {
+            s.push_str(&format!(",{lo:e},{hi:e}"));
+        }
+        s.push_str(&format!(",{dlo:e},{dhi:e}"));
         for h in &c.histogram {
             s.push_str(&format!(",{h:e}"));
         }

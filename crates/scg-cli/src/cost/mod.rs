@@ -99,14 +99,18 @@ pub struct CostArgs {
     #[arg(long, default_value = "cost")]
     pub out: PathBuf,
     /// Reduced sweep for CI: a tenth of the duration (at most 0.3 s of simulated time),
-    /// laws scg,none,mass, dt multipliers 1,2, the first integrator and stiffness only.
+    /// laws scg,none,mass,sample, dt multipliers 1,2, the first integrator and stiffness only.
     #[arg(long)]
     pub quick: bool,
     /// Coarse-grain ratios α.
     #[arg(long, value_delimiter = ',', default_value = "1,2,4,8")]
     pub alphas: Vec<f64>,
     /// Coarse-graining laws.
-    #[arg(long, value_delimiter = ',', default_value = "scg,none,mass,parcel")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "scg,none,mass,parcel,sample"
+    )]
     pub laws: Vec<String>,
     /// Time-step multipliers (positive integers) applied to the scene's dt.
     #[arg(long = "dt-mult", value_delimiter = ',', default_value = "1,2,4")]

@@ -74,7 +74,7 @@ where
         .y_label_formatter(&|v| format!("{v:.0e}"))
         .draw()
         .map_err(e)?;
-    let laws = ["original", "scg", "none", "mass", "parcel"];
+    let laws = ["original", "scg", "none", "mass", "parcel", "sample"];
     let r = &s.reference;
     let is_base = |o: &Outcome| {
         o.point.dt_mult == r.dt_mult

@@ -13,7 +13,7 @@ use scg_core::physics::scaling::CoarseGrainLaw;
 use scg_core::step::StepSet;
 use scg_scene::Scene;
 
-use crate::analysis::{self, Analysis, Params, SharedAnalysis, cut_size, w1_to};
+use crate::analysis::{self, Analysis, Params, SharedAnalysis, cut_size, cut_size95, w1_to};
 use crate::points::{Points, map};
 
 use super::ERROR_FLOOR;
@@ -38,7 +38,8 @@ pub struct Outcome {
     /// Single-particle scenes: wall time of the original particle alone at this point, s
     /// (only for the α³ estimate).
     pub alone_wall_s: Option<f64>,
-    /// Error against the reference (NaN when not computed).
+    /// Error against the reference (NaN when not computed; `null` in JSON).
+    #[serde(deserialize_with = "nan::f64")]
     pub error: f64,
     /// Wall time per step set, s (indexed like [`StepSet::ORDER`]).
     pub sets: SetTimes,
@@ -46,6 +47,12 @@ pub struct Outcome {
     pub failure: Option<String>,
     /// Classifier scenes: per-class errors.
     pub classes: Option<ClassErrors>,
+    /// Particle–particle contacts started during the run.
+    #[serde(default)]
+    pub pair_contacts: u64,
+    /// Particle–wall contacts started during the run.
+    #[serde(default)]
+    pub wall_contacts: u64,
 }
 
 impl Outcome {
@@ -62,6 +69,8 @@ impl Outcome {
             sets: [0.0; StepSet::ORDER.len()],
             failure,
             classes: None,
+            pair_contacts: 0,
+            wall_contacts: 0,
         }
     }
 
@@ -73,13 +82,22 @@ impl Outcome {
         wall_s: f64,
         failure: Option<String>,
     ) -> Self {
+        let contacts = sim.contact_resolution();
         Outcome {
             wall_s,
             steps: sim.step_count(),
             particle_steps: sim.particle_steps(),
             sets: set_times(sim),
+            pair_contacts: contacts.pair.contacts,
+            wall_contacts: contacts.wall.contacts,
             ..Outcome::unmeasured(point, dt, failure)
         }
+    }
+
+    /// Particle–particle contacts per simulated particle per second of simulated time (a
+    /// contact counts for both its particles), 1/s; NaN before any step.
+    pub fn contact_rate(&self) -> f64 {
+        2.0 * self.pair_contacts as f64 / (self.particle_steps as f64 * self.dt)
     }
 
     /// Particle-steps per second of wall time.
@@ -103,17 +121,65 @@ fn set_times(sim: &Simulation) -> SetTimes {
     sets
 }
 
+/// JSON writes NaN as `null`: these read it back as NaN.
+mod nan {
+    use serde::{Deserialize, Deserializer};
+
+    fn v(x: Option<f64>) -> f64 {
+        x.unwrap_or(f64::NAN)
+    }
+
+    pub fn f64<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        Option::<f64>::deserialize(d).map(v)
+    }
+
+    pub fn vec<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
+        Vec::<Option<f64>>::deserialize(d).map(|x| x.into_iter().map(v).collect())
+    }
+
+    pub fn pairs<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<(f64, f64)>, D::Error> {
+        Vec::<(Option<f64>, Option<f64>)>::deserialize(d)
+            .map(|x| x.into_iter().map(|(a, b)| (v(a), v(b))).collect())
+    }
+
+    pub fn opt_pair<'de, D: Deserializer<'de>>(d: D) -> Result<Option<(f64, f64)>, D::Error> {
+        Option::<(Option<f64>, Option<f64>)>::deserialize(d).map(|x| x.map(|(a, b)| (v(a), v(b))))
+    }
+}
+
 /// Classifier errors of one point against the reference.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct ClassErrors {
     /// Class names.
     pub names: Vec<String>,
     /// W1 of each class's radial distribution to the reference's, / vessel radius.
+    #[serde(deserialize_with = "nan::vec")]
     pub w1: Vec<f64>,
     /// Cut size d50, m (None when the partition curve never crosses 0.5).
     pub d50: Option<f64>,
     /// |d50 − d50_ref| / d50_ref (NaN when either is missing).
+    #[serde(deserialize_with = "nan::f64")]
     pub d50_error: f64,
+    /// 95 % bootstrap interval of each class's W1 (by particle), / vessel radius.
+    #[serde(deserialize_with = "nan::pairs")]
+    pub w1_95: Vec<(f64, f64)>,
+    /// W1 of each class that sampling noise alone reaches in 5 % of runs of these sizes
+    /// (permutation test), / vessel radius: W1 at or below it agrees with the reference.
+    #[serde(deserialize_with = "nan::vec")]
+    pub w1_noise95: Vec<f64>,
+    /// 95 % bootstrap interval of d50, m (a NaN bound where it is open).
+    #[serde(deserialize_with = "nan::opt_pair")]
+    pub d50_95: Option<(f64, f64)>,
+    /// Whether d50 agrees with the reference's within the intervals: |Δ| ≤ the two
+    /// half-widths added in quadrature (None when either is missing or open).
+    pub d50_agrees: Option<bool>,
+}
+
+impl ClassErrors {
+    /// Whether every class's W1 is within the sampling noise.
+    pub fn w1_agrees(&self) -> bool {
+        self.w1.iter().zip(&self.w1_noise95).all(|(w, n)| w <= n)
+    }
 }
 
 /// A finished sweep.
@@ -233,6 +299,9 @@ fn team() -> (usize, usize) {
 fn class_errors(reference: &analysis::Result, v: &analysis::Result) -> ClassErrors {
     let d_ref = cut_size(reference);
     let d50 = cut_size(v);
+    let (d50_95, ref95) = (cut_size95(v), cut_size95(reference));
+    let intervals = analysis::w1_intervals(reference, v);
+    let half = |i: Option<(f64, f64)>| i.map(|(lo, hi)| 0.5 * (hi - lo)).filter(|h| h.is_finite());
     ClassErrors {
         names: v.classes.iter().map(|c| c.name.clone()).collect(),
         w1: w1_to(reference, v),
@@ -240,6 +309,13 @@ fn class_errors(reference: &analysis::Result, v: &analysis::Result) -> ClassErro
         d50_error: match (d50, d_ref) {
             (Some(a), Some(b)) => ((a - b) / b).abs(),
             _ => f64::NAN,
+        },
+        w1_95: intervals.iter().map(|x| x.0).collect(),
+        w1_noise95: intervals.iter().map(|x| x.1).collect(),
+        d50_95,
+        d50_agrees: match (d50, d_ref, half(d50_95), half(ref95)) {
+            (Some(a), Some(b), Some(h), Some(k)) => Some((a - b).abs() <= h.hypot(k)),
+            _ => None,
         },
     }
 }
@@ -448,7 +524,7 @@ fn sweep_classifier(
 }
 
 /// Originals one particle alone stands for in the α³ estimate: α³ (`scg`, `none`,
-/// `parcel`), 1 for `mass` (its particle keeps one original's mass).
+/// `parcel`, `sample`), 1 for `mass` (its particle keeps one original's mass).
 fn alone_represents(p: &Point) -> f64 {
     match p.law {
         None | Some(CoarseGrainLaw::Mass) => 1.0,

@@ -1,11 +1,15 @@
-//! `scg study classifier|classifier-psd`: the paper's Section 5 end to end. Runs the three
-//! variants (original, CG α = 2 with SCG, CG α = 2 without SCG), then writes the radial
+//! `scg study classifier|classifier-psd`: the paper's Section 5 end to end. Runs the four
+//! variants (original, CG α = 2 with SCG, CG α = 2 without SCG, and the sampling control:
+//! originals, 8 times fewer), then writes the radial
 //! distributions (Fig. 10), top-view snapshots (Fig. 9), drained fractions and the
 //! partition curves with both cut sizes (finite-time drained, steady-state fates), the computing time for 0.1 s (Fig. 8), the normalised W1
 //! distances to the original, and `summary.json`. `scg study cyclone` ([`cyclone`]): grade
-//! efficiency of the OpenFOAM cyclone in five variants, beside cyclone theory and OpenFOAM.
+//! efficiency of the OpenFOAM cyclone in seven variants, beside cyclone theory and OpenFOAM.
+//! `scg study loading` ([`loading`]): the classifier at several feed rates, SCG against
+//! sampling where particles collide.
 
 pub mod cyclone;
+pub mod loading;
 pub(crate) mod plot;
 mod report;
 mod run;
@@ -34,8 +38,10 @@ pub const CLASSIFIER_CUT: &str = include_str!("../../../../cases/classifier-cut.
 #[derive(Args, Debug)]
 pub struct StudyArgs {
     /// `classifier` (paper Table 3), `classifier-psd` (size distribution, partition curve),
-    /// `classifier-cut` (classes at the cut: the steady-state d50) or `cyclone` (grade
-    /// efficiency of cases/cyclone.toml in seven variants and the tracer check).
+    /// `classifier-cut` (classes at the cut: the steady-state d50), `cyclone` (grade
+    /// efficiency of cases/cyclone.toml in seven variants and the tracer check) or
+    /// `loading` (the classifier at several feed rates: SCG against sampling where
+    /// particles collide).
     pub study: String,
     /// Fewer particles (feed rates scaled down): a few minutes in all.
     #[arg(long)]
@@ -53,8 +59,9 @@ pub struct StudyArgs {
     /// to add as a column and a curve.
     #[arg(long, value_name = "FILE")]
     pub openfoam: Option<PathBuf>,
-    /// `cyclone` only: do not run; re-write the tables and plots of the finished study in
-    /// this folder (its summary.json and MCAPs) into `--out`, e.g. with `--openfoam`.
+    /// `cyclone`: do not run; re-write the tables and plots of the finished study in this
+    /// folder (its summary.json and MCAPs) into `--out`, e.g. with `--openfoam`. `loading`:
+    /// with `--markdown`, print the finished study's table.
     #[arg(long, value_name = "DIR")]
     pub from: Option<PathBuf>,
     /// `cyclone` only: run just these variants (comma-separated: original, scg2, scg4,
@@ -65,10 +72,14 @@ pub struct StudyArgs {
     /// count (more particles: less sampling noise, no longer the same cost).
     #[arg(long, value_name = "F", default_value_t = 1.0)]
     pub cg_feed: f64,
-    /// `cyclone` only, with `--from` and no `--run`: print the study's tables in Markdown
-    /// (as docs/cyclone.md quotes them) and write nothing.
+    /// `cyclone` and `loading`, with `--from` (and no `--run`): print the study's tables in
+    /// Markdown (as docs/ quotes them) and write nothing.
     #[arg(long)]
     pub markdown: bool,
+    /// `loading` only: multiples of the classifier's feed rate to run (default 1,4,16;
+    /// e.g. `--loadings 1,4,16,64` for the dense end, ≈ 1 h more).
+    #[arg(long, value_delimiter = ',', value_name = "L")]
+    pub loadings: Option<Vec<f64>>,
 }
 
 /// One study: its scene and windows.
@@ -110,11 +121,16 @@ pub fn spec(name: &str) -> Option<StudySpec> {
     }
 }
 
-/// The variants: name and the overrides that select them.
-pub const VARIANTS: [(&str, [&str; 2]); 3] = [
+/// The variants: name and the overrides that select them. `sample` is the control a
+/// coarse-graining law must beat: originals, α³ = 8 times fewer (the count `scg` runs).
+pub const VARIANTS: [(&str, [&str; 2]); 4] = [
     ("original", ["coarse_grain.alpha=1", "coarse_grain.law=scg"]),
     ("scg", ["coarse_grain.alpha=2", "coarse_grain.law=scg"]),
     ("none", ["coarse_grain.alpha=2", "coarse_grain.law=none"]),
+    (
+        "sample",
+        ["coarse_grain.alpha=2", "coarse_grain.law=sample"],
+    ),
 ];
 
 /// Write every table and plot of a study into `out`.
@@ -127,12 +143,24 @@ pub fn write_outputs(runs: &[VariantRun], nozzle: f64, out: &Path) -> Result<(),
 /// them calls this; the one that receives the results writes the outputs, the MCAPs are
 /// written by the process that ran the variant); returns the exit status.
 pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
+    if a.loadings.is_some() && a.study != "loading" {
+        eprintln!("error: --loadings is for `scg study loading` only");
+        return EXIT_BAD_INPUT;
+    }
     if a.study == "cyclone" {
         return cyclone::study(a, points);
     }
+    if a.study == "loading" {
+        if a.openfoam.is_some() || a.run.is_some() {
+            eprintln!("error: --openfoam and --run are for `scg study cyclone`");
+            return EXIT_BAD_INPUT;
+        }
+        return loading::study(a, points);
+    }
     let Some(spec) = spec(&a.study) else {
         eprintln!(
-            "error: unknown study `{}` (classifier, classifier-psd, classifier-cut, cyclone)",
+            "error: unknown study `{}` (classifier, classifier-psd, classifier-cut, cyclone, \
+             loading)",
             a.study
         );
         return EXIT_BAD_INPUT;

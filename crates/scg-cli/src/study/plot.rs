@@ -87,7 +87,10 @@ pub fn plot_radial(runs: &[VariantRun], path: &Path) -> PlotResult {
                 pts.push(((b + 1) as f64 / bins as f64, *y));
             }
             chart
-                .draw_series(LineSeries::new(pts, VARIANT_COLORS[vi % 3].stroke_width(2)))
+                .draw_series(LineSeries::new(
+                    pts,
+                    VARIANT_COLORS[vi % VARIANT_COLORS.len()].stroke_width(2),
+                ))
                 .map_err(perr)?;
         }
     }
@@ -182,7 +185,7 @@ pub fn plot_partition(runs: &[VariantRun], path: &Path) -> PlotResult {
             .filter(|c| c.drained_fraction.is_finite())
             .map(|c| (c.diameter * 1e6, c.drained_fraction))
             .collect();
-        let col = VARIANT_COLORS[vi % 3];
+        let col = VARIANT_COLORS[vi % VARIANT_COLORS.len()];
         chart
             .draw_series(LineSeries::new(pts.clone(), col.stroke_width(2)))
             .map_err(perr)?

@@ -3,7 +3,10 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use crate::analysis::{self, cut_size, steady_cut_size, undecided, w1_to};
+use crate::analysis::interval::wilson95;
+use crate::analysis::{
+    self, cut_size, cut_size95, steady_cut_size, undecided, w1_intervals, w1_to,
+};
 
 use super::VariantRun;
 
@@ -21,13 +24,19 @@ pub fn summary(runs: &[VariantRun]) -> serde_json::Value {
     let reference = &runs[0].result;
     for v in runs {
         let w1 = w1_to(reference, &v.result);
+        let iv = w1_intervals(reference, &v.result);
         let mut classes = serde_json::Map::new();
-        for (c, w) in v.result.classes.iter().zip(&w1) {
+        for ((c, w), ((lo, hi), noise)) in v.result.classes.iter().zip(&w1).zip(&iv) {
+            let (dlo, dhi) = wilson95(c.drained, c.cohort);
             classes.insert(
                 format!("{}", (c.diameter * 1e6 * 1000.0).round() / 1000.0),
                 serde_json::json!({
                     "w1": json_num(*w),
+                    "w1_95": [json_num(*lo), json_num(*hi)],
+                    "w1_noise95": json_num(*noise),
+                    "w1_agrees": *w <= *noise,
                     "drained": json_num(c.drained_fraction),
+                    "drained_95": [json_num(dlo), json_num(dhi)],
                     "fate_fine": c.fates.fine,
                     "fate_coarse": c.fates.coarse,
                     "fate_undecided": c.fates.undecided,
@@ -49,6 +58,11 @@ pub fn summary(runs: &[VariantRun]) -> serde_json::Value {
                 "time_s": v.time_s,
                 "total_s": v.total_s,
                 "d50_drained_um": um(cut_size(&v.result)),
+                "d50_drained_95_um": cut_size95(&v.result)
+                    .map_or(serde_json::Value::Null, |(lo, hi)| serde_json::json!([
+                        json_num(lo * 1e6),
+                        json_num(hi * 1e6)
+                    ])),
                 "d50_steady_um": um(steady_cut_size(&v.result)),
                 "fates_decided": decided,
                 "fates_undecided": undecided(&v.result),
@@ -59,6 +73,10 @@ pub fn summary(runs: &[VariantRun]) -> serde_json::Value {
     serde_json::json!({
         "definitions": {
         "d50_drained_um": "finite time: the partition of drained fractions of the particles fed by cohort_until, gone by the last frame",
+        "w1_95": "95 % bootstrap interval of w1, resampling particles (not frames) of both runs",
+        "w1_noise95": "the w1 two runs of these particle counts reach from sampling noise alone in 5 % of cases (permutation test over particles); w1_agrees = w1 ≤ w1_noise95",
+        "drained_95": "Wilson 95 % interval of the drained fraction",
+        "d50_drained_95_um": "95 % bootstrap interval of d50_drained (null bound: open, the data cannot place the cut on that side)",
         "d50_steady_um": "steady state: the partition of each particle's decided fate (fine at the nozzle radius or drained, coarse in the wall zone), undecided particles left out"
         },
         "cohort_until_s": runs[0].result.params.cohort_until,
@@ -89,13 +107,15 @@ pub fn report(runs: &[VariantRun]) -> String {
     );
     let _ = writeln!(
         s,
-        "{:<10} {:>8} {:>10} {:>9} {:>9} {:>10} {:>8} {:>7} {:>7} {:>7} {:>7}",
+        "{:<10} {:>8} {:>10} {:>9} {:>9} {:>15} {:>10} {:>10} {:>8} {:>7} {:>7} {:>7} {:>7}",
         "variant",
         "class",
         "mean_r[m]",
         "r/R",
         "drained",
+        "drained 95 %",
         "W1/R",
+        "noise95",
         "samples",
         "fine",
         "coarse",
@@ -104,16 +124,20 @@ pub fn report(runs: &[VariantRun]) -> String {
     );
     for v in runs {
         let w1 = w1_to(reference, &v.result);
-        for (c, w) in v.result.classes.iter().zip(&w1) {
+        let iv = w1_intervals(reference, &v.result);
+        for ((c, w), (_, noise)) in v.result.classes.iter().zip(&w1).zip(&iv) {
+            let (dlo, dhi) = wilson95(c.drained, c.cohort);
             let _ = writeln!(
                 s,
-                "{:<10} {:>6.0}µm {:>10.4e} {:>9.4} {:>9.4} {:>10.4} {:>8} {:>7} {:>7} {:>7} {:>7.4}",
+                "{:<10} {:>6.0}µm {:>10.4e} {:>9.4} {:>9.4} {:>15} {:>10.4} {:>10.4} {:>8} {:>7} {:>7} {:>7} {:>7.4}",
                 v.name,
                 c.diameter * 1e6,
                 c.mean_r,
                 c.mean_r / reference.params.radius,
                 c.drained_fraction,
+                format!("[{dlo:.3}, {dhi:.3}]"),
                 w,
+                noise,
                 c.radii.len(),
                 c.fates.fine,
                 c.fates.coarse,
@@ -136,7 +160,25 @@ pub fn report(runs: &[VariantRun]) -> String {
     );
     let t0 = runs[0].time_s;
     let um = |d: Option<f64>| d.map_or("—".to_string(), |d| format!("{:.1} µm", d * 1e6));
+    let bound = |x: f64| {
+        if x.is_finite() {
+            format!("{:.1}", x * 1e6)
+        } else {
+            "…".into()
+        }
+    };
+    let mut cuts = String::new();
     for v in runs {
+        if let (Some(d), Some((lo, hi))) = (cut_size(&v.result), cut_size95(&v.result)) {
+            let _ = write!(
+                cuts,
+                "  {} {:.1} [{}, {}] µm",
+                v.name,
+                d * 1e6,
+                bound(lo),
+                bound(hi)
+            );
+        }
         let _ = writeln!(
             s,
             "{:<10} {:>14.3} {:>12.3} {:>10} {:>10} {:>14} {:>14} {:>10}   (time ratio to original {:.3})",
@@ -156,6 +198,18 @@ pub fn report(runs: &[VariantRun]) -> String {
         "d50 drained: finite-time cut of the drained fractions (cohort fed by {} s, gone by {} s); \
          d50 steady: cut of the decided fates (undecided particles left out)",
         reference.params.cohort_until, reference.last_time
+    );
+    if !cuts.is_empty() {
+        let _ = writeln!(
+            s,
+            "d50 drained with its 95 % bootstrap interval (… = open):{cuts}"
+        );
+    }
+    let _ = writeln!(
+        s,
+        "W1/R agrees with the original's distribution when ≤ noise95, the W1 that two runs of \
+         these particle counts reach from sampling alone in 5 % of cases (permutation test over \
+         particles); drained 95 %: Wilson's interval."
     );
     s
 }

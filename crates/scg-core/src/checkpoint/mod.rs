@@ -183,6 +183,7 @@ impl Simulation {
             impulse_walls: None,
             contacts: None,
             collected: None,
+            collect_inside: Vec::new(),
         };
         if let Some(reg) = w.get_resource::<Persistence>() {
             for p in reg.iter() {

@@ -121,6 +121,9 @@ pub struct Checkpoint {
     pub contacts: Option<ContactRecord>,
     /// Collecting zones' log: collection times per zone and group, s.
     pub collected: Option<Vec<Vec<Vec<f64>>>>,
+    /// Particles inside a collecting zone that waits (`collects_after`): (id, zone, step
+    /// they entered), in id order.
+    pub collect_inside: Vec<(u32, u32, u64)>,
 }
 
 /// A stage's part of a checkpoint: the stage that holds the state saves and restores it.

@@ -1,7 +1,7 @@
 //! Coarse-graining laws: how an original particle (d, ρ) becomes a coarse-grained one.
 //!
-//! Every law enlarges the diameter by α. They differ in the density and in how the fluid
-//! force is evaluated:
+//! Every law but `sample` enlarges the diameter by α. They differ in the density and in
+//! how the fluid force is evaluated:
 //!
 //! | law      | d_CG | ρ_CG        | fluid force               | source |
 //! |----------|------|-------------|---------------------------|--------|
@@ -9,6 +9,13 @@
 //! | `none`   | α·d  | ρ           | for d_CG                  | the paper's "without SCG" |
 //! | `mass`   | α·d  | ρ/α³        | for d_CG                  | the paper's Appendix A (mass equals the original's) |
 //! | `parcel` | α·d  | ρ           | for d, multiplied by α³   | parcel approach of LIGGGHTS/CFDEM, MFiX, OpenFOAM MPPIC |
+//! | `sample` | d    | ρ           | for d                     | plain sampling: the original particle, α³ fewer of them |
+//!
+//! Under every law a simulated particle stands for α³ originals: feeders given a volume or
+//! mass rate and `scg cost`'s populations simulate α³ fewer particles. `sample` is the
+//! control every coarse-graining law must beat: α³ fewer particles, each an original, so
+//! no model error at all — only the statistical noise of the smaller population and, where
+//! particles touch, α³ fewer collision partners.
 //!
 //! Under Stokes drag (F = 3πμ·d·u_r) the acceleration of a particle is 18μ·u_r/(ρ·d²):
 //! `scg` and `parcel` keep it equal to the original's, `none` divides it by α², `mass`
@@ -29,15 +36,18 @@ pub enum CoarseGrainLaw {
     Mass,
     /// Enlarged, density unchanged, fluid force of α³ original particles.
     Parcel,
+    /// Not enlarged: the original particle, standing for α³ originals (sampling).
+    Sample,
 }
 
 impl CoarseGrainLaw {
     /// All laws, in the order reports list them.
-    pub const ALL: [CoarseGrainLaw; 4] = [
+    pub const ALL: [CoarseGrainLaw; 5] = [
         CoarseGrainLaw::Scg,
         CoarseGrainLaw::None,
         CoarseGrainLaw::Mass,
         CoarseGrainLaw::Parcel,
+        CoarseGrainLaw::Sample,
     ];
 
     /// Lower-case name as used in scene files.
@@ -47,7 +57,13 @@ impl CoarseGrainLaw {
             CoarseGrainLaw::None => "none",
             CoarseGrainLaw::Mass => "mass",
             CoarseGrainLaw::Parcel => "parcel",
+            CoarseGrainLaw::Sample => "sample",
         }
+    }
+
+    /// Whether the law enlarges the particle (every law but `sample`).
+    pub fn enlarges(self) -> bool {
+        self != CoarseGrainLaw::Sample
     }
 }
 
@@ -106,7 +122,21 @@ pub fn coarse_grain(law: CoarseGrainLaw, alpha: f64, d: f64, rho: f64) -> Scaled
             drag_diameter: d,
             force_scale: alpha * alpha * alpha,
         },
+        CoarseGrainLaw::Sample => Scaled {
+            diameter: d,
+            density: rho,
+            drag_diameter: d,
+            force_scale: 1.0,
+        },
     }
+}
+
+/// Volume of original powder one simulated particle of `law` with ratio `alpha` stands
+/// for (α³ originals of diameter `d`, m), m³: what a feeder's volume or mass rate is
+/// divided by.
+pub fn represented_volume(alpha: f64, d: f64) -> f64 {
+    let d_cg = alpha * d;
+    std::f64::consts::PI / 6.0 * d_cg.powi(3)
 }
 
 #[cfg(test)]
@@ -154,6 +184,19 @@ mod tests {
         assert_eq!(s.drag_diameter, 1e-4);
         assert_eq!(s.force_scale, 64.0);
         assert_eq!(s.diameter, 4e-4);
+    }
+
+    #[test]
+    fn sample_law_is_the_original() {
+        let s = coarse_grain(CoarseGrainLaw::Sample, 4.0, 1e-4, 500.0);
+        assert_eq!(
+            (s.diameter, s.density, s.drag_diameter, s.force_scale),
+            (1e-4, 500.0, 1e-4, 1.0)
+        );
+        // it stands for α³ originals, as an enlarged particle does
+        let v = represented_volume(4.0, 1e-4);
+        assert!(rel(v, 64.0 * std::f64::consts::PI / 6.0 * 1e-12) < 1e-14);
+        assert!(!CoarseGrainLaw::Sample.enlarges() && CoarseGrainLaw::Scg.enlarges());
     }
 
     /// `name()` (reports) and the serde names (scene files, `--laws`) agree.

@@ -3,7 +3,10 @@
 //!
 //! A patch feeder ([`FeedSource::Patch`]) samples points uniformly by area on the patch
 //! ([`PatchSampler`]) and starts each particle its simulated radius inward of the face,
-//! with the cell hint of the cell holding it ([`settle`]).
+//! with the cell hint of the cell holding it ([`settle`]). With [`FeederSpec::by_flux`]
+//! the points are weighted by the flow's inward flux u·n there instead (rejection from the
+//! area-uniform draw against twice the largest u·n at the patch's face centres): the
+//! particles of air that enters at a uniform concentration, as fluid tracers are.
 //!
 //! The count is exact: after the step ending at time t a feeder has fed
 //! ⌊rate·(min(t, stop) − start)⌋ particles ([`fed_by`]), so fractional particles carry
@@ -14,7 +17,7 @@ use std::sync::Arc;
 
 use bevy_ecs::prelude::*;
 use glam::DVec3;
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
@@ -52,6 +55,10 @@ pub struct FeederSpec {
     /// A rigid rotation added to `velocity` at each particle's position (e.g. entering
     /// co-rotating with a vortex), or none.
     pub spin: Option<Spin>,
+    /// Patch feeders: positions weighted by the flow's inward flux u·n at each point
+    /// (particles carried in by the air at a uniform concentration; fluid tracers), not
+    /// uniformly by area.
+    pub by_flux: bool,
     /// Feeding starts at this time, s.
     pub start: f64,
     /// Feeding stops at this time, s.
@@ -115,6 +122,27 @@ struct FeederState {
     fed: u64,
     /// Simulated (coarse-grained) radius of the particles fed, m.
     radius: f64,
+    /// Flux-weighted patch feeders: the bound of u·n the draws are accepted against, m/s
+    /// (found at the first feed, from the flow).
+    flux_bound: Option<f64>,
+}
+
+/// Draws before a flux-weighted feeder gives up on a patch with (nearly) no inflow and
+/// takes the area-uniform point.
+const FLUX_TRIES: usize = 10_000;
+
+/// Twice the largest inward u·n at the face centres of patch `p` in `flow`, m/s (the
+/// interpolated u·n inside a face can exceed its centre's; a draw above the bound is
+/// accepted as at it).
+fn flux_bound(
+    p: &crate::physics::inlet::PatchSampler,
+    flow: &crate::physics::mesh_flow::MeshFlow,
+) -> f64 {
+    2.0 * p
+        .faces()
+        .iter()
+        .map(|f| flow.velocity(f.owner, f.centre).0.dot(f.inward))
+        .fold(0.0, f64::max)
 }
 
 /// The scene's feeders and their state (resource).
@@ -135,6 +163,7 @@ impl Feeders {
                     rng: ChaCha8Rng::seed_from_u64(feeder_seed(seed, i)),
                     fed: 0,
                     radius: 0.5 * coarse_grain(s.law, s.alpha, s.diameter, s.density).diameter,
+                    flux_bound: None,
                 })
                 .collect(),
         }
@@ -232,9 +261,26 @@ pub fn feed_particles(
             let (position, cell, u) = match (&f.spec.source, flow) {
                 (FeedSource::Region(r), _) => (r.sample(&mut f.rng), hint::UNLOCATED, None),
                 (FeedSource::Patch(p), Some(flow)) => {
-                    let s = p.sample(&mut f.rng, f.radius);
-                    let (cell, u) = settle(flow, p.faces()[s.face].owner, s.centre);
-                    (s.centre, cell, Some(u))
+                    let bound = f
+                        .spec
+                        .by_flux
+                        .then(|| *f.flux_bound.get_or_insert_with(|| flux_bound(p, flow)));
+                    let mut tries = 0;
+                    loop {
+                        let s = p.sample(&mut f.rng, f.radius);
+                        let (cell, u) = settle(flow, p.faces()[s.face].owner, s.centre);
+                        let accept = match bound {
+                            None => true,
+                            Some(b) => {
+                                tries += 1;
+                                let un = u.dot(p.faces()[s.face].inward);
+                                tries >= FLUX_TRIES || f.rng.random::<f64>() * b < un.min(b)
+                            }
+                        };
+                        if accept {
+                            break (s.centre, cell, Some(u));
+                        }
+                    }
                 }
                 // (the scene rejects a patch without a mesh flow)
                 (FeedSource::Patch(p), None) => {

@@ -13,10 +13,18 @@ pub(super) fn findings(scene: &Scene) -> Vec<Finding> {
             message: format!(
                 "zone `{}`: {} ({:?})",
                 z.name,
-                if z.collects {
-                    "collects: a particle whose centre enters it is removed and counted as collected"
+                if !z.collects {
+                    "counts the particles inside at the end".to_string()
+                } else if z.collects_after > 0.0 {
+                    format!(
+                        "collects: a particle whose centre stays in it {} s ({} steps) is removed \
+                         and counted as collected, at the time it entered",
+                        z.collects_after,
+                        (z.collects_after / scene.dt - 1e-9).ceil().max(0.0)
+                    )
                 } else {
-                    "counts the particles inside at the end"
+                    "collects: a particle whose centre enters it is removed and counted as collected"
+                        .to_string()
                 },
                 z.region
             ),

@@ -181,10 +181,9 @@ pub(super) fn feeder(
         .position(|g| g.name == f.group)
         .ok_or_else(|| cx.err(&k("group"), format!("no group named `{}`", f.group)))?;
     let g = &groups[group];
-    // Each simulated particle stands for α³ originals: the original powder's volume
-    // (and mass) it carries is the simulated particle's volume.
-    let simulated = scg_core::physics::scaling::coarse_grain(g.law, g.alpha, g.diameter, g.density);
-    let volume = std::f64::consts::PI / 6.0 * simulated.diameter.powi(3);
+    // Each simulated particle stands for α³ originals (under every law, `sample` too): the
+    // original powder's volume (and mass) it carries is α³ originals' volume.
+    let volume = scg_core::physics::scaling::represented_volume(g.alpha, g.diameter);
     let rate = match (f.rate, f.volume_rate, f.mass_rate) {
         (Some(r), None, None) => cx.non_negative(&k("rate"), r)?,
         (None, Some(v), None) => cx.non_negative(&k("volume_rate"), v)? / volume,
@@ -244,7 +243,24 @@ pub(super) fn feeder(
             ));
         }
     };
+    let by_flux = match f.weight.as_deref() {
+        None | Some("area") => false,
+        Some("flux") if f.patch.is_some() => true,
+        Some("flux") => {
+            return Err(cx.err(
+                &k("weight"),
+                "`weight = \"flux\"` goes with `patch` (the flux of a mesh-flow patch)",
+            ));
+        }
+        Some(w) => {
+            return Err(cx.err(
+                &k("weight"),
+                format!("expected \"area\" or \"flux\", got \"{w}\""),
+            ));
+        }
+    };
     Ok(Feeder {
+        by_flux,
         group,
         rate,
         source,

@@ -172,25 +172,30 @@ pub fn cut_size(classes: &[ClassGrade]) -> Option<f64> {
     d50(&escaped)
 }
 
-/// Wilson's score interval (95 %, z = 1.96) of a binomial share k/n: (low, high), NaN
-/// for n = 0. Unlike ±2σ it stays inside [0, 1] and is not empty at k = 0 or n.
-pub fn wilson95(k: u64, n: u64) -> (f64, f64) {
-    if n == 0 {
-        return (f64::NAN, f64::NAN);
-    }
-    let (z, n) = (1.96_f64, n as f64);
-    let p = k as f64 / n;
-    let d = 1.0 + z * z / n;
-    let c = (p + z * z / (2.0 * n)) / d;
-    let h = z * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt() / d;
-    ((c - h).max(0.0), (c + h).min(1.0))
-}
+pub use crate::analysis::interval::wilson95;
 
 /// W1 distance between the residence times of `v` and those of `reference` (escaped
 /// particles of one class), over the reference's mean residence time; NaN when either has
 /// none.
 pub fn residence_w1(reference: &ClassGrade, v: &ClassGrade) -> f64 {
     wasserstein1(&reference.residence_times, &v.residence_times) / reference.mean_residence()
+}
+
+/// The 95 % bootstrap interval of [`cut_size`] (each class's count redrawn binomially:
+/// [`crate::analysis::interval::d50_interval`]); `None` where the curve does not cross 0.5,
+/// a NaN bound where it is open.
+pub fn cut_size95(classes: &[ClassGrade]) -> Option<(f64, f64)> {
+    use crate::analysis::interval::{ClassCount, RESAMPLES, d50_interval};
+    let counts: Vec<ClassCount> = classes
+        .iter()
+        .map(|c| ClassCount {
+            diameter: c.diameter,
+            // the share the curve falls through: 1 − η of the fed
+            k: ((1.0 - c.efficiency) * c.fed as f64).round().max(0.0) as u64,
+            n: c.fed,
+        })
+        .collect();
+    d50_interval(&counts, RESAMPLES, 0x5c6_c7c)
 }
 
 /// Another code's grade curve (`grade.json` of `cases/cyclone/vs-openfoam.sh`).

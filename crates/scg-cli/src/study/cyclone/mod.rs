@@ -23,7 +23,7 @@ pub mod tracers;
 
 use std::path::PathBuf;
 
-pub use grade::{ClassGrade, ExternalGrade, cut_size, efficiency, residence_w1};
+pub use grade::{ClassGrade, ExternalGrade, cut_size, cut_size95, efficiency, residence_w1};
 pub use plot::write_plots;
 pub use report::{Criteria, criteria, markdown, report, summary, write_tables};
 pub use run::{CycloneRun, Tracker, run_variant};

@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::grade::{ClassGrade, ExternalGrade, cut_size, residence_w1, wilson95};
+use super::grade::{ClassGrade, ExternalGrade, cut_size, cut_size95, residence_w1, wilson95};
 use super::run::{CycloneRun, LATE, MOVING};
 use super::theory::Cyclone;
 use super::tracers::TracerCheck;
@@ -56,6 +56,22 @@ pub fn max_delta_pp(reference: &CycloneRun, v: &CycloneRun) -> f64 {
         .map(|(a, b)| 100.0 * (b.efficiency - a.efficiency).abs())
         .filter(|d| d.is_finite())
         .fold(f64::NAN, f64::max)
+}
+
+/// Classes of `v` whose η differs from the reference's beyond the intervals: |Δη| above
+/// the two Wilson 95 % half-widths added in quadrature (an approximate 95 % test of the
+/// difference of two binomial shares).
+pub fn classes_beyond(reference: &CycloneRun, v: &CycloneRun) -> usize {
+    let half = |c: &ClassGrade| {
+        let (lo, hi) = c.efficiency95();
+        0.5 * (hi - lo)
+    };
+    reference
+        .classes
+        .iter()
+        .zip(&v.classes)
+        .filter(|(a, b)| (b.efficiency - a.efficiency).abs() > half(a).hypot(half(b)))
+        .count()
 }
 
 /// The largest residence-time W1 / mean of `v` to the reference over the classes where both
@@ -204,6 +220,8 @@ pub fn summary(
                 "particle_steps_per_s": v.particle_steps as f64 / v.total_s,
                 "duration_s": v.duration,
                 "d50": opt_num(cut_size(&v.classes)),
+                "d50_95": cut_size95(&v.classes)
+                    .map_or(serde_json::Value::Null, |(lo, hi)| serde_json::json!([num(lo), num(hi)])),
                 "unmatched_departures": v.unmatched,
                 "classes": classes,
             }),
@@ -510,8 +528,9 @@ pub fn write_tables(
 
 /// The study's tables in Markdown, as docs/cyclone.md quotes them (`scg study cyclone
 /// --from DIR --markdown`): the original's grade curve with Wilson's 95 % interval, the
-/// escaped and undecided shares; then per variant its largest |Δη| to the original, d50
-/// and wall time against the original's.
+/// escaped and undecided shares; then per variant its largest |Δη| to the original, the
+/// classes where Δη is beyond the intervals ([`classes_beyond`]), d50 and wall time
+/// against the original's.
 pub fn markdown(runs: &[CycloneRun]) -> String {
     let mut s = String::new();
     let o = &runs[0];
@@ -544,19 +563,34 @@ pub fn markdown(runs: &[CycloneRun]) -> String {
     }
     let _ = writeln!(
         s,
-        "\n| variant | max \\|Δη\\| to the original, pp | d50 [µm] | wall time / the original's |\n|---|---|---|---|"
+        "\n| variant | max \\|Δη\\| to the original, pp | classes beyond the 95 % intervals | d50 [µm] [95 %] | wall time / the original's |\n|---|---|---|---|---|"
     );
     for v in runs {
-        let d = if v.name == o.name {
-            "—".to_string()
+        let (d, k) = if v.name == o.name {
+            ("—".to_string(), "—".to_string())
         } else {
-            format!("{:.2}", max_delta_pp(o, v))
+            (
+                format!("{:.2}", max_delta_pp(o, v)),
+                format!("{} of {}", classes_beyond(o, v), v.classes.len()),
+            )
         };
         let _ = writeln!(
             s,
-            "| {} | {d} | {} | {:.3} |",
+            "| {} | {d} | {k} | {} | {:.3} |",
             v.name,
-            cut_size(&v.classes).map_or("—".to_string(), |x| format!("{:.2}", x * 1e6)),
+            match (cut_size(&v.classes), cut_size95(&v.classes)) {
+                (Some(x), Some((lo, hi))) => {
+                    let b = |y: f64| {
+                        if y.is_finite() {
+                            format!("{:.2}", y * 1e6)
+                        } else {
+                            "…".to_string()
+                        }
+                    };
+                    format!("{:.2} [{}, {}]", x * 1e6, b(lo), b(hi))
+                }
+                _ => "—".to_string(),
+            },
             v.total_s / o.total_s
         );
     }

@@ -83,8 +83,9 @@ impl TracerCheck {
 }
 
 /// Run the tracer check on the cyclone scene `text` with the study's `set` overrides:
-/// the first class becomes `rate` tracers per second over its feed window (the other
-/// classes are not fed), run for the feed window and 5·V/Q after it.
+/// the first class becomes `rate` tracers per second over its feed window, weighted by
+/// the inlet's flux (`weight = "flux"`: they enter with the air; the other classes are
+/// not fed), run for the feed window and 5·V/Q after it.
 pub fn run_tracers(text: &str, set: &[String], rate: f64) -> Result<TracerCheck, String> {
     let scene =
         scg_scene::parse(text, "<tracers>", "cyclone-tracers", set).map_err(|e| e.to_string())?;
@@ -105,6 +106,8 @@ pub fn run_tracers(text: &str, set: &[String], rate: f64) -> Result<TracerCheck,
     let mut o = set.to_vec();
     o.push(format!("groups.0.diameter={DIAMETER:e}"));
     o.push(format!("feeders.0.rate={rate:e}"));
+    // tracers enter with the air: V/Q is their mean residence only when fed by flux
+    o.push("feeders.0.weight=\"flux\"".to_string());
     for i in 1..scene.feeders.len() {
         o.push(format!("feeders.{i}.rate=0"));
     }
