@@ -119,8 +119,8 @@ pub struct ClassResult {
     /// Histogram over [0, radius]: fraction of the samples per bin.
     pub histogram: Vec<f64>,
     /// The same radii per particle (in id order, each particle's in time order): what
-    /// intervals resample ([`super::interval`]). Not written to files.
-    #[serde(skip)]
+    /// intervals resample ([`super::interval`]); carried with the result between MPI
+    /// ranks.
     pub clusters: Vec<super::interval::Cluster>,
     /// Fates of every particle of the class seen (fine, coarse, undecided by the last
     /// frame): the steady-state partition.

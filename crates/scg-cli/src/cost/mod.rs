@@ -62,6 +62,7 @@
 //! `sweep.rs` designs the points, `population.rs` places a point's population, `run.rs` runs and measures them, `report.rs` writes the
 //! CSV and Markdown tables, `plot.rs` the SVG.
 
+mod nan;
 mod plot;
 mod population;
 mod report;

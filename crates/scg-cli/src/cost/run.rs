@@ -39,7 +39,7 @@ pub struct Outcome {
     /// (only for the α³ estimate).
     pub alone_wall_s: Option<f64>,
     /// Error against the reference (NaN when not computed; `null` in JSON).
-    #[serde(deserialize_with = "nan::f64")]
+    #[serde(with = "super::nan::num")]
     pub error: f64,
     /// Wall time per step set, s (indexed like [`StepSet::ORDER`]).
     pub sets: SetTimes,
@@ -121,54 +121,28 @@ fn set_times(sim: &Simulation) -> SetTimes {
     sets
 }
 
-/// JSON writes NaN as `null`: these read it back as NaN.
-mod nan {
-    use serde::{Deserialize, Deserializer};
-
-    fn v(x: Option<f64>) -> f64 {
-        x.unwrap_or(f64::NAN)
-    }
-
-    pub fn f64<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-        Option::<f64>::deserialize(d).map(v)
-    }
-
-    pub fn vec<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
-        Vec::<Option<f64>>::deserialize(d).map(|x| x.into_iter().map(v).collect())
-    }
-
-    pub fn pairs<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<(f64, f64)>, D::Error> {
-        Vec::<(Option<f64>, Option<f64>)>::deserialize(d)
-            .map(|x| x.into_iter().map(|(a, b)| (v(a), v(b))).collect())
-    }
-
-    pub fn opt_pair<'de, D: Deserializer<'de>>(d: D) -> Result<Option<(f64, f64)>, D::Error> {
-        Option::<(Option<f64>, Option<f64>)>::deserialize(d).map(|x| x.map(|(a, b)| (v(a), v(b))))
-    }
-}
-
 /// Classifier errors of one point against the reference.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct ClassErrors {
     /// Class names.
     pub names: Vec<String>,
     /// W1 of each class's radial distribution to the reference's, / vessel radius.
-    #[serde(deserialize_with = "nan::vec")]
+    #[serde(with = "super::nan::nums")]
     pub w1: Vec<f64>,
     /// Cut size d50, m (None when the partition curve never crosses 0.5).
     pub d50: Option<f64>,
     /// |d50 − d50_ref| / d50_ref (NaN when either is missing).
-    #[serde(deserialize_with = "nan::f64")]
+    #[serde(with = "super::nan::num")]
     pub d50_error: f64,
     /// 95 % bootstrap interval of each class's W1 (by particle), / vessel radius.
-    #[serde(deserialize_with = "nan::pairs")]
+    #[serde(with = "super::nan::pairs")]
     pub w1_95: Vec<(f64, f64)>,
     /// W1 of each class that sampling noise alone reaches in 5 % of runs of these sizes
     /// (permutation test), / vessel radius: W1 at or below it agrees with the reference.
-    #[serde(deserialize_with = "nan::vec")]
+    #[serde(with = "super::nan::nums")]
     pub w1_noise95: Vec<f64>,
     /// 95 % bootstrap interval of d50, m (a NaN bound where it is open).
-    #[serde(deserialize_with = "nan::opt_pair")]
+    #[serde(with = "super::nan::opt_pair")]
     pub d50_95: Option<(f64, f64)>,
     /// Whether d50 agrees with the reference's within the intervals: |Δ| ≤ the two
     /// half-widths added in quadrature (None when either is missing or open).

@@ -529,7 +529,7 @@ pub fn write_tables(
 /// The study's tables in Markdown, as docs/cyclone.md quotes them (`scg study cyclone
 /// --from DIR --markdown`): the original's grade curve with Wilson's 95 % interval, the
 /// escaped and undecided shares; then per variant its largest |Δη| to the original, the
-/// classes where Δη is beyond the intervals ([`classes_beyond`]), d50 and wall time
+/// classes where Δη is beyond the intervals (`classes_beyond`), d50 and wall time
 /// against the original's.
 pub fn markdown(runs: &[CycloneRun]) -> String {
     let mut s = String::new();
