@@ -224,20 +224,26 @@ fn fed_particles_start_on_the_patch_radius_inward_with_exact_counts_and_field_ve
     }
 }
 
+/// The scene's first feeder alone at 10^8 /s for 100 steps of 10 µs (10^5 particles),
+/// by area or by flux: the particles of group `a`.
+fn feed_10e5(mut scene: Scene, by_flux: bool) -> Vec<scg::core::sim::ParticleState> {
+    scene.feeders.truncate(1);
+    scene.feeders[0].rate = 1.0e8;
+    scene.feeders[0].by_flux = by_flux;
+    let mut sim = scene.build(false);
+    sim.run(100, |_| true).unwrap();
+    sim.particles()
+        .into_iter()
+        .filter(|p| p.group == 0)
+        .collect()
+}
+
 #[test]
 fn spatial_share_matches_area_ratio_over_many_particles() {
     // (3) with 10^5 particles: the share on the 0.3 L² face within 4σ = 4·√(N·0.3·0.7).
     let dir = tempfile::tempdir().unwrap();
-    let mut scene = setup(dir.path(), |_| DVec3::X, 0.0011);
-    scene.feeders.truncate(1);
-    scene.feeders[0].rate = 1.0e8; // 10^5 in 1 ms
-    let mut sim = scene.build(false);
-    sim.run(100, |_| true).unwrap();
-    let ps: Vec<_> = sim
-        .particles()
-        .into_iter()
-        .filter(|p| p.group == 0)
-        .collect();
+    let scene = setup(dir.path(), |_| DVec3::X, 0.0011);
+    let ps = feed_10e5(scene, false);
     let n = ps.len() as f64;
     let low = ps.iter().filter(|p| p.position.y < Y_SPLIT).count() as f64;
     let sigma = (n * 0.3 * 0.7).sqrt();
@@ -275,17 +281,8 @@ fn flux_weighted_feed_follows_the_inflow() {
     .unwrap();
     let text = scene_text(0.0011).replace("cell_point_linear_exact", "cell_value");
     std::fs::write(dir.path().join("scene.toml"), &text).unwrap();
-    let mut scene = scg::scene::load(&dir.path().join("scene.toml"), &[]).unwrap();
-    scene.feeders.truncate(1);
-    scene.feeders[0].rate = 1.0e8;
-    scene.feeders[0].by_flux = true;
-    let mut sim = scene.build(false);
-    sim.run(100, |_| true).unwrap();
-    let ps: Vec<_> = sim
-        .particles()
-        .into_iter()
-        .filter(|p| p.group == 0)
-        .collect();
+    let scene = scg::scene::load(&dir.path().join("scene.toml"), &[]).unwrap();
+    let ps = feed_10e5(scene, true);
     let n = ps.len() as f64;
     let share = ps.iter().filter(|p| p.position.y < Y_SPLIT).count() as f64 / n;
     let expected = 0.3 / (0.3 + 0.7 * 2.0);

@@ -525,3 +525,30 @@ mod tests {
         assert_eq!(j["threads"], 2);
     }
 }
+
+/// Write a command's text files and its SVG (drawn by `draw` into the path given), print
+/// `md` and list what was written; returns the exit status (1 when a file cannot be
+/// written).
+pub(crate) fn write_report(
+    files: &[(std::path::PathBuf, String)],
+    svg: &std::path::Path,
+    draw: impl FnOnce(&std::path::Path) -> Result<(), String>,
+    md: &str,
+) -> i32 {
+    for (p, text) in files {
+        if let Err(e) = std::fs::write(p, text) {
+            eprintln!("error: cannot write {}: {e}", p.display());
+            return 1;
+        }
+    }
+    if let Err(e) = draw(svg) {
+        eprintln!("error: cannot draw {}: {e}", svg.display());
+        return 1;
+    }
+    print!("{md}");
+    for (p, _) in files {
+        eprintln!("wrote {}", p.display());
+    }
+    eprintln!("wrote {}", svg.display());
+    0
+}

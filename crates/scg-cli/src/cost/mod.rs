@@ -215,21 +215,5 @@ pub fn cost(a: CostArgs, points: &dyn Points) -> i32 {
         (a.out.join("cost.md"), md.clone()),
         (a.out.join("cost.csv"), csv(&s)),
     ];
-    for (p, text) in &files {
-        if let Err(e) = std::fs::write(p, text) {
-            eprintln!("error: cannot write {}: {e}", p.display());
-            return 1;
-        }
-    }
-    let svg = a.out.join("cost.svg");
-    if let Err(e) = plot(&s, &svg) {
-        eprintln!("error: cannot draw {}: {e}", svg.display());
-        return 1;
-    }
-    print!("{md}");
-    for (p, _) in &files {
-        eprintln!("wrote {}", p.display());
-    }
-    eprintln!("wrote {}", svg.display());
-    0
+    crate::run::write_report(&files, &a.out.join("cost.svg"), |p| plot(&s, p), &md)
 }

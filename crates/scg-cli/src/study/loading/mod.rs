@@ -37,9 +37,10 @@ pub const LOADINGS: [f64; 3] = [1.0, 4.0, 16.0];
 /// Loadings of `--quick`.
 pub const LOADINGS_QUICK: [f64; 3] = [1.0, 2.0, 4.0];
 /// Simulated time of the full study, s (the analysis window is its second half): the
-/// classifier's first 50 ms, while the feed builds its hold-up; at ×16 the originals
-/// alone take ≈ 20 min on two cores (the cost grows with the square of the duration).
-pub const DURATION: f64 = 0.05;
+/// classifier's first 30 ms, while the feed builds its hold-up. The cost grows with about
+/// the square of the duration: at ×16 the originals take ≈ 10 min on two cores for 30 ms
+/// and over an hour for 50 ms (`--set duration=0.05`).
+pub const DURATION: f64 = 0.03;
 /// Simulated time under `--quick`, s.
 pub const DURATION_QUICK: f64 = 0.02;
 
@@ -221,21 +222,5 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
             serde_json::to_string_pretty(&summary(&rows, duration)).unwrap_or_default(),
         ),
     ];
-    for (p, text) in &files {
-        if let Err(e) = std::fs::write(p, text) {
-            eprintln!("error: cannot write {}: {e}", p.display());
-            return 1;
-        }
-    }
-    let svg = out.join("loading.svg");
-    if let Err(e) = plot(&records, &svg) {
-        eprintln!("error: cannot draw {}: {e}", svg.display());
-        return 1;
-    }
-    print!("{md}");
-    for (p, _) in &files {
-        eprintln!("wrote {}", p.display());
-    }
-    eprintln!("wrote {}", svg.display());
-    0
+    crate::run::write_report(&files, &out.join("loading.svg"), |p| plot(&records, p), &md)
 }
