@@ -115,3 +115,18 @@ fn markdown_needs_a_finished_study() {
         0
     );
 }
+
+/// Issue 37: in the committed cyclone study the sampling controls (originals at the
+/// coarse-grained counts) agree with the originals in every class within the intervals,
+/// and without SCG most classes do not (the test can tell them apart).
+#[test]
+fn the_cyclone_sampling_controls_agree_within_the_intervals() {
+    let runs =
+        scg::cli::study::cyclone::read_study(&common::repo("docs/data/cyclone-study")).unwrap();
+    let by = |n: &str| runs.iter().find(|r| r.name == n).unwrap();
+    let o = by("original");
+    for v in ["sample2", "sample4", "scg2", "parcel2"] {
+        assert_eq!(scg::cli::study::cyclone::classes_beyond(o, by(v)), 0, "{v}");
+    }
+    assert!(scg::cli::study::cyclone::classes_beyond(o, by("none2")) >= 5);
+}

@@ -25,7 +25,7 @@ use std::path::PathBuf;
 
 pub use grade::{ClassGrade, ExternalGrade, cut_size, cut_size95, efficiency, residence_w1};
 pub use plot::write_plots;
-pub use report::{Criteria, criteria, markdown, report, summary, write_tables};
+pub use report::{Criteria, classes_beyond, criteria, markdown, report, summary, write_tables};
 pub use run::{CycloneRun, Tracker, run_variant};
 pub use theory::Cyclone;
 pub use tracers::{TracerCheck, run_tracers};
