@@ -25,14 +25,13 @@ pub fn group_stats(rec: &Recording, from: f64, to: f64) -> Result<(String, Strin
     }
     let ng = rec.meta.groups.len();
     let mut r: Vec<Vec<f64>> = vec![Vec::new(); ng];
-    // the same samples per particle (id → its distances), for the intervals
-    let mut by_id: Vec<std::collections::BTreeMap<u32, Vec<f64>>> = vec![Default::default(); ng];
+    // the id of each sample, for the intervals (resampled by particle)
+    let mut ids: Vec<Vec<u32>> = vec![Vec::new(); ng];
     for f in &frames {
         for (i, g) in f.group.iter().enumerate() {
             if let Some(v) = r.get_mut(*g as usize) {
-                let d = axis.distance(f.position[i]);
-                v.push(d);
-                by_id[*g as usize].entry(f.id[i]).or_default().push(d);
+                v.push(axis.distance(f.position[i]));
+                ids[*g as usize].push(f.id[i]);
             }
         }
     }
@@ -61,6 +60,7 @@ pub fn group_stats(rec: &Recording, from: f64, to: f64) -> Result<(String, Strin
     }
     csv.push('\n');
     for (gi, g) in rec.meta.groups.iter().enumerate() {
+        let clusters = super::radial::clusters(&ids[gi], &r[gi]);
         let v = &mut r[gi];
         v.sort_by(f64::total_cmp);
         let m = mean(v);
@@ -81,7 +81,6 @@ pub fn group_stats(rec: &Recording, from: f64, to: f64) -> Result<(String, Strin
             p50,
             p90
         ));
-        let clusters: Vec<Vec<f64>> = std::mem::take(&mut by_id[gi]).into_values().collect();
         let ((mlo, mhi), qi) = super::interval::mean_and_quantiles95(
             &clusters,
             &[0.1, 0.5, 0.9],

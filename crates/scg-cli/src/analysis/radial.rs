@@ -266,7 +266,7 @@ impl Analysis {
 }
 
 /// The samples `r` grouped by their particle `ids` (ids in increasing order).
-fn clusters(ids: &[u32], r: &[f64]) -> Vec<super::interval::Cluster> {
+pub(super) fn clusters(ids: &[u32], r: &[f64]) -> Vec<super::interval::Cluster> {
     let mut order: Vec<usize> = (0..ids.len()).collect();
     order.sort_by_key(|&i| ids[i]); // stable: each particle's samples stay in time order
     let mut out: Vec<super::interval::Cluster> = Vec::new();

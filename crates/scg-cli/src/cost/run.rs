@@ -269,11 +269,16 @@ fn team() -> (usize, usize) {
     (e.team_size(), e.parallel_min)
 }
 
-/// Per-class errors of `v` against `reference`.
-fn class_errors(reference: &analysis::Result, v: &analysis::Result) -> ClassErrors {
-    let d_ref = cut_size(reference);
+/// Per-class errors of `v` against `reference`, whose cut size and its interval are
+/// `ref_cut` (computed once per sweep).
+fn class_errors(
+    reference: &analysis::Result,
+    ref_cut: (Option<f64>, Option<(f64, f64)>),
+    v: &analysis::Result,
+) -> ClassErrors {
+    let (d_ref, ref95) = ref_cut;
     let d50 = cut_size(v);
-    let (d50_95, ref95) = (cut_size95(v), cut_size95(reference));
+    let d50_95 = cut_size95(v);
     let intervals = analysis::w1_intervals(reference, v);
     let half = |i: Option<(f64, f64)>| i.map(|(lo, hi)| 0.5 * (hi - lo)).filter(|h| h.is_finite());
     ClassErrors {
@@ -455,16 +460,19 @@ fn sweep_classifier(
 ) -> Sweep {
     let (plan, plan_sets) = reference_plan(base, &reference, None);
     let ref_res = runs[0].1.clone();
+    let ref_cut = ref_res
+        .as_ref()
+        .map_or((None, None), |r| (cut_size(r), cut_size95(r)));
     let mut outcomes = Vec::with_capacity(runs.len());
     for (i, (mut o, res)) in runs.into_iter().enumerate() {
         if i == 0 {
             if let Some(r) = &ref_res {
-                let ce = class_errors(r, r);
+                let ce = class_errors(r, ref_cut, r);
                 o.error = ce.w1.iter().copied().fold(0.0, f64::max);
                 o.classes = Some(ce);
             }
         } else if let (Some(r), Some(v), None) = (&ref_res, &res, &o.failure) {
-            let ce = class_errors(r, v);
+            let ce = class_errors(r, ref_cut, v);
             o.error = ce.w1.iter().copied().fold(
                 0.0,
                 |a: f64, b| if b.is_nan() { f64::NAN } else { a.max(b) },

@@ -133,10 +133,11 @@ pub const VARIANTS: [(&str, [&str; 2]); 4] = [
     ),
 ];
 
-/// Write every table and plot of a study into `out`.
-pub fn write_outputs(runs: &[VariantRun], nozzle: f64, out: &Path) -> Result<(), String> {
-    write_tables(runs, out)?;
-    write_plots(runs, nozzle, out)
+/// Write every table and plot of a study into `out`; returns the text report.
+pub fn write_outputs(runs: &[VariantRun], nozzle: f64, out: &Path) -> Result<String, String> {
+    let text = write_tables(runs, out)?;
+    write_plots(runs, nozzle, out)?;
+    Ok(text)
 }
 
 /// Run `scg study` with its variants run through `points` (every process that shares
@@ -236,10 +237,12 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
             Err(_) => return 1,
         }
     }
-    print!("{}", report(&runs));
-    if let Err(e) = write_outputs(&runs, nozzle, &out) {
-        eprintln!("error: {e}");
-        return 1;
+    match write_outputs(&runs, nozzle, &out) {
+        Ok(text) => print!("{text}"),
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 1;
+        }
     }
     eprintln!(
         "wrote tables, plots and summary.json under {}",

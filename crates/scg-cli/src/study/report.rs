@@ -18,15 +18,28 @@ fn json_num(x: f64) -> serde_json::Value {
     }
 }
 
+/// Per variant, per class: W1's bootstrap interval and the sampling-noise W1 against the
+/// first variant ([`w1_intervals`]: resampling, computed once for all tables).
+type Intervals = Vec<Vec<((f64, f64), f64)>>;
+
+fn intervals(runs: &[VariantRun]) -> Intervals {
+    runs.iter()
+        .map(|v| w1_intervals(&runs[0].result, &v.result))
+        .collect()
+}
+
 /// `summary.json` of a study.
 pub fn summary(runs: &[VariantRun]) -> serde_json::Value {
+    summary_with(runs, &intervals(runs))
+}
+
+fn summary_with(runs: &[VariantRun], intervals: &Intervals) -> serde_json::Value {
     let mut variants = serde_json::Map::new();
     let reference = &runs[0].result;
-    for v in runs {
+    for (v, iv) in runs.iter().zip(intervals) {
         let w1 = w1_to(reference, &v.result);
-        let iv = w1_intervals(reference, &v.result);
         let mut classes = serde_json::Map::new();
-        for ((c, w), ((lo, hi), noise)) in v.result.classes.iter().zip(&w1).zip(&iv) {
+        for ((c, w), ((lo, hi), noise)) in v.result.classes.iter().zip(&w1).zip(iv) {
             let (dlo, dhi) = wilson95(c.drained, c.cohort);
             classes.insert(
                 format!("{}", (c.diameter * 1e6 * 1000.0).round() / 1000.0),
@@ -87,6 +100,10 @@ pub fn summary(runs: &[VariantRun]) -> serde_json::Value {
 
 /// Text report: per class mean radius, drained fraction, fates, W1; times; both d50s.
 pub fn report(runs: &[VariantRun]) -> String {
+    report_with(runs, &intervals(runs))
+}
+
+fn report_with(runs: &[VariantRun], intervals: &Intervals) -> String {
     let mut s = String::new();
     let reference = &runs[0].result;
     let _ = writeln!(
@@ -122,10 +139,9 @@ pub fn report(runs: &[VariantRun]) -> String {
         "undec",
         "f_fine"
     );
-    for v in runs {
+    for (v, iv) in runs.iter().zip(intervals) {
         let w1 = w1_to(reference, &v.result);
-        let iv = w1_intervals(reference, &v.result);
-        for ((c, w), (_, noise)) in v.result.classes.iter().zip(&w1).zip(&iv) {
+        for ((c, w), (_, noise)) in v.result.classes.iter().zip(&w1).zip(iv) {
             let (dlo, dhi) = wilson95(c.drained, c.cohort);
             let _ = writeln!(
                 s,
@@ -214,8 +230,9 @@ pub fn report(runs: &[VariantRun]) -> String {
     s
 }
 
-/// Write every table of a study into `out`.
-pub fn write_tables(runs: &[VariantRun], out: &Path) -> Result<(), String> {
+/// Write every table of a study into `out`; returns the text report (report.txt).
+pub fn write_tables(runs: &[VariantRun], out: &Path) -> Result<String, String> {
+    let intervals = intervals(runs);
     let w = |name: &str, text: String| {
         std::fs::write(out.join(name), text)
             .map_err(|e| format!("{}: {e}", out.join(name).display()))
@@ -309,7 +326,10 @@ pub fn write_tables(runs: &[VariantRun], out: &Path) -> Result<(), String> {
     w("time.csv", time)?;
     w(
         "summary.json",
-        serde_json::to_string_pretty(&summary(runs)).map_err(|e| e.to_string())? + "\n",
+        serde_json::to_string_pretty(&summary_with(runs, &intervals)).map_err(|e| e.to_string())?
+            + "\n",
     )?;
-    w("report.txt", report(runs))
+    let text = report_with(runs, &intervals);
+    w("report.txt", text.clone())?;
+    Ok(text)
 }

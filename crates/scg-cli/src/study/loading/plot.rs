@@ -74,16 +74,18 @@ pub fn plot(rows: &[Record], path: &Path) -> Result<(), String> {
                 .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
         }
         for (name, law, color) in families {
-            let mut pts: Vec<(f64, f64, f64, f64, bool)> = here
+            // (α, wall time, W1, its interval's low and high ends, agrees)
+            let mut pts: Vec<(f64, f64, f64, f64, f64, bool)> = here
                 .iter()
                 .filter(|r| r.law == law)
                 .filter_map(|r| {
-                    let (w, lo, _) = bar(r)?;
+                    let (w, lo, hi) = bar(r)?;
                     Some((
                         r.alpha,
                         r.wall_s.max(1e-3),
                         w.max(FLOOR),
                         lo.max(FLOOR),
+                        hi.max(FLOOR),
                         r.agrees == Some(true),
                     ))
                 })
@@ -98,18 +100,13 @@ pub fn plot(rows: &[Record], path: &Path) -> Result<(), String> {
                 .label(name)
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
             for p in &pts {
-                let hi = here
-                    .iter()
-                    .find(|r| r.law == law && r.alpha == p.0)
-                    .and_then(|r| bar(r))
-                    .map_or(p.2, |b| b.2.max(FLOOR));
                 chart
                     .draw_series(std::iter::once(PathElement::new(
-                        vec![(p.1, p.3), (p.1, hi)],
+                        vec![(p.1, p.3), (p.1, p.4)],
                         color.stroke_width(1),
                     )))
                     .map_err(|x| x.to_string())?;
-                let style = if p.4 {
+                let style = if p.5 {
                     color.stroke_width(2)
                 } else {
                     color.filled()
