@@ -61,6 +61,7 @@ fn config(
         gravity: None,
         buoyancy: false,
         scg_at_original: false,
+        extra_forces: Default::default(),
         walls: None,
         contacts: None,
         record_every: None,

@@ -44,6 +44,7 @@ fn sim(dt: f64, model: Model, turbulence: Turbulence, seed: u64) -> Simulation {
         gravity: None,
         buoyancy: false,
         scg_at_original: false,
+        extra_forces: Default::default(),
         walls: None,
         contacts: None,
         record_every: None,

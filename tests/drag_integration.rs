@@ -31,6 +31,7 @@ fn sim(dt: f64, integrator: Integrator, u: DVec3, v0: DVec3) -> Simulation {
         gravity: None,
         buoyancy: false,
         scg_at_original: false,
+        extra_forces: Default::default(),
         walls: None,
         contacts: None,
         record_every: None,

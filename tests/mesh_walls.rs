@@ -103,6 +103,7 @@ fn run(
         gravity,
         buoyancy: false,
         scg_at_original: false,
+        extra_forces: Default::default(),
         contacts: None,
         walls: Some(WallSet {
             walls: shapes
@@ -753,6 +754,7 @@ fn wall_cost_mesh_vs_analytic() {
                 gravity: None,
                 buoyancy: false,
                 scg_at_original: false,
+                extra_forces: Default::default(),
                 contacts: None,
                 walls: Some(WallSet {
                     walls: shapes

@@ -37,6 +37,7 @@ fn sim(
         gravity,
         buoyancy: false,
         scg_at_original: false,
+        extra_forces: Default::default(),
         contacts: None,
         walls: Some(WallSet {
             walls: vec![Wall {

@@ -44,6 +44,7 @@ fn bounce(
         gravity: None,
         buoyancy: false,
         scg_at_original: false,
+        extra_forces: Default::default(),
         contacts: None,
         walls: Some(WallSet {
             walls: vec![Wall {

@@ -37,6 +37,8 @@ pub struct GroupFates {
     pub zones: Vec<(String, bool, u64)>,
     /// Still in the domain (moving or resting on a contact wall), in no zone.
     pub airborne: u64,
+    /// A size distribution's report bin: its original sizes, m.
+    pub size_range: Option<(f64, f64)>,
 }
 
 impl GroupFates {
@@ -111,6 +113,7 @@ pub fn fates(scene: &Scene, sim: &mut Simulation) -> Vec<GroupFates> {
                 initial: grp.count() as u64,
                 fed: get(&counts.fed),
                 airborne: get(&counts.held),
+                size_range: grp.size.as_ref().map(|s| s.range()),
                 ..Default::default()
             };
             let drained = times(&counts.drained);
@@ -180,8 +183,11 @@ pub fn render(fates: &[GroupFates]) -> String {
     for f in fates {
         let n = f.entered();
         let mass = |k: u64| k as f64 * f.represented_mass;
+        let range = f.size_range.map_or(String::new(), |(lo, hi)| {
+            format!(" ({:.3}–{:.3} µm)", lo * 1e6, hi * 1e6)
+        });
         s += &format!(
-            "  {}: entered {} ({} placed + {} fed, {:.4e} kg)\n",
+            "  {}{range}: entered {} ({} placed + {} fed, {:.4e} kg)\n",
             f.group,
             n,
             f.initial,
@@ -353,6 +359,7 @@ mod tests {
             lost: 0,
             zones: Vec::new(),
             airborne: 1,
+            size_range: None,
         };
         assert_eq!(f.accounted(), 10);
         let t = render(std::slice::from_ref(&f));

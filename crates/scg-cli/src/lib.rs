@@ -4,6 +4,7 @@ pub mod analysis;
 mod bench;
 mod chart;
 pub mod cost;
+pub mod distribution;
 pub mod fates;
 pub mod points;
 pub mod replay;

@@ -332,6 +332,8 @@ pub fn run(args: RunArgs) -> i32 {
     }
     let fates = crate::fates::fates(&scene, &mut sim);
     eprint!("{}", crate::fates::render(&fates));
+    let by_mass = crate::distribution::by_mass(&scene, &fates);
+    eprint!("{}", crate::distribution::render(&by_mass));
     if let Some(path) = &args.fates_csv {
         if let Err(e) = std::fs::write(path, crate::fates::csv(&fates)) {
             eprintln!("error: cannot write {}: {e}", path.display());
@@ -385,6 +387,9 @@ pub fn run(args: RunArgs) -> i32 {
             for (g, f) in gs.iter_mut().zip(&fates) {
                 g["fates"] = crate::fates::json(f);
             }
+        }
+        if !by_mass.is_empty() {
+            json["distributions"] = crate::distribution::json(&by_mass);
         }
         let text = serde_json::to_string_pretty(&json).unwrap_or_default();
         if let Err(e) = std::fs::write(path, text + "\n") {
@@ -480,6 +485,33 @@ pub fn summary_json(
     })
 }
 
+/// Write a command's text files and its SVG (drawn by `draw` into the path given), print
+/// `md` and list what was written; returns the exit status (1 when a file cannot be
+/// written).
+pub(crate) fn write_report(
+    files: &[(std::path::PathBuf, String)],
+    svg: &std::path::Path,
+    draw: impl FnOnce(&std::path::Path) -> Result<(), String>,
+    md: &str,
+) -> i32 {
+    for (p, text) in files {
+        if let Err(e) = std::fs::write(p, text) {
+            eprintln!("error: cannot write {}: {e}", p.display());
+            return 1;
+        }
+    }
+    if let Err(e) = draw(svg) {
+        eprintln!("error: cannot draw {}: {e}", svg.display());
+        return 1;
+    }
+    print!("{md}");
+    for (p, _) in files {
+        eprintln!("wrote {}", p.display());
+    }
+    eprintln!("wrote {}", svg.display());
+    0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -524,31 +556,4 @@ mod tests {
         assert_eq!(j["particle_steps_per_s"], 200.0);
         assert_eq!(j["threads"], 2);
     }
-}
-
-/// Write a command's text files and its SVG (drawn by `draw` into the path given), print
-/// `md` and list what was written; returns the exit status (1 when a file cannot be
-/// written).
-pub(crate) fn write_report(
-    files: &[(std::path::PathBuf, String)],
-    svg: &std::path::Path,
-    draw: impl FnOnce(&std::path::Path) -> Result<(), String>,
-    md: &str,
-) -> i32 {
-    for (p, text) in files {
-        if let Err(e) = std::fs::write(p, text) {
-            eprintln!("error: cannot write {}: {e}", p.display());
-            return 1;
-        }
-    }
-    if let Err(e) = draw(svg) {
-        eprintln!("error: cannot draw {}: {e}", svg.display());
-        return 1;
-    }
-    print!("{md}");
-    for (p, _) in files {
-        eprintln!("wrote {}", p.display());
-    }
-    eprintln!("wrote {}", svg.display());
-    0
 }

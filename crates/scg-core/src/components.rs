@@ -85,6 +85,10 @@ pub struct FluidCoupling {
     /// `drag_diameter`, or the original's for an SCG particle whose forces are evaluated
     /// as the original's (`SimConfig::scg_at_original`).
     pub reynolds_diameter: f64,
+    /// Density of the sphere of `reynolds_diameter` (kg/m³): the original's where that
+    /// diameter is the original's, else the simulated one. The opt-in forces
+    /// ([`crate::physics::forces`]) give the acceleration of this sphere.
+    pub force_density: f64,
     /// Factor applied to the fluid force, dimensionless.
     pub force_scale: f64,
     /// Stokes momentum response time τ = m / (3π·μ·d_drag·force_scale), s (∞ without drag).

@@ -35,6 +35,7 @@
 //!     gravity: None,
 //!     buoyancy: false,
 //!     scg_at_original: false,
+//!     extra_forces: Default::default(),
 //!     walls: None,
 //!     contacts: None,
 //!     record_every: None,

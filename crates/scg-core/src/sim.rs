@@ -9,6 +9,7 @@ use crate::components::*;
 use crate::frame::{FrameSink, Recorders};
 use crate::physics::drag::DragLaw;
 use crate::physics::flow::{FlowField, Fluid};
+use crate::physics::forces::ExtraForces;
 use crate::physics::integrate::Integrator;
 use crate::spawn::{ParticleSpec, SpawnRules, spawn_particle};
 use crate::stages::carrier::CarrierModifier;
@@ -25,7 +26,7 @@ use crate::stages::{
 use crate::state::{
     ContactCount, ContactResolution, Health, NextParticleId, NonFinite, SimClock, Tally,
 };
-use crate::step::{Plan, StageTimers, StepBuilder, StepSystem};
+use crate::step::{Plan, StageTimers, StepBuilder, StepSet, StepSystem};
 
 /// Everything the core needs to build a simulation (the scene crate produces it).
 #[derive(Clone, Debug)]
@@ -52,6 +53,9 @@ pub struct SimConfig {
     /// is then the original's under any drag law, not only Stokes'. `false`: as the
     /// simulated sphere's.
     pub scg_at_original: bool,
+    /// Forces besides drag and gravity the scene declares (Cunningham slip), each for
+    /// the original particle.
+    pub extra_forces: crate::physics::forces::ExtraForces,
     /// Walls, if any.
     pub walls: Option<WallSet>,
     /// Particle–particle contacts, if declared.
@@ -190,7 +194,12 @@ impl Simulation {
         let motion_res = Motion {
             integrator: cfg.integrator,
             drag: cfg.drag,
+            forces: match (cfg.drag, cfg.fluid) {
+                (Some(_), Some(f)) => cfg.extra_forces.step(f),
+                _ => None,
+            },
         };
+        let motion_forces = motion_res.forces.is_some();
         world.insert_resource(SimClock::new(cfg.dt));
         world.insert_resource(motion_res);
         world.insert_resource(cfg.flow);
@@ -218,6 +227,7 @@ impl Simulation {
             buoyancy: cfg.buoyancy,
             fluid: cfg.fluid,
             scg_at_original: cfg.scg_at_original,
+            extra_forces: cfg.extra_forces,
             mesh: cfg.mesh_flow.is_some(),
             carrier_offset: cfg.carrier.is_some(),
             dispersion: cfg
@@ -263,7 +273,8 @@ impl Simulation {
         if cfg.record_every.is_some() {
             recording::plugin(&mut b);
         }
-        let (schedule, plan) = b.build();
+        let (schedule, mut plan) = b.build();
+        plan.notes = force_notes(&cfg.extra_forces, motion_forces);
         world.insert_resource(plan.clone());
         Simulation {
             world,
@@ -397,4 +408,36 @@ impl Simulation {
         v.sort_by_key(|p| p.id);
         v
     }
+}
+
+/// What `scg run --plan` lists of the opt-in forces: under scaling what is set once per particle at
+/// spawn, under forces what the integration's step evaluates (`stepped`: the scene
+/// has the drag these act through).
+fn force_notes(f: &ExtraForces, stepped: bool) -> Vec<(StepSet, String)> {
+    let mut v = Vec::new();
+    if let Some(l) = f.cunningham {
+        v.push((
+            StepSet::Scaling,
+            format!(
+                "at spawn: cunningham_davies slip, τ·C_c(d), mean free path {l:e} m, at \
+                 the original d"
+            ),
+        ));
+    }
+    if let Some(c) = f.added_mass {
+        v.push((
+            StepSet::Scaling,
+            format!(
+                "at spawn: added_mass inertia m + {c}·m_f (τ and body acceleration / \
+                 (1 + {c}·ρ_f/ρ_p))"
+            ),
+        ));
+    }
+    if stepped && let Some(l) = f.step_label() {
+        v.push((
+            StepSet::Forces,
+            format!("[{l}] in the integration's step, at mid-step, for the original"),
+        ));
+    }
+    v
 }

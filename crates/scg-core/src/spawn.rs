@@ -6,8 +6,9 @@ use bevy_ecs::prelude::*;
 use glam::DVec3;
 
 use crate::components::*;
-use crate::physics::drag::stokes_response_time;
+use crate::physics::drag::{cunningham_davies, stokes_response_time};
 use crate::physics::flow::Fluid;
+use crate::physics::forces::ExtraForces;
 use crate::physics::integrate::exponential_factors;
 use crate::physics::scaling::{CoarseGrainLaw, coarse_grain};
 use crate::state::{NextParticleId, SimClock};
@@ -48,6 +49,8 @@ pub struct SpawnRules {
     /// SCG particles' Reynolds-dependent drag correction and buoyancy as the original's
     /// (`SimConfig::scg_at_original`).
     pub scg_at_original: bool,
+    /// Forces besides drag and gravity (the Cunningham slip enters τ here).
+    pub extra_forces: crate::physics::forces::ExtraForces,
     /// A flow on a mesh: every particle has a [`CellHint`] (spawned unlocated).
     pub mesh: bool,
     /// A carrier modifier: every particle has a [`CarrierOffset`] (zero at spawn).
@@ -61,18 +64,36 @@ pub struct SpawnRules {
 /// `alpha`, for time step `dt`: diameter, density, mass, fluid coupling, Stokes factors.
 /// With `as_original` (an SCG particle under `scg_at_original`: [`SpawnRules::as_original`])
 /// the drag correction is taken at the original diameter's Reynolds number (the SCG
-/// premise, equal acceleration, under any drag law).
+/// premise, equal acceleration, under any drag law). With a Cunningham mean free path
+/// `forces` (Cunningham slip, added mass) τ grows by C_c and by the inertia factor k,
+/// both at the diameter and density the correction is taken at.
 pub fn coarse_grained(
     cg: &CoarseGrain,
     fluid: Option<&Fluid>,
     dt: f64,
     as_original: bool,
+    forces: &ExtraForces,
 ) -> (Diameter, Density, Mass, FluidCoupling, StokesFactors) {
     let s = coarse_grain(cg.law, cg.alpha, cg.original_diameter, cg.original_density);
     let mass = s.mass();
+    let reynolds_diameter = if as_original {
+        cg.original_diameter
+    } else {
+        s.drag_diameter
+    };
+    let force_density = if reynolds_diameter == cg.original_diameter {
+        cg.original_density
+    } else {
+        s.density
+    };
     let tau = match fluid {
         Some(f) if f.viscosity > 0.0 => {
+            let cc = forces
+                .cunningham
+                .map_or(1.0, |l| cunningham_davies(reynolds_diameter, l));
             stokes_response_time(mass, f.viscosity, s.drag_diameter, s.force_scale)
+                * cc
+                * forces.inertia(fluid, force_density)
         }
         _ => f64::INFINITY,
     };
@@ -83,11 +104,8 @@ pub fn coarse_grained(
         Mass(mass),
         FluidCoupling {
             drag_diameter: s.drag_diameter,
-            reynolds_diameter: if as_original {
-                cg.original_diameter
-            } else {
-                s.drag_diameter
-            },
+            reynolds_diameter,
+            force_density,
             force_scale: s.force_scale,
             tau,
         },
@@ -202,14 +220,24 @@ macro_rules! spawn_bundle {
             original_density: spec.density,
         };
         let as_original = rules.as_original(&cg);
-        let scaled = coarse_grained(&cg, rules.fluid.as_ref(), $dt, as_original);
+        let scaled = coarse_grained(
+            &cg,
+            rules.fluid.as_ref(),
+            $dt,
+            as_original,
+            &rules.extra_forces,
+        );
         // buoyancy of the original when its forces are (equal acceleration)
         let buoyant = if as_original {
             cg.original_density
         } else {
             scaled.1.0
         };
-        let gravity = BodyAcceleration(rules.body_acceleration(buoyant));
+        // with added mass the inertia is m + C_A·m_f: every acceleration divides by k
+        let k = rules
+            .extra_forces
+            .inertia(rules.fluid.as_ref(), scaled.3.force_density);
+        let gravity = BodyAcceleration(rules.body_acceleration(buoyant) / k);
         let mut e = $spawner.spawn((
             ParticleId($id),
             GroupId(spec.group),

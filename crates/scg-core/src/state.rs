@@ -266,4 +266,7 @@ pub struct Motion {
     pub integrator: crate::physics::integrate::Integrator,
     /// Drag law, `None` without fluid drag.
     pub drag: Option<crate::physics::drag::DragLaw>,
+    /// The opt-in forces evaluated each step, if any (they take every particle through
+    /// the carrier seam's [`crate::physics::carrier::advance`]).
+    pub forces: Option<crate::physics::forces::StepForces>,
 }

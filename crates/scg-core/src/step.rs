@@ -227,6 +227,10 @@ pub struct PlannedSystem {
 pub struct Plan {
     /// Systems in order.
     pub systems: Vec<PlannedSystem>,
+    /// Models that act inside other systems, listed under their set: applied once per
+    /// particle as it enters (scaling: a slip correction of its response time), or
+    /// evaluated in the integration's step (forces: pressure gradient, lift).
+    pub notes: Vec<(StepSet, String)>,
 }
 
 impl Plan {
@@ -251,7 +255,11 @@ impl Plan {
         for set in StepSet::ORDER {
             let systems: Vec<_> = self.in_set(set).collect();
             out.push_str(&format!("{}. {}\n", set.index() + 1, set.name()));
-            if systems.is_empty() {
+            let notes: Vec<_> = self.notes.iter().filter(|n| n.0 == set).collect();
+            for (_, n) in &notes {
+                out.push_str(&format!("     {n}\n"));
+            }
+            if systems.is_empty() && notes.is_empty() {
                 out.push_str(match set {
                     StepSet::Scaling => "     (at spawn: particles enter coarse-grained)\n",
                     _ => "     (nothing)\n",

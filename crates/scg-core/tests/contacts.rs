@@ -61,6 +61,7 @@ fn config(dt: f64, contacts: Option<ContactConfig>, walls: Option<WallSet>) -> S
         gravity: None,
         buoyancy: false,
         scg_at_original: false,
+        extra_forces: Default::default(),
         walls,
         contacts,
         record_every: None,

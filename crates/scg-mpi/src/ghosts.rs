@@ -89,8 +89,13 @@ pub fn largest_radius(scene: &scg_scene::Scene) -> f64 {
         .groups
         .iter()
         .map(|g| {
-            0.5 * scg_core::physics::scaling::coarse_grain(g.law, g.alpha, g.diameter, g.density)
-                .diameter
+            0.5 * scg_core::physics::scaling::coarse_grain(
+                g.law,
+                g.alpha,
+                g.max_diameter(),
+                g.density,
+            )
+            .diameter
         })
         .fold(0.0, f64::max)
 }

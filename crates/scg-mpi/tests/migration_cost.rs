@@ -22,6 +22,7 @@ fn sim() -> Simulation {
         gravity: Some(DVec3::new(0.0, 0.0, -9.81)),
         buoyancy: false,
         scg_at_original: false,
+        extra_forces: Default::default(),
         walls: None,
         contacts: None,
         record_every: None,

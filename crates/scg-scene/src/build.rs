@@ -14,7 +14,7 @@ use scg_core::frame::{GroupMeta, Outline, PatchSurface, RunMeta};
 use scg_core::physics::contact::{Material, NormalLaw};
 use scg_core::physics::wall_shape::WallShape;
 use scg_core::sim::InletOutlet;
-use scg_core::stages::feeder::{FeederSpec, Spin};
+use scg_core::stages::feeder::{FeederSpec, SizeFeed, Spin};
 use scg_core::stages::mesh_flow::MeshFlowSpec;
 use scg_core::stages::outlet::OutletSpec;
 use scg_core::stages::walls::WallSet;
@@ -80,6 +80,11 @@ impl Scene {
             start: f.window.0,
             stop: f.window.1,
             every: self.interval_steps(f.interval),
+            size: g.size.as_ref().map(|s| SizeFeed {
+                distribution: s.distribution.clone(),
+                edges: s.edges.clone(),
+                first_group: f.group as u32,
+            }),
         }
     }
 
@@ -127,6 +132,7 @@ impl Scene {
             gravity: self.gravity,
             buoyancy: self.buoyancy,
             scg_at_original: self.scg_at_original,
+            extra_forces: self.extra_forces,
             walls: (self.contact_walls().next().is_some()).then(|| WallSet {
                 walls: self.contact_walls().cloned().collect(),
                 law: self.normal_law.unwrap_or(NormalLaw::hertz(1.0)),

@@ -267,11 +267,26 @@ fn contact_time(scene: &Scene, d: f64, rho: f64, v: f64) -> Option<f64> {
     }
 }
 
+/// A group's report; a size bin's at its smallest size (the fastest response to the air
+/// and the shortest contact, which bound the time step).
 fn group_report(scene: &Scene, g: &crate::Group) -> GroupReport {
-    let s = coarse_grain(g.law, g.alpha, g.diameter, g.density);
+    let s = coarse_grain(g.law, g.alpha, g.min_diameter(), g.density);
     let (tau, slip, re, ratio) = match (scene.fluid, scene.drag) {
         (Some(f), Some(_)) => {
-            let tau = stokes_response_time(s.mass(), f.viscosity, s.drag_diameter, s.force_scale);
+            // with Cunningham slip, C_c at the diameter the spawn takes it at
+            let at = if scene.scg_at_original
+                && g.law == scg_core::physics::scaling::CoarseGrainLaw::Scg
+            {
+                g.min_diameter()
+            } else {
+                s.drag_diameter
+            };
+            let cc = scene
+                .extra_forces
+                .cunningham
+                .map_or(1.0, |l| scg_core::physics::drag::cunningham_davies(at, l));
+            let tau =
+                stokes_response_time(s.mass(), f.viscosity, s.drag_diameter, s.force_scale) * cc;
             let law = scene.drag.unwrap_or_default();
             let mut slip: f64 = 0.0;
             for (x, v) in group_velocities(scene, g) {
@@ -330,7 +345,7 @@ pub fn particle_contact_time(scene: &Scene) -> Option<f64> {
         .groups
         .iter()
         .map(|g| {
-            let s = coarse_grain(g.law, g.alpha, g.diameter, g.density);
+            let s = coarse_grain(g.law, g.alpha, g.min_diameter(), g.density);
             let r = group_report(scene, g);
             let vs = group_velocities(scene, g)
                 .into_iter()

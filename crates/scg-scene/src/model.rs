@@ -8,8 +8,10 @@ use glam::DVec3;
 use scg_core::physics::contact::{Material, NormalLaw};
 use scg_core::physics::drag::DragLaw;
 use scg_core::physics::flow::{FlowField, Fluid};
+use scg_core::physics::forces::ExtraForces;
 use scg_core::physics::integrate::Integrator;
 use scg_core::physics::scaling::CoarseGrainLaw;
+use scg_core::physics::size_distribution::{Basis, SizeDistribution};
 pub use scg_core::region::Region;
 use scg_core::stages::contacts::ContactConfig;
 pub use scg_core::stages::feeder::FeedSource;
@@ -37,7 +39,8 @@ pub enum Placement {
     },
 }
 
-/// A particle group (one size class, one coarse-graining law).
+/// A particle group (one size class or one bin of a size distribution, one coarse-graining
+/// law).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Group {
     /// Name.
@@ -54,9 +57,49 @@ pub struct Group {
     pub color: [u8; 3],
     /// Initial placement.
     pub placement: Placement,
+    /// A report bin of a size distribution (`groups[i].size`): the group's particles are
+    /// the distribution's sizes in the bin, `diameter` their mean-volume size.
+    pub size: Option<SizeBin>,
+}
+
+/// One report bin of a size distribution. A `[[groups]]` entry with `size` becomes one
+/// group per bin (named `<name>-<k>`, k from 1 at the finest), fed by the entry's feeders.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SizeBin {
+    /// The `[[groups]]` entry's name.
+    pub parent: String,
+    /// The distribution of original sizes.
+    pub distribution: std::sync::Arc<SizeDistribution>,
+    /// The bins' edges, m (every bin of the distribution).
+    pub edges: Vec<f64>,
+    /// This bin's index (0 = finest).
+    pub index: usize,
+}
+
+impl SizeBin {
+    /// This bin's smallest and largest size, m.
+    pub fn range(&self) -> (f64, f64) {
+        (self.edges[self.index], self.edges[self.index + 1])
+    }
+
+    /// The original mass share of this bin in the distribution.
+    pub fn mass_share(&self) -> f64 {
+        let (lo, hi) = self.range();
+        self.distribution.share(lo, hi, Basis::Mass)
+    }
 }
 
 impl Group {
+    /// Largest original diameter of the group's particles, m (a size bin's upper edge).
+    pub fn max_diameter(&self) -> f64 {
+        self.size.as_ref().map_or(self.diameter, |s| s.range().1)
+    }
+
+    /// Smallest original diameter of the group's particles, m.
+    pub fn min_diameter(&self) -> f64 {
+        self.size.as_ref().map_or(self.diameter, |s| s.range().0)
+    }
+
     /// Number of particles at the start.
     pub fn count(&self) -> usize {
         match &self.placement {
@@ -116,6 +159,8 @@ pub struct Scene {
     /// (`[coarse_grain] forces_at = "original"`, the default; `"coarse"`: as the
     /// simulated sphere's).
     pub scg_at_original: bool,
+    /// `[forces]`: forces besides drag and gravity, each for the original particle.
+    pub extra_forces: ExtraForces,
     /// Contact material (required with walls).
     pub material: Option<Material>,
     /// Normal contact law derived from the material.

@@ -6,6 +6,7 @@ mod dispersion;
 mod particles;
 mod patches;
 mod physics;
+mod size;
 
 use std::path::Path;
 
@@ -263,22 +264,28 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
     let mut groups = Vec::new();
     let fed: Vec<&str> = raw.feeders.iter().map(|f| f.group.as_str()).collect();
     for (i, g) in raw.groups.iter().enumerate() {
-        let mut grp = group(g, i, cx, fed.contains(&g.name.as_str()))?;
-        if let Some(c) = &raw.coarse_grain {
-            if let Some(a) = c.alpha {
-                grp.alpha = cx.positive("coarse_grain.alpha", a)?;
+        let is_fed = fed.contains(&g.name.as_str());
+        let made = match &g.size {
+            None => vec![group(g, i, cx, is_fed)?],
+            Some(s) => size::size_groups(g, s, i, groups.len(), cx, is_fed)?,
+        };
+        for mut grp in made {
+            if let Some(c) = &raw.coarse_grain {
+                if let Some(a) = c.alpha {
+                    grp.alpha = cx.positive("coarse_grain.alpha", a)?;
+                }
+                if let Some(l) = c.law {
+                    grp.law = l.into();
+                }
             }
-            if let Some(l) = c.law {
-                grp.law = l.into();
+            if groups.iter().any(|o: &Group| o.name == grp.name) {
+                return Err(cx.err(
+                    &format!("groups[{i}].name"),
+                    format!("duplicate group name `{}`", grp.name),
+                ));
             }
+            groups.push(grp);
         }
-        if groups.iter().any(|o: &Group| o.name == grp.name) {
-            return Err(cx.err(
-                &format!("groups[{i}].name"),
-                format!("duplicate group name `{}`", grp.name),
-            ));
-        }
-        groups.push(grp);
     }
     let feed_scale = cx.non_negative("feed_scale", raw.feed_scale.unwrap_or(1.0))?;
     let mut feeders = Vec::new();
@@ -320,6 +327,7 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
             .as_ref()
             .and_then(|c| c.forces_at)
             .is_none_or(|f| f == crate::raw::RawForcesAt::Original),
+        extra_forces: physics::forces(&raw, drag, cx)?,
         material,
         normal_law,
         walls,

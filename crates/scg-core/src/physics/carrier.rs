@@ -16,10 +16,11 @@
 //! Stokes and ballistic fast paths of [`crate::stages::motion`] are specialisations of
 //! the exponential arm with the same operations (their bit tests keep them so).
 
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 
 use super::drag::{DragLaw, particle_reynolds};
 use super::flow::{FlowField, Fluid};
+use super::forces::StepForces;
 use super::integrate::{
     Integrator, explicit_euler, explicit_substeps, exponential_drift, exponential_factors,
     linear_kick,
@@ -32,6 +33,10 @@ pub trait Carrier: Sync {
     /// the cell holding `x` (analytic flows return `cell` unchanged; a mesh flow returns
     /// the cell its walk ended in).
     fn at(&self, cell: u32, x: DVec3) -> (DVec3, u32);
+
+    /// The velocity gradient at `x` in `cell` (the cell [`Carrier::at`] returned), column
+    /// k = ∂u/∂x_k, 1/s: read only by the opt-in forces ([`crate::physics::forces`]).
+    fn gradient(&self, cell: u32, x: DVec3) -> DMat3;
 }
 
 impl Carrier for FlowField {
@@ -39,12 +44,20 @@ impl Carrier for FlowField {
     fn at(&self, cell: u32, x: DVec3) -> (DVec3, u32) {
         (self.velocity(x), cell)
     }
+
+    fn gradient(&self, _cell: u32, x: DVec3) -> DMat3 {
+        FlowField::gradient(self, x)
+    }
 }
 
 impl<C: Carrier + ?Sized> Carrier for &C {
     #[inline(always)]
     fn at(&self, cell: u32, x: DVec3) -> (DVec3, u32) {
         (**self).at(cell, x)
+    }
+
+    fn gradient(&self, cell: u32, x: DVec3) -> DMat3 {
+        (**self).gradient(cell, x)
     }
 }
 
@@ -63,6 +76,11 @@ impl<C: Carrier> Carrier for WithOffset<C> {
     fn at(&self, cell: u32, x: DVec3) -> (DVec3, u32) {
         let (u, c) = self.inner.at(cell, x);
         (u + self.du, c)
+    }
+
+    /// The mean carrier's (the offset is uniform over the step).
+    fn gradient(&self, cell: u32, x: DVec3) -> DMat3 {
+        self.inner.gradient(cell, x)
     }
 }
 
@@ -87,6 +105,9 @@ pub struct Scheme {
     pub integrator: Integrator,
     /// Fluid (for the Reynolds number; a placeholder without one).
     pub fluid: Fluid,
+    /// The opt-in forces evaluated each step (pressure gradient, added mass, lift), if
+    /// any: a constant acceleration over the step, from the mid-step point.
+    pub forces: Option<StepForces>,
 }
 
 impl Scheme {
@@ -158,7 +179,11 @@ pub fn advance<C: Carrier>(
                 let (u, hu) = carrier.at(h, xi);
                 h = hu;
                 let tau = effective_tau(law, fc, &s.fluid, (u - vi).length());
-                (xi, vi) = explicit_euler(xi, vi, u, acc, tau, step);
+                let a = match &s.forces {
+                    None => acc,
+                    Some(f) => acc + f.acceleration(fc, u, carrier.gradient(h, xi), vi),
+                };
+                (xi, vi) = explicit_euler(xi, vi, u, a, tau, step);
             }
             (xi, vi, h)
         }
@@ -167,17 +192,27 @@ pub fn advance<C: Carrier>(
                 Some(f) => linear_kick(v0, f, b.m, dt),
                 None => v0,
             };
-            let (u, hm) = carrier.at(cell, x0 + vk * (0.5 * dt));
+            let xm = x0 + vk * (0.5 * dt);
+            let (u, hm) = carrier.at(cell, xm);
+            // the opt-in forces at the mid-step point, with the velocity relaxed halfway
+            // there (the exponential step's own mid-step velocity)
+            let a = match &s.forces {
+                None => b.a,
+                Some(f) => {
+                    let vm = u + (vk - u) * (-0.5 * dt / fc.tau).exp();
+                    b.a + f.acceleration(fc, u, carrier.gradient(hm, xm), vm)
+                }
+            };
             let (x1, v1) = match s.law {
-                None => exponential_drift(x0, vk, u, b.a, f64::INFINITY, 0.0, dt, dt),
+                None => exponential_drift(x0, vk, u, a, f64::INFINITY, 0.0, dt, dt),
                 Some(DragLaw::Stokes) => {
-                    exponential_drift(x0, vk, u, b.a, fc.tau, b.sf.gain, b.sf.relax, dt)
+                    exponential_drift(x0, vk, u, a, fc.tau, b.sf.gain, b.sf.relax, dt)
                 }
                 Some(law) => {
                     let u0 = u_start(cell, x0);
                     let tau = effective_tau(law, fc, &s.fluid, (u0 - vk).length());
                     let (gain, relax) = exponential_factors(tau, dt);
-                    exponential_drift(x0, vk, u, b.a, tau, gain, relax, dt)
+                    exponential_drift(x0, vk, u, a, tau, gain, relax, dt)
                 }
             };
             (x1, v1, hm)
@@ -212,6 +247,7 @@ mod tests {
         let fc = FluidCoupling {
             drag_diameter: 1e-5,
             reynolds_diameter: 1e-5,
+            force_density: 1000.0,
             force_scale: 1.0,
             tau,
         };
@@ -225,6 +261,7 @@ mod tests {
                 density: 1.2,
                 viscosity: 1.8e-5,
             },
+            forces: None,
         };
         let b = body(&fc, &sf);
         let shifted = WithOffset {

@@ -46,6 +46,19 @@ impl DragLaw {
     }
 }
 
+/// Mean free path of air at 20 °C and 101.325 kPa, m (the value that gives Davies'
+/// C_c = 1.166 at 1 µm; the scene states its own).
+pub const AIR_MEAN_FREE_PATH: f64 = 6.6e-8;
+
+/// Cunningham's slip correction with Davies' (1945) constants:
+/// C_c = 1 + Kn·(1.257 + 0.4·exp(−1.1/Kn)), Kn = 2λ/d, for a sphere of diameter `d` in a
+/// gas of mean free path `lambda` (both m). Stokes drag is divided by it.
+#[inline]
+pub fn cunningham_davies(d: f64, lambda: f64) -> f64 {
+    let kn = 2.0 * lambda / d;
+    1.0 + kn * (1.257 + 0.4 * (-1.1 / kn).exp())
+}
+
 /// Stokes drag coefficient C_d = 24/Re (paper eq. 5).
 pub fn stokes_cd(re: f64) -> f64 {
     24.0 / re
@@ -132,5 +145,24 @@ mod tests {
         assert!((schiller_naumann_correction(1e-12) - 1.0).abs() < 1e-8);
         assert!((schiller_naumann_cd(1.0) - 24.0 * 1.15).abs() < 1e-12);
         assert_eq!(DragLaw::Stokes.correction(50.0), 1.0);
+    }
+
+    #[test]
+    fn cunningham_davies_values_and_limits() {
+        // 1 µm in air: 1.166 (Davies; Hinds, Aerosol Technology, Table A.6 gives 1.168 at
+        // λ = 66.5 nm)
+        let c = cunningham_davies(1e-6, AIR_MEAN_FREE_PATH);
+        assert!((c - 1.166).abs() < 5e-4, "{c}");
+        // the formula itself, at Kn = 0.5: 1 + 0.5·(1.257 + 0.4·e^(−2.2))
+        let want = 1.0 + 0.5 * (1.257 + 0.4 * f64::exp(-2.2));
+        assert!(
+            (cunningham_davies(4.0 * AIR_MEAN_FREE_PATH, AIR_MEAN_FREE_PATH) - want).abs() < 1e-15
+        );
+        // continuum: 1 + 2.514·λ/d; free molecular: C_c/Kn → 1.657
+        let big = cunningham_davies(1e-3, 6.6e-8);
+        assert!((big - (1.0 + 2.514 * 6.6e-8 / 1e-3)).abs() < 1e-12);
+        let kn = 1e4;
+        let tiny = cunningham_davies(2.0 * 6.6e-8 / kn, 6.6e-8);
+        assert!((tiny / kn - 1.657).abs() < 1e-3);
     }
 }

@@ -41,6 +41,15 @@ impl Vortex {
         self.velocity_of(x)
     }
 
+    /// The velocity gradient J (column k = ∂u/∂x_k), 1/s: u = J·(x − c), constant.
+    pub fn gradient(&self) -> DMat3 {
+        // u = ω·(a × r − k·r), r = P·(x − c), P = I − a·aᵀ; a × (P y) = a × y.
+        let a = self.axis;
+        let cross = DMat3::from_cols(a.cross(DVec3::X), a.cross(DVec3::Y), a.cross(DVec3::Z));
+        let proj = DMat3::IDENTITY - DMat3::from_cols(a * a.x, a * a.y, a * a.z);
+        self.omega * (cross - self.inflow_ratio * proj)
+    }
+
     /// [`Vortex::radial`] of one point or four lanes ([`Lane3`]): rel − (rel·a)·a.
     #[inline(always)]
     pub fn radial_of<V: Lane3>(&self, x: V) -> V {
@@ -136,18 +145,23 @@ impl FlowField {
                 b: u,
             }),
             FlowField::Vortex(v) => {
-                // u = ω·(a × r − k·r), r = P·(x − c), P = I − a·aᵀ; a × (P y) = a × y.
-                let a = v.axis;
-                let cross =
-                    DMat3::from_cols(a.cross(DVec3::X), a.cross(DVec3::Y), a.cross(DVec3::Z));
-                let proj = DMat3::IDENTITY - DMat3::from_cols(a * a.x, a * a.y, a * a.z);
-                let m = v.omega * (cross - v.inflow_ratio * proj);
+                let m = v.gradient();
                 Some(Affine {
                     m,
                     b: -(m * v.center),
                 })
             }
             FlowField::Classifier { .. } => None,
+        }
+    }
+
+    /// The velocity gradient at `x` (column k = ∂u/∂x_k), 1/s: zero for still and
+    /// uniform flows, the vortex's everywhere else (the classifier's axial speed inside
+    /// its nozzle is constant: its jump at the nozzle radius is not a gradient).
+    pub fn gradient(&self, _x: DVec3) -> DMat3 {
+        match self {
+            FlowField::Still | FlowField::Uniform(_) => DMat3::ZERO,
+            FlowField::Vortex(v) | FlowField::Classifier { vortex: v, .. } => v.gradient(),
         }
     }
 

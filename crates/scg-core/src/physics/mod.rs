@@ -2,8 +2,10 @@
 //! in their docs, unit-tested without a World.
 //!
 //! * [`scaling`] — coarse-graining laws (SCG, none, mass-equivalent, parcel);
+//! * [`size_distribution`] — Rosin–Rammler, log-normal and tabulated size distributions;
 //! * [`drag`] — drag laws (Stokes, Schiller–Naumann) and response times;
 //! * [`flow`] — the prescribed fluid flow fields;
+//! * [`forces`] — opt-in forces besides drag (Cunningham slip), for the original particle;
 //! * [`carrier`] — the carrier-velocity seam (the fluid velocity a particle sees, its
 //!   modifiers) and the one per-particle step of every scheme;
 //! * [`dispersion`] — turbulent dispersion (OpenFOAM's stochastic eddy model, a Langevin
@@ -25,6 +27,7 @@ pub mod contact;
 pub mod dispersion;
 pub mod drag;
 pub mod flow;
+pub mod forces;
 pub mod inlet;
 pub mod integrate;
 pub mod lane;
@@ -34,6 +37,7 @@ pub mod patch_interaction;
 pub mod periodic;
 pub mod random;
 pub mod scaling;
+pub mod size_distribution;
 pub mod trimesh;
 pub mod wall_function;
 pub mod wall_motion;

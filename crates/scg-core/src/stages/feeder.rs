@@ -8,6 +8,10 @@
 //! area-uniform draw against twice the largest u·n at the patch's face centres): the
 //! particles of air that enters at a uniform concentration, as fluid tracers are.
 //!
+//! With a size distribution ([`SizeFeed`]) each particle's original size is drawn from
+//! the feeder's stream before its position, and it joins the group of the report bin
+//! holding that size (the fates and grade curves are then per bin).
+//!
 //! The count is exact: after the step ending at time t a feeder has fed
 //! ⌊rate·(min(t, stop) − start)⌋ particles ([`fed_by`]), so fractional particles carry
 //! over between steps. Positions come from a ChaCha8 stream seeded by the scene seed and
@@ -24,6 +28,7 @@ use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
 use crate::physics::inlet::{PatchSampler, settle};
 use crate::physics::mesh_flow::hint;
 use crate::physics::scaling::{CoarseGrainLaw, coarse_grain};
+use crate::physics::size_distribution::SizeDistribution;
 use crate::region::Region;
 use crate::spawn::{ParticleSpec, SpawnRules, spawn_particle_deferred_in};
 use crate::stages::mesh_flow::MeshFlowState;
@@ -66,6 +71,29 @@ pub struct FeederSpec {
     /// Steps between releases (≥ 1): particles due are released together every `every`
     /// steps, so the particle set (and the neighbour list) changes less often.
     pub every: u64,
+    /// A size distribution instead of the one `diameter`: each particle's original size
+    /// drawn from it, its group the report bin holding the size.
+    pub size: Option<SizeFeed>,
+}
+
+/// A feeder's size distribution and its report bins.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SizeFeed {
+    /// The distribution of original sizes.
+    pub distribution: Arc<SizeDistribution>,
+    /// The bins' edges, m (one more than the bins), spanning the distribution.
+    pub edges: Vec<f64>,
+    /// The group of the first (finest) bin; bin k feeds group `first_group + k`.
+    pub first_group: u32,
+}
+
+impl SizeFeed {
+    /// The group of a particle of original size `d` (m).
+    pub fn group_of(&self, d: f64) -> u32 {
+        let bins = self.edges.len() - 1;
+        let k = self.edges.partition_point(|e| *e <= d).clamp(1, bins) - 1;
+        self.first_group + k as u32
+    }
 }
 
 /// Where a feeder's particles appear.
@@ -258,6 +286,16 @@ pub fn feed_particles(
         }
         let due = fed_by(f.spec.rate, f.spec.start, f.spec.stop, t);
         while f.fed < due {
+            // the size first (the start point sits its radius inward of a patch)
+            let (group, diameter) = match &f.spec.size {
+                None => (f.spec.group, f.spec.diameter),
+                Some(s) => {
+                    let d = s.distribution.sample(&mut f.rng);
+                    f.radius =
+                        0.5 * coarse_grain(f.spec.law, f.spec.alpha, d, f.spec.density).diameter;
+                    (s.group_of(d), d)
+                }
+            };
             let (position, cell, u) = match (&f.spec.source, flow) {
                 (FeedSource::Region(r), _) => (r.sample(&mut f.rng), hint::UNLOCATED, None),
                 (FeedSource::Patch(p), Some(flow)) => {
@@ -293,8 +331,8 @@ pub fn feed_particles(
             };
             let velocity = given + f.spec.spin.map_or(DVec3::ZERO, |s| s.velocity_at(position));
             let spec = ParticleSpec {
-                group: f.spec.group,
-                diameter: f.spec.diameter,
+                group,
+                diameter,
                 density: f.spec.density,
                 alpha: f.spec.alpha,
                 law: f.spec.law,
@@ -304,7 +342,7 @@ pub fn feed_particles(
             let id = next.take();
             spawn_particle_deferred_in(&mut commands, &rules, &spec, id, clock.dt, cell);
             f.fed += 1;
-            if let Some(c) = tally.fed.get_mut(f.spec.group as usize) {
+            if let Some(c) = tally.fed.get_mut(group as usize) {
                 *c += 1;
             }
         }

@@ -180,6 +180,7 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
         law: d.motion.drag,
         integrator: d.motion.integrator,
         fluid: d.fluid.as_deref().copied().unwrap_or(Scheme::NO_FLUID),
+        forces: d.motion.forces,
     };
     let step = MeshStep {
         scheme,
@@ -347,6 +348,7 @@ fn keeps_start(m: &Motion, carrier: Option<&CarrierModifier>) -> bool {
             law: m.drag,
             integrator: m.integrator,
             fluid: Scheme::NO_FLUID,
+            forces: None,
         }
         .reads_start()
 }

@@ -41,7 +41,9 @@ pub fn plugin(b: &mut StepBuilder, motion: &Motion, rotation: bool, mesh: bool) 
         (None, _) => b.add(set, "motion", IntegrateBallistic, integrate_ballistic),
         (Some(DragLaw::Stokes), Integrator::Exponential) => b.add(
             set,
-            "drag:stokes",
+            motion
+                .forces
+                .map_or("drag:stokes", |_| "drag:stokes+forces"),
             IntegrateStokesExponential,
             integrate_stokes_exponential,
         ),
@@ -394,7 +396,7 @@ pub fn integrate_stokes_exponential(
     let health = &*d.health;
     let dt = d.clock.dt;
     let columns = move_columns(&mut q);
-    if columns.as_ref().is_some_and(|c| c.2.2.is_some()) {
+    if columns.as_ref().is_some_and(|c| c.2.2.is_some()) || d.motion.forces.is_some() {
         let scheme = d.scheme();
         return carrier_pass(columns, health, disp, &scheme, &flow);
     }
@@ -481,6 +483,7 @@ impl DragInputs<'_> {
             law: Some(self.motion.drag.unwrap_or_default()),
             integrator: self.motion.integrator,
             fluid: self.fluid.as_deref().copied().unwrap_or(Scheme::NO_FLUID),
+            forces: self.motion.forces,
         }
     }
 }

@@ -376,6 +376,7 @@ mod tests {
             .map(|i| FluidCoupling {
                 drag_diameter: 1e-4,
                 reynolds_diameter: 1e-4,
+                force_density: 1000.0,
                 force_scale: 1.0,
                 tau: if ballistic && i % 7 == 3 {
                     f64::INFINITY

@@ -83,7 +83,8 @@ pub(super) fn mesh_flow_findings(scene: &Scene) -> Vec<Finding> {
             FeedSource::Patch(p) => {
                 // the centres, one simulated radius inward, must be inside the mesh
                 let g = &scene.groups[f.group];
-                let r = 0.5 * coarse_grain(g.law, g.alpha, g.diameter, g.density).diameter;
+                // (a size distribution's largest particles)
+                let r = 0.5 * coarse_grain(g.law, g.alpha, g.max_diameter(), g.density).diameter;
                 let n = (0..FEEDER_SAMPLES)
                     .filter(|_| m.flow.find_cell(p.sample(&mut rng, r).centre).is_none())
                     .count();

@@ -12,7 +12,7 @@ use crate::model::{FeedSource, Feeder, Group, Placement, Region, SceneMeshFlow};
 use crate::raw::{RawFeedVelocity, RawFeeder, RawGroup, RawRegion, RawRegionKind};
 
 /// Default group colours, by group index.
-const PALETTE: [[u8; 3]; 10] = [
+pub(super) const PALETTE: [[u8; 3]; 10] = [
     [31, 119, 180],
     [255, 127, 14],
     [44, 160, 44],
@@ -39,7 +39,7 @@ pub(super) fn group(g: &RawGroup, i: usize, cx: &Ctx, fed: bool) -> Result<Group
             "must be non-empty and use only letters, digits, `_` and `-`",
         ));
     }
-    let diameter = cx.positive(&k("diameter"), g.diameter)?;
+    let diameter = cx.positive(&k("diameter"), cx.need(&k("diameter"), &g.diameter)?)?;
     let density = cx.positive(&k("density"), g.density)?;
     let alpha = cx.positive(&k("alpha"), g.alpha.unwrap_or(1.0))?;
     let law = g.law.map_or(CoarseGrainLaw::Scg, CoarseGrainLaw::from);
@@ -127,6 +127,7 @@ pub(super) fn group(g: &RawGroup, i: usize, cx: &Ctx, fed: bool) -> Result<Group
         law,
         color,
         placement,
+        size: None,
     })
 }
 
@@ -176,14 +177,25 @@ pub(super) fn feeder(
     cx: &Ctx,
 ) -> Result<Feeder, SceneError> {
     let k = |s: &str| format!("feeders[{i}].{s}");
+    // a size distribution's feeder names the `[[groups]]` entry and feeds its first bin's
+    // group and the next ones
     let group = groups
         .iter()
-        .position(|g| g.name == f.group)
+        .position(|g| {
+            g.size
+                .as_ref()
+                .map_or(g.name == f.group, |s| s.parent == f.group && s.index == 0)
+        })
         .ok_or_else(|| cx.err(&k("group"), format!("no group named `{}`", f.group)))?;
     let g = &groups[group];
     // Each simulated particle stands for α³ originals (under every law, `sample` too): the
-    // original powder's volume (and mass) it carries is α³ originals' volume.
-    let volume = scg_core::physics::scaling::represented_volume(g.alpha, g.diameter);
+    // original powder's volume (and mass) it carries is α³ originals' volume (their mean
+    // volume for a size distribution).
+    let d3 = g
+        .size
+        .as_ref()
+        .map_or(g.diameter.powi(3), |s| s.distribution.mean_d3());
+    let volume = scg_core::physics::scaling::represented_volume(g.alpha, d3.cbrt());
     let rate = match (f.rate, f.volume_rate, f.mass_rate) {
         (Some(r), None, None) => cx.non_negative(&k("rate"), r)?,
         (None, Some(v), None) => cx.non_negative(&k("volume_rate"), v)? / volume,

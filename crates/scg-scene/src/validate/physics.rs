@@ -20,6 +20,7 @@ use crate::raw::{
 };
 use crate::raw::{RawInterpolation, RawTime};
 use crate::raw::{RawWallFunction, RawWallFunctionModel};
+use scg_core::physics::drag::DragLaw;
 use scg_core::physics::flow::Fluid;
 use scg_core::physics::mesh_flow::{MeshFlow, PatchRole, WallFunctionSpec};
 use scg_core::physics::wall_function::{FrictionVelocity, LogLaw};
@@ -60,7 +61,8 @@ fn max_simulated_diameter(groups: &[Group]) -> f64 {
     groups
         .iter()
         .map(|g| {
-            scg_core::physics::scaling::coarse_grain(g.law, g.alpha, g.diameter, g.density).diameter
+            scg_core::physics::scaling::coarse_grain(g.law, g.alpha, g.max_diameter(), g.density)
+                .diameter
         })
         .fold(0.0, f64::max)
 }
@@ -479,4 +481,44 @@ pub(super) fn outlet(o: &RawOutlet, cx: &Ctx) -> Result<Outlet, SceneError> {
         },
         interval,
     })
+}
+
+/// `[forces]`: each force is opt-in; every one acts through the fluid, so it needs
+/// `[drag]` (with `[fluid]`).
+pub(super) fn forces(
+    raw: &crate::raw::RawScene,
+    drag: Option<DragLaw>,
+    cx: &Ctx,
+) -> Result<scg_core::physics::forces::ExtraForces, SceneError> {
+    let mut out = scg_core::physics::forces::ExtraForces::default();
+    let Some(f) = &raw.forces else {
+        return Ok(out);
+    };
+    if let Some(c) = &f.cunningham {
+        if drag.is_none() {
+            return Err(cx.err(
+                "forces.cunningham",
+                "corrects the drag: the scene needs [fluid] and [drag]",
+            ));
+        }
+        out.cunningham = Some(cx.positive("forces.cunningham.mean_free_path", c.mean_free_path)?);
+    }
+    for (key, on) in [
+        ("forces.added_mass", f.added_mass.is_some()),
+        ("forces.pressure_gradient", f.pressure_gradient),
+        ("forces.saffman_mei", f.saffman_mei),
+    ] {
+        if on && drag.is_none() {
+            return Err(cx.err(
+                key,
+                "acts through the fluid: the scene needs [fluid] and [drag]",
+            ));
+        }
+    }
+    if let Some(c) = f.added_mass {
+        out.added_mass = Some(cx.positive("forces.added_mass", c)?);
+    }
+    out.pressure_gradient = f.pressure_gradient;
+    out.saffman_mei = f.saffman_mei;
+    Ok(out)
 }
