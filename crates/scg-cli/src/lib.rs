@@ -5,6 +5,7 @@ mod bench;
 mod chart;
 pub mod cost;
 pub mod distribution;
+pub mod erosion;
 pub mod fates;
 pub mod points;
 pub mod replay;

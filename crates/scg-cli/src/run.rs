@@ -60,6 +60,10 @@ pub struct RunArgs {
     /// airborne; counts, shares and the original powder's mass) as CSV to FILE.
     #[arg(long, value_name = "FILE")]
     pub fates_csv: Option<PathBuf>,
+    /// With `[erosion]`: write every face hit (patch, face, centre, area, impacts, mass,
+    /// volume removed, depth rate) as CSV to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub erosion_csv: Option<PathBuf>,
 }
 
 impl Default for RunArgs {
@@ -78,6 +82,7 @@ impl Default for RunArgs {
             restart: None,
             summary_json: None,
             fates_csv: None,
+            erosion_csv: None,
         }
     }
 }
@@ -334,6 +339,16 @@ pub fn run(args: RunArgs) -> i32 {
     eprint!("{}", crate::fates::render(&fates));
     let by_mass = crate::distribution::by_mass(&scene, &fates);
     eprint!("{}", crate::distribution::render(&by_mass));
+    if let Some(rows) = crate::erosion::rows(&scene, &sim) {
+        eprint!("{}", crate::erosion::render(&scene, &sim, &rows));
+        if let Some(path) = &args.erosion_csv {
+            if let Err(e) = std::fs::write(path, crate::erosion::csv(&rows)) {
+                eprintln!("error: cannot write {}: {e}", path.display());
+                return 1;
+            }
+            eprintln!("wrote {}", path.display());
+        }
+    }
     if let Some(path) = &args.fates_csv {
         if let Err(e) = std::fs::write(path, crate::fates::csv(&fates)) {
             eprintln!("error: cannot write {}: {e}", path.display());

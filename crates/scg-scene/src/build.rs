@@ -128,6 +128,7 @@ impl Scene {
                 flow: m.flow.clone(),
                 interactions: self.patch_models.iter().map(|p| p.interaction).collect(),
                 sort_every: m.sort_every,
+                erosion: self.erosion.clone(),
             }),
             gravity: self.gravity,
             buoyancy: self.buoyancy,

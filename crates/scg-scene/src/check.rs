@@ -273,20 +273,8 @@ fn group_report(scene: &Scene, g: &crate::Group) -> GroupReport {
     let s = coarse_grain(g.law, g.alpha, g.min_diameter(), g.density);
     let (tau, slip, re, ratio) = match (scene.fluid, scene.drag) {
         (Some(f), Some(_)) => {
-            // with Cunningham slip, C_c at the diameter the spawn takes it at
-            let at = if scene.scg_at_original
-                && g.law == scg_core::physics::scaling::CoarseGrainLaw::Scg
-            {
-                g.min_diameter()
-            } else {
-                s.drag_diameter
-            };
-            let cc = scene
-                .extra_forces
-                .cunningham
-                .map_or(1.0, |l| scg_core::physics::drag::cunningham_davies(at, l));
-            let tau =
-                stokes_response_time(s.mass(), f.viscosity, s.drag_diameter, s.force_scale) * cc;
+            let tau = stokes_response_time(s.mass(), f.viscosity, s.drag_diameter, s.force_scale)
+                * slip::tau_factor(scene, g, &s);
             let law = scene.drag.unwrap_or_default();
             let mut slip: f64 = 0.0;
             for (x, v) in group_velocities(scene, g) {

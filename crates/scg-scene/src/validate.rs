@@ -304,6 +304,10 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
         None => None,
         Some(o) => Some(outlet(o, cx)?),
     };
+    let erosion = match &raw.erosion {
+        None => None,
+        Some(e) => Some(patches::erosion(e, mesh_flow.as_ref(), &patch_models, cx)?),
+    };
     let mut scene = Scene {
         name: raw.name.clone().unwrap_or_else(|| stem.to_string()),
         file: cx.file.to_string(),
@@ -328,6 +332,7 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
             .and_then(|c| c.forces_at)
             .is_none_or(|f| f == crate::raw::RawForcesAt::Original),
         extra_forces: physics::forces(&raw, drag, cx)?,
+        erosion,
         material,
         normal_law,
         walls,

@@ -184,6 +184,7 @@ impl Simulation {
             contacts: None,
             collected: None,
             collect_inside: Vec::new(),
+            erosion: None,
         };
         if let Some(reg) = w.get_resource::<Persistence>() {
             for p in reg.iter() {

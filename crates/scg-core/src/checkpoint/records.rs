@@ -124,6 +124,9 @@ pub struct Checkpoint {
     /// Particles inside a collecting zone that waits (`collects_after`): (id, zone, step
     /// they entered), in id order.
     pub collect_inside: Vec<(u32, u32, u64)>,
+    /// Erosion log: (face, impacts, represented mass kg, volume m³) per face hit, in
+    /// face order.
+    pub erosion: Option<Vec<(u32, u64, f64, f64)>>,
 }
 
 /// A stage's part of a checkpoint: the stage that holds the state saves and restores it.
@@ -155,6 +158,8 @@ pub enum Part {
     Contacts,
     /// The collecting zones' log.
     Collect,
+    /// The erosion log.
+    Erosion,
 }
 
 impl Part {
@@ -169,6 +174,7 @@ impl Part {
             Part::ImpulseWalls => "the scene and the checkpoint differ in the impulse walls".into(),
             Part::Contacts => "the scene and the checkpoint differ in particle contacts".into(),
             Part::Collect => "the scene and the checkpoint differ in the collecting zones".into(),
+            Part::Erosion => "the scene and the checkpoint differ in [erosion]".into(),
         }
     }
 }
@@ -183,6 +189,7 @@ impl Checkpoint {
             (Part::ImpulseWalls, self.impulse_walls.is_some()),
             (Part::Contacts, self.contacts.is_some()),
             (Part::Collect, self.collected.is_some()),
+            (Part::Erosion, self.erosion.is_some()),
         ]
         .into_iter()
         .filter_map(|(p, held)| held.then_some(p))

@@ -173,65 +173,6 @@ impl MeshFlow {
         })
     }
 
-    /// The velocity gradient of cell `c` (column k = ∂u/∂x_k, 1/s) by Gauss' theorem,
-    /// (1/V)·Σ u ⊗ A over the cell's surface. With a cell-point scheme each face is cut
-    /// into the triangles (edge, face centre) of the interpolation's decomposition, each
-    /// taking the mean of its three node values: exact for an affine field on any
-    /// polyhedral cell. With `cell_value` each face takes one value, the two cells'
-    /// weighted by their centres' distances (the boundary's own value on boundary faces).
-    /// Computed for every cell at the first call. Zero outside the mesh's cells.
-    pub fn cell_gradient(&self, c: u32) -> glam::DMat3 {
-        let g = self.gradients.get_or_init(|| self.gauss_gradients());
-        g.get(c as usize).copied().unwrap_or(glam::DMat3::ZERO)
-    }
-
-    fn gauss_gradients(&self) -> Vec<glam::DMat3> {
-        let m = self.mesh();
-        let g = self.geometry();
-        let u = self.interp.cell_values();
-        let nodes = self.interp.node_values();
-        let np = m.points.len();
-        let ni = m.n_internal_faces();
-        let mut grad = vec![glam::DMat3::ZERO; m.n_cells];
-        for f in 0..m.n_faces() {
-            let o = m.owner[f] as usize;
-            let (a, xf) = (g.face_areas[f], g.face_centres[f]);
-            let outer = if nodes.len() > np + f {
-                // the triangles (p_k, p_k+1, centre), each with its nodes' mean value
-                let (uc, face) = (nodes[np + f], m.face(f));
-                let mut sum = glam::DMat3::ZERO;
-                for k in 0..face.len() {
-                    let (p, q) = (face[k] as usize, face[(k + 1) % face.len()] as usize);
-                    let at = 0.5 * (m.points[p] - xf).cross(m.points[q] - xf);
-                    let ut = (nodes[p] + nodes[q] + uc) / 3.0;
-                    sum += glam::DMat3::from_cols(ut * at.x, ut * at.y, ut * at.z);
-                }
-                sum
-            } else if f < ni {
-                let n = m.neighbour[f] as usize;
-                let (dof, dnf) = (
-                    (xf - g.cell_centres[o]).length(),
-                    (g.cell_centres[n] - xf).length(),
-                );
-                let w = dnf / (dof + dnf);
-                let uf = u[o] * w + u[n] * (1.0 - w);
-                // u_f ⊗ A_f: column k is u_f·A_k
-                glam::DMat3::from_cols(uf * a.x, uf * a.y, uf * a.z)
-            } else {
-                let uf = self.interp.velocity(o as u32, xf);
-                glam::DMat3::from_cols(uf * a.x, uf * a.y, uf * a.z)
-            };
-            grad[o] += outer;
-            if f < ni {
-                grad[m.neighbour[f] as usize] -= outer;
-            }
-        }
-        for (c, gc) in grad.iter_mut().enumerate() {
-            *gc *= 1.0 / g.cell_volumes[c];
-        }
-        grad
-    }
-
     /// How far the cell field is from conserving volume: Σ over cells of |Σ_f u_f·A_f|
     /// (m³/s), with u_f linear between the two cells' values on an internal face
     /// (weighted by the distances of their centres to the face) and the interpolated
@@ -481,6 +422,19 @@ pub struct Landing {
     /// Next hint: the cell, or a departure marker ([`hint::escaped`], [`hint::stuck`],
     /// [`hint::LOST`]).
     pub hint: u32,
+    /// The step's first impact on a wall patch that rebounds or sticks (erosion logs it).
+    pub impact: Option<WallImpact>,
+}
+
+/// A particle meeting a wall patch face.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WallImpact {
+    /// The boundary face (the mesh's face index).
+    pub face: u32,
+    /// The face's unit normal, into the fluid.
+    pub normal: DVec3,
+    /// The particle's velocity as it met the face, m/s.
+    pub velocity: DVec3,
 }
 
 /// Most wall reflections tried in one step before the particle is put back at its start.
@@ -515,6 +469,7 @@ pub fn land(
             v: v1,
             u: Some(flow.near_wall(cell, x1, value)),
             hint: cell,
+            impact: None,
         };
     }
     land_boundary(flow, (x0, h0), h_from, walked, x1, v1, models)
@@ -533,6 +488,7 @@ fn land_boundary(
     models: &[PatchInteraction],
 ) -> Landing {
     let mut from = h_from;
+    let mut impact = None;
     for k in 0..MAX_REFLECTIONS {
         // The table's walk met a boundary face (a particle at a wall), or could not tell.
         // Whether the point beyond that face is inside the mesh elsewhere
@@ -548,6 +504,7 @@ fn land_boundary(
                     v: v1,
                     u: Some(flow.near_wall(cell, x1, value)),
                     hint: cell,
+                    impact,
                 };
             }
             TableWalk::Boundary { cell, face } => {
@@ -561,6 +518,7 @@ fn land_boundary(
                         v: v1,
                         u: None,
                         hint: h.cell,
+                        impact,
                     };
                 }
                 Location::Crossed { face, patch, hit } => {
@@ -577,6 +535,7 @@ fn land_boundary(
                         v: v1,
                         u: None,
                         hint: hint::LOST,
+                        impact,
                     };
                 }
             },
@@ -588,10 +547,22 @@ fn land_boundary(
         let marker = match model {
             PatchInteraction::Rebound { e, mu } => {
                 let (n, p) = flow.face_plane(face);
+                impact = impact.or(Some(WallImpact {
+                    face,
+                    normal: -n,
+                    velocity: v1,
+                }));
                 (x1, v1) = rebound(x1, v1, p, n, e, mu);
                 continue;
             }
-            PatchInteraction::Stick => hint::stuck(patch),
+            PatchInteraction::Stick => {
+                impact = impact.or(Some(WallImpact {
+                    face,
+                    normal: -flow.face_plane(face).0,
+                    velocity: v1,
+                }));
+                hint::stuck(patch)
+            }
             PatchInteraction::Escape => hint::escaped(patch),
         };
         return Landing {
@@ -599,6 +570,7 @@ fn land_boundary(
             v: v1,
             u: None,
             hint: marker,
+            impact,
         };
     }
     Landing {
@@ -606,8 +578,10 @@ fn land_boundary(
         v: v1,
         u: None,
         hint: h0,
+        impact,
     }
 }
 
+mod gradient;
 #[cfg(test)]
 mod tests;

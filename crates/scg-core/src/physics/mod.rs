@@ -4,6 +4,7 @@
 //! * [`scaling`] — coarse-graining laws (SCG, none, mass-equivalent, parcel);
 //! * [`size_distribution`] — Rosin–Rammler, log-normal and tabulated size distributions;
 //! * [`drag`] — drag laws (Stokes, Schiller–Naumann) and response times;
+//! * [`erosion`] — wall wear per impact (Finnie, DNV RP-O501);
 //! * [`flow`] — the prescribed fluid flow fields;
 //! * [`forces`] — opt-in forces besides drag (Cunningham slip), for the original particle;
 //! * [`carrier`] — the carrier-velocity seam (the fluid velocity a particle sees, its
@@ -26,6 +27,7 @@ pub mod carrier;
 pub mod contact;
 pub mod dispersion;
 pub mod drag;
+pub mod erosion;
 pub mod flow;
 pub mod forces;
 pub mod inlet;

@@ -14,13 +14,14 @@
 //! escaped through an outlet patch as drained (`Tally::drained`, `OutletLog::drained`),
 //! through other patches or lost as `OutletLog::lost`, stuck ones in [`PatchLog::stuck`].
 
-use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
 
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 
 use super::carrier::CarrierModifier;
+use super::erosion::{ErosionLog, Impact};
 use super::outlet::{OutletLog, OutletPart, remove_departed};
 use super::table::{bypass, columns_mut};
 use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
@@ -44,6 +45,8 @@ pub struct MeshFlowSpec {
     /// Steps between reorderings of the particle table by mesh cell ([`sort_by_cell`]);
     /// 0: never.
     pub sort_every: u64,
+    /// `[erosion]`: the model and, per patch, whether its impacts are logged.
+    pub erosion: Option<(crate::physics::erosion::ErosionModel, Vec<bool>)>,
 }
 
 /// The mesh flow of a simulation (resource).
@@ -95,6 +98,9 @@ impl Persist for PatchesPart {
 /// Add the mesh-flow integration and boundary systems and their resources.
 pub fn plugin(world: &mut World, b: &mut StepBuilder, spec: MeshFlowSpec, groups: usize) {
     add_integration(b);
+    if let Some((model, patches)) = &spec.erosion {
+        super::erosion::plugin(world, ErosionLog::new(*model, patches.clone()));
+    }
     world.insert_resource(PatchLog::new(spec.flow.mesh().patches.len(), groups));
     Persistence::register(world, PatchesPart);
     Persistence::register(world, OutletPart);
@@ -135,6 +141,7 @@ type MeshMoveQuery<'w, 's> = Query<
         Option<&'static BodyAcceleration>,
         (&'static mut CellHint, &'static mut FlowAtCentre),
         Option<&'static CarrierOffset>,
+        &'static CoarseGrain,
     ),
 >;
 
@@ -148,17 +155,18 @@ pub struct MeshInputs<'w> {
     disp: Option<Res<'w, StepDisplacement>>,
     state: Res<'w, MeshFlowState>,
     carrier: Option<Res<'w, CarrierModifier>>,
+    erosion: Option<ResMut<'w, ErosionLog>>,
 }
 
 /// Move every particle through the mesh flow (see the module documentation): the one
 /// per-particle step of every scheme ([`advance`]) with the mesh flow as the carrier (plus
 /// each particle's [`CarrierOffset`] when the scene has a carrier modifier), then the
 /// landing on the mesh ([`land`]).
-pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
+pub fn integrate_mesh_flow(mut d: MeshInputs, mut q: MeshMoveQuery) {
     let disp = d.disp.as_deref();
     let departures = &d.state.departures;
     departures.store(0, Ordering::Relaxed);
-    let Some((xs, vs, drag, ms, fs, gs, (hs, us), offs)) = columns_mut(&mut q) else {
+    let Some((xs, vs, drag, ms, fs, gs, (hs, us), offs, cgs)) = columns_mut(&mut q) else {
         if let Some(dd) = disp {
             dd.mark_reported();
         }
@@ -172,9 +180,10 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
         fs,
         gs,
         (bypass(hs), bypass(us)),
-        offs,
+        (offs, cgs),
     );
     let flow: &MeshFlow = &d.state.spec.flow;
+    let sink = d.erosion.as_ref().map(|_| Mutex::new(Vec::new()));
     let scheme = Scheme {
         dt: d.clock.dt,
         law: d.motion.drag,
@@ -188,12 +197,13 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
         models: &d.state.spec.interactions,
         n_cells: flow.mesh().n_cells as u32,
         health: &d.health,
+        erosion: d.erosion.as_deref().zip(sink.as_ref()),
     };
     // The schemes that never read the start's fluid velocity run a loop without it
     // (unless the dispersion model reads it).
     let keep_start = keeps_start(&d.motion, d.carrier.as_deref());
     for_each_piece_heavy(columns, |piece| {
-        let (d2max, gone) = match (keep_start, piece.7) {
+        let (d2max, gone) = match (keep_start, piece.7.0) {
             (true, None) => step.advance::<true, _>(piece, |_| flow),
             (false, None) => step.advance::<false, _>(piece, |_| flow),
             (true, Some(offs)) => step.advance::<true, _>(piece, |i| WithOffset {
@@ -215,6 +225,10 @@ pub fn integrate_mesh_flow(d: MeshInputs, mut q: MeshMoveQuery) {
     if let Some(dd) = disp {
         dd.mark_reported();
     }
+    // (`step` borrows the log: its last use is above)
+    if let (Some(log), Some(sink)) = (d.erosion.as_deref_mut(), sink) {
+        log.add(sink.into_inner().unwrap_or_else(|e| e.into_inner()));
+    }
 }
 
 /// A piece of the particle table as the mesh integration reads it.
@@ -226,7 +240,7 @@ type MeshPiece<'a> = (
     Option<&'a [Force]>,
     Option<&'a [BodyAcceleration]>,
     (&'a mut [CellHint], &'a mut [FlowAtCentre]),
-    Option<&'a [CarrierOffset]>,
+    (Option<&'a [CarrierOffset]>, &'a [CoarseGrain]),
 );
 
 /// One step of the mesh integration: what every particle's step reads besides its own
@@ -237,6 +251,8 @@ struct MeshStep<'a> {
     models: &'a [PatchInteraction],
     n_cells: u32,
     health: &'a Health,
+    /// With `[erosion]`: the log (which patches) and where the step's impacts go.
+    erosion: Option<(&'a ErosionLog, &'a Mutex<Vec<Impact>>)>,
 }
 
 impl MeshStep<'_> {
@@ -252,14 +268,16 @@ impl MeshStep<'_> {
         piece: MeshPiece,
         carrier: impl Fn(usize) -> C,
     ) -> (f64, u64) {
-        let (xs, vs, (sfs, fcs), ms, fs, gs, (hs, us), offs) = piece;
+        let (xs, vs, (sfs, fcs), ms, fs, gs, (hs, us), (offs, cgs)) = piece;
         let MeshStep {
             scheme,
             flow,
             models,
             n_cells,
             health,
+            erosion,
         } = *self;
+        let mut impacts = Vec::new();
         let mut d2max = 0.0_f64;
         let mut gone = 0u64;
         for i in 0..xs.len() {
@@ -313,6 +331,11 @@ impl MeshStep<'_> {
                 continue;
             }
             let l = land(flow, x0, h0, h_end, x1, v1, models);
+            if let (Some(w), Some((log, _))) = (&l.impact, erosion)
+                && log.wants(flow.patch_of(w.face))
+            {
+                impacts.push(super::erosion::impact(w, &cgs[i]));
+            }
             if l.hint >= n_cells {
                 gone += 1;
             }
@@ -329,6 +352,13 @@ impl MeshStep<'_> {
                     None => FlowAtCentre::UNKNOWN,
                 };
             }
+        }
+        if let Some((_, sink)) = erosion
+            && !impacts.is_empty()
+        {
+            sink.lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .extend(impacts);
         }
         (d2max, gone)
     }

@@ -5,6 +5,7 @@
 pub mod carrier;
 pub mod collect;
 pub mod contacts;
+pub mod erosion;
 pub mod feeder;
 pub mod guard;
 pub mod impulse_walls;

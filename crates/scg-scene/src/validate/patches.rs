@@ -209,3 +209,103 @@ pub(super) fn wall_model(
         }
     })
 }
+
+/// `[erosion]`: the model and the patches it logs (default: every wall patch that
+/// rebounds or sticks). Needs a mesh flow; a listed patch must be a wall whose particles
+/// rebound or stick (a `contact` patch's impacts are resolved by the contact law over
+/// several steps and are not logged).
+pub(super) fn erosion(
+    e: &crate::raw::RawErosion,
+    mf: Option<&SceneMeshFlow>,
+    models: &[PatchModel],
+    cx: &Ctx,
+) -> Result<(scg_core::physics::erosion::ErosionModel, Vec<bool>), SceneError> {
+    use crate::raw::RawErosionModel;
+    use scg_core::physics::erosion::ErosionModel;
+    let Some(mf) = mf else {
+        return Err(cx.err(
+            "erosion",
+            "erosion is logged on the wall patches of a mesh flow (flow.kind = \"openfoam\" or \"vtk\")",
+        ));
+    };
+    let not = |key: &str, given: bool, model: &str| -> Result<(), SceneError> {
+        if given {
+            Err(cx.err(
+                &format!("erosion.{key}"),
+                format!("does not belong to `{model}`"),
+            ))
+        } else {
+            Ok(())
+        }
+    };
+    let model = match e.model {
+        RawErosionModel::Finnie => {
+            not("n", e.n.is_some(), "finnie")?;
+            not("wall_density", e.wall_density.is_some(), "finnie")?;
+            ErosionModel::Finnie {
+                flow_stress: cx.positive(
+                    "erosion.flow_stress",
+                    cx.need("erosion.flow_stress", &e.flow_stress)?,
+                )?,
+                psi: cx.positive("erosion.psi", e.psi.unwrap_or(2.0))?,
+                k: cx.positive("erosion.k", e.k.unwrap_or(2.0))?,
+            }
+        }
+        RawErosionModel::Dnv => {
+            not("flow_stress", e.flow_stress.is_some(), "dnv")?;
+            not("psi", e.psi.is_some(), "dnv")?;
+            ErosionModel::Dnv {
+                k: cx.positive("erosion.k", e.k.unwrap_or(2.0e-9))?,
+                n: cx.positive("erosion.n", e.n.unwrap_or(2.6))?,
+                wall_density: cx.positive(
+                    "erosion.wall_density",
+                    cx.need("erosion.wall_density", &e.wall_density)?,
+                )?,
+            }
+        }
+    };
+    let mesh = mf.flow.mesh();
+    let roles = mf.flow.roles();
+    let loggable = |p: usize| {
+        roles[p] == PatchRole::Wall
+            && models.get(p).is_some_and(|m| {
+                !m.contact
+                    && matches!(
+                        m.interaction,
+                        PatchInteraction::Rebound { .. } | PatchInteraction::Stick
+                    )
+            })
+    };
+    let patches = match &e.patches {
+        None => (0..mesh.patches.len()).map(loggable).collect(),
+        Some(names) => {
+            let mut on = vec![false; mesh.patches.len()];
+            for name in names {
+                let Some(p) = mesh.patches.iter().position(|p| &p.name == name) else {
+                    return Err(cx.err(
+                        "erosion.patches",
+                        format!("unknown patch `{name}` in {}", mf.source),
+                    ));
+                };
+                if !loggable(p) {
+                    return Err(cx.err(
+                        "erosion.patches",
+                        format!(
+                            "patch `{name}` is not a wall whose particles rebound or stick \
+                             (flow.patches.walls with wall_model rebound or stick)"
+                        ),
+                    ));
+                }
+                on[p] = true;
+            }
+            on
+        }
+    };
+    if !patches.contains(&true) {
+        return Err(cx.err(
+            "erosion",
+            "no wall patch whose particles rebound or stick: nothing to erode",
+        ));
+    }
+    Ok((model, patches))
+}

@@ -1,0 +1,144 @@
+//! Wall erosion (`[erosion]`): every impact of a particle on a wall patch of the mesh
+//! flow that rebounds or sticks, worn into the face it hit by the scene's
+//! [`ErosionModel`], with the original powder's mass the particle stands for (α³
+//! originals under every coarse-graining law).
+//!
+//! The mesh integration hands over the step's impacts ([`WallImpact`] from the landing,
+//! the first of each particle's step); they are summed per face in a canonical order
+//! (face, then the impact's bits), so the log is the same whatever the thread count.
+//! Walls of other kinds (analytic, STL, contact-law mesh walls) are not logged.
+
+use std::collections::BTreeMap;
+
+use bevy_ecs::prelude::*;
+use glam::DVec3;
+
+use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
+use crate::components::CoarseGrain;
+use crate::physics::erosion::ErosionModel;
+use crate::physics::mesh_flow::WallImpact;
+use crate::physics::scaling::sphere_mass;
+
+/// What one face has taken.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FaceWear {
+    /// Impacts (simulated particles).
+    pub impacts: u64,
+    /// Original powder's mass of those impacts, kg.
+    pub mass: f64,
+    /// Wall volume removed, m³.
+    pub volume: f64,
+}
+
+/// The erosion log (resource, with `[erosion]` on a mesh flow).
+#[derive(Resource, Clone, Debug, PartialEq)]
+pub struct ErosionLog {
+    /// The model.
+    pub model: ErosionModel,
+    /// Per patch of the mesh: logged or not.
+    pub patches: Vec<bool>,
+    /// Per face hit.
+    pub faces: BTreeMap<u32, FaceWear>,
+}
+
+/// One impact as the integration reports it: the face, the particle's velocity and the
+/// face's normal (into the fluid), and the original mass it stands for, kg.
+pub type Impact = (u32, DVec3, DVec3, f64);
+
+/// The original powder's mass a particle stands for: α³ originals, kg.
+#[inline]
+pub fn represented_mass(cg: &CoarseGrain) -> f64 {
+    cg.alpha.powi(3) * sphere_mass(cg.original_diameter, cg.original_density)
+}
+
+impl ErosionLog {
+    /// A log of `model` on the patches flagged in `patches`.
+    pub fn new(model: ErosionModel, patches: Vec<bool>) -> Self {
+        ErosionLog {
+            model,
+            patches,
+            faces: BTreeMap::new(),
+        }
+    }
+
+    /// The impact of a landing worth logging: on a logged patch (`patch_of` gives a face's
+    /// patch).
+    pub fn wants(&self, patch: u32) -> bool {
+        self.patches.get(patch as usize).copied().unwrap_or(false)
+    }
+
+    /// Add a step's impacts (in any order: they are sorted first).
+    pub fn add(&mut self, mut impacts: Vec<Impact>) {
+        let key = |i: &Impact| {
+            (
+                i.0,
+                i.1.to_array().map(f64::to_bits),
+                i.2.to_array().map(f64::to_bits),
+                i.3.to_bits(),
+            )
+        };
+        impacts.sort_unstable_by_key(key);
+        for (face, v, n, m) in impacts {
+            let w = self.faces.entry(face).or_default();
+            w.impacts += 1;
+            w.mass += m;
+            w.volume += self.model.volume(m, v, n);
+        }
+    }
+
+    /// Total volume removed, m³.
+    pub fn total_volume(&self) -> f64 {
+        self.faces.values().map(|w| w.volume).sum()
+    }
+}
+
+/// The record of a [`WallImpact`] for the log.
+#[inline]
+pub fn impact(w: &WallImpact, cg: &CoarseGrain) -> Impact {
+    (w.face, w.velocity, w.normal, represented_mass(cg))
+}
+
+struct ErosionPart;
+
+impl Persist for ErosionPart {
+    fn part(&self) -> Option<Part> {
+        Some(Part::Erosion)
+    }
+
+    fn save(&self, world: &World, c: &mut Checkpoint) {
+        let l = world.resource::<ErosionLog>();
+        c.erosion = Some(
+            l.faces
+                .iter()
+                .map(|(f, w)| (*f, w.impacts, w.mass, w.volume))
+                .collect(),
+        );
+    }
+
+    fn restore(&self, world: &mut World, c: &Checkpoint) -> Result<(), String> {
+        let Some(rows) = &c.erosion else {
+            return Err(Part::Erosion.mismatch());
+        };
+        let mut l = world.resource_mut::<ErosionLog>();
+        l.faces = rows
+            .iter()
+            .map(|&(f, impacts, mass, volume)| {
+                (
+                    f,
+                    FaceWear {
+                        impacts,
+                        mass,
+                        volume,
+                    },
+                )
+            })
+            .collect();
+        Ok(())
+    }
+}
+
+/// Add the erosion log (the mesh integration fills it).
+pub fn plugin(world: &mut World, log: ErosionLog) {
+    world.insert_resource(log);
+    Persistence::register(world, ErosionPart);
+}
