@@ -217,8 +217,16 @@ def read_scene(path, duration=None, feed_scale=None, dt=None):
             "patch": f["patch"], "rate": float(f["rate"]) * feed_scale,
             "start": start, "stop": stop, "velocity": [float(x) for x in v],
         })
+    erosion = None
+    if "erosion" in s:
+        e = s["erosion"]
+        if e.get("model") != "finnie":
+            bad(path, "erosion.model", f"{e.get('model')!r}: OpenFOAM's ParticleErosion is Finnie's")
+        ep = list(e.get("patches", [p for p in walls if interaction[p]["model"] in ("rebound", "stick")]))
+        erosion = {"p": float(e["flow_stress"]), "psi": float(e.get("psi", 2.0)),
+                   "K": float(e.get("k", 2.0)), "patches": ep}
     return {
-        "scene": os.path.abspath(path), "name": s.get("name", "scene"),
+        "scene": os.path.abspath(path), "name": s.get("name", "scene"), "erosion": erosion,
         "case": case, "time": time, "field": field, "field_file": field_file,
         "interpolation": interp, "foam_interpolation": foam_interp,
         "walls": walls, "outlets": outlets, "inlets": inlets, "restitution": restitution,
@@ -543,7 +551,23 @@ cloudFunctions
         maxStoredParcels 100000000;
         patches         ({' '.join(patches)});
     }}
-}}
+{erosion_function(sc)}}}
+"""
+
+
+def erosion_function(sc):
+    """OpenFOAM's ParticleErosion (Finnie) as the scene's [erosion] declares it, or nothing."""
+    e = sc.get("erosion")
+    if not e:
+        return ""
+    return f"""    particleErosion1
+    {{
+        type            particleErosion;
+        patches         ({' '.join(e['patches'])});
+        p               {g6(e['p'])};
+        psi             {g6(e['psi'])};
+        K               {g6(e['K'])};
+    }}
 """
 
 

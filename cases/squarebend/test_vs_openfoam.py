@@ -301,5 +301,65 @@ class ScgSummary(unittest.TestCase):
             shutil.rmtree(d)
 
 
+class Erosion(unittest.TestCase):
+    def test_the_scene_adds_particle_erosion_and_dnv_is_refused(self):
+        tmp = tempfile.mkdtemp()
+        try:
+            base = cyc.read_text(SCENE).replace(
+                'case = "squarebend/coarse"', f'case = "{os.path.join(HERE, "coarse")}"').replace(
+                'wall_model = "stick"', 'wall_model = "rebound"')
+            p = os.path.join(tmp, "s.toml")
+            with open(p, "w") as f:
+                f.write(base + '\n[erosion]\nmodel = "finnie"\nflow_stress = 2.0e9\n')
+            plan = cyc.make_cases(cyc.read_scene(p), os.path.join(tmp, "of"))
+            cloud = cyc.read_text(os.path.join(plan["runs"][0]["dir"], "constant", "kinematicCloudProperties"))
+            e = block(cloud, "particleErosion1")
+            self.assertEqual(entry(e, "type"), "particleErosion")
+            self.assertEqual(entry(e, "patches"), "(walls)")
+            self.assertEqual(float(entry(e, "p")), 2.0e9)
+            self.assertEqual((float(entry(e, "psi")), float(entry(e, "K"))), (2.0, 2.0))
+            with open(p, "w") as f:
+                f.write(base + '\n[erosion]\nmodel = "dnv"\nwall_density = 7800.0\n')
+            with self.assertRaises(cyc.SceneError) as c:
+                cyc.read_scene(p)
+            self.assertIn("erosion.model", str(c.exception))
+        finally:
+            shutil.rmtree(tmp)
+
+    def test_side_by_side_sums_regions_and_finds_the_deepest(self):
+        d = tempfile.mkdtemp()
+        try:
+            # two wall faces: OpenFOAM wears the first 3e-15 and the second 1e-15; scg the
+            # other way round, in regions of 10 mm (faces 30 mm apart)
+            def field(kind, values):
+                body = " ".join(values)
+                return (f"boundaryField\n{{\n    walls\n    {{\n        type calculated;\n"
+                        f"        value nonuniform List<{kind}> \n2\n({body})\n;\n    }}\n}}\n")
+            os.makedirs(os.path.join(d, "t"))
+            with open(os.path.join(d, "t", "kinematicCloudQ"), "w") as f:
+                f.write(field("scalar", ["3e-15", "1e-15"]))
+            with open(os.path.join(d, "C"), "w") as f:
+                f.write(field("vector", ["(0.005 0.005 0.005)", "(0.035 0.005 0.005)"]))
+            with open(os.path.join(d, "s.csv"), "w") as f:
+                f.write("patch,face,x,y,z,area_m2,impacts,mass_kg,volume_m3,depth_rate_m_per_s\n"
+                        "walls,7,0.005,0.005,0.005,1e-4,1,1e-9,1e-15,1e-12\n"
+                        "walls,9,0.035,0.005,0.005,1e-4,3,3e-9,3e-15,3e-12\n")
+            with contextlib.redirect_stdout(io.StringIO()) as o:
+                sb.erosion(os.path.join(d, "t"), os.path.join(d, "C"), ["walls"],
+                           os.path.join(d, "s.csv"), 0.01, os.path.join(d, "e.json"))
+            out = o.getvalue()
+            self.assertIn("ratio 1.000", out)
+            self.assertIn("region != scg's", out)
+            self.assertIn("30.0 mm apart", out)
+            with open(os.path.join(d, "e.json")) as f:
+                j = json.load(f)
+            self.assertFalse(j["same_region"])
+            self.assertAlmostEqual(j["openfoam_total"], 4e-15)
+            shares = sorted((round(r[1], 12), round(r[2], 12)) for r in j["regions"])
+            self.assertEqual(shares, [(0.25, 0.75), (0.75, 0.25)])
+        finally:
+            shutil.rmtree(d)
+
+
 if __name__ == "__main__":
     unittest.main()

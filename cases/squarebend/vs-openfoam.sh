@@ -21,6 +21,9 @@
 #   --no-scg      OpenFOAM only (its table; no scg run)
 #   --scg-set KEY=VALUE  passed to scg as --set (repeatable); keys that change the physics
 #                 break the like-for-like
+#   With [erosion] (model "finnie") in the scene: OpenFOAM's ParticleErosion on the same
+#   patches, and the wear of both codes side by side in regions of REGION m (default
+#   0.025): totals, the regions' shares, where each puts the most (erosion.txt, .json)
 #   NICE="nice -n 5" prefixes both codes' runs alike (for a shared machine)
 #
 # Steps: installs OpenFOAM with apt when missing; writes the OpenFOAM case from the scene
@@ -116,7 +119,11 @@ fi
 
 # --- scg ------------------------------------------------------------------------------------
 echo "== scg"
-if ! $NICE "$SCG" run "$scene" --no-record "${set_args[@]}" "${scg_set[@]}" \
+# with [erosion] (Finnie): scg's wear per face, beside OpenFOAM's ParticleErosion below
+erosion=$(python3 -c 'import sys, tomllib; print(1 if "erosion" in tomllib.load(open(sys.argv[1], "rb")) else 0)' "$scene")
+erosion_args=()
+[ "$erosion" = 1 ] && erosion_args=(--erosion-csv "$out/scg-erosion.csv")
+if ! $NICE "$SCG" run "$scene" --no-record "${set_args[@]}" "${scg_set[@]}" "${erosion_args[@]}" \
         --summary-json "$out/scg.json" > "$out/scg.log" 2>&1; then
     tail -20 "$out/scg.log" >&2
     echo "vs-openfoam.sh: scg run failed ($out/scg.log)" >&2
@@ -128,3 +135,17 @@ echo
 echo "== fates per class; load now $(cut -d' ' -f1-3 /proc/loadavg)"
 "${py[@]}" table "$out/grade.json" "$out/scg.json" --plan "$out/openfoam/plan.json" --json "$out/fates.json" \
     | tee "$out/table.txt"
+
+if [ "$erosion" = 1 ]; then
+    echo
+    echo "== erosion (OpenFOAM's ParticleErosion, scg's [erosion] finnie)"
+    for d in "${runs[@]}"; do
+        [ -d "$d/0/C" ] || [ -f "$d/0/C" ] || (cd "$d" && postProcess -func writeCellCentres -time 0 > log.centres 2>&1)
+        last=$(ls -d "$d"/[0-9]* | sort -t/ -k1 -g | tail -1)
+        for t in "$d"/[0-9]*; do
+            [ -f "$t/kinematicCloudQ" ] && last=$t
+        done
+        "${py[@]}" erosion "$last" "$d/0/C" "$out/scg-erosion.csv" --region "${REGION:-0.025}" \
+            --json "$out/erosion.json" | tee "$out/erosion.txt"
+    done
+fi

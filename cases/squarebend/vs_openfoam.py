@@ -25,6 +25,7 @@ and prints the keys the summary has.
 import json
 import math
 import os
+import re
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -246,6 +247,86 @@ def table(grade_path, scg_path, walls, outlets, inlets, dest=None):
     return rows, (None if unknown and all_ok else all_ok)
 
 
+def _foam_list(path, patch, kind):
+    """The values of `patch` in an ASCII OpenFOAM field file: scalars (kind "scalar") or
+    vectors, in the patch's face order (a uniform value gives an empty list)."""
+    text = cyc.read_text(path)
+    m = re.search(r"\n\s*" + re.escape(patch) + r"\s*\{(.*?)\n\s*\}", text, re.S)
+    if not m:
+        sys.exit(f"{path}: no patch {patch}")
+    body = m.group(1)
+    v = re.search(r"nonuniform\s+List<\w+>\s*(\d+)\s*\((.*)\)\s*;", body, re.S)
+    if not v:
+        return []
+    n, data = int(v.group(1)), v.group(2)
+    if kind == "scalar":
+        out = [float(x) for x in data.split()]
+    else:
+        out = [tuple(float(x) for x in t.split()) for t in re.findall(r"\(([^()]*)\)", data)]
+    if len(out) != n:
+        sys.exit(f"{path}: {patch} lists {len(out)} values for {n}")
+    return out
+
+
+def erosion(of_time_dir, centres_file, patches, scg_csv, region, dest=None):
+    """Side by side of the eroded volume: OpenFOAM's ParticleErosion field (Q on the
+    patches at the end) against scg's --erosion-csv, both summed into cubic regions of
+    `region` m; the regions' shares of the total, the deepest face of each code and
+    whether both put the most wear in the same region."""
+    import csv
+    import math
+    cells = {}
+    of_total, of_max = 0.0, (0.0, None)
+    for p in patches:
+        q = _foam_list(os.path.join(of_time_dir, "kinematicCloudQ"), p, "scalar")
+        c = _foam_list(centres_file, p, "vector")
+        for qi, ci in zip(q, c):
+            if qi <= 0:
+                continue
+            key = tuple(math.floor(x / region) for x in ci)
+            cells.setdefault(key, [0.0, 0.0])[0] += qi
+            of_total += qi
+            if qi > of_max[0]:
+                of_max = (qi, ci)
+    scg_total, scg_max = 0.0, (0.0, None)
+    with open(scg_csv) as f:
+        for r in csv.DictReader(f):
+            if r["patch"] not in patches:
+                continue
+            qi = float(r["volume_m3"])
+            ci = (float(r["x"]), float(r["y"]), float(r["z"]))
+            key = tuple(math.floor(x / region) for x in ci)
+            cells.setdefault(key, [0.0, 0.0])[1] += qi
+            scg_total += qi
+            if qi > scg_max[0]:
+                scg_max = (qi, ci)
+    if of_total <= 0 or scg_total <= 0:
+        sys.exit(f"erosion: OpenFOAM total {of_total:g}, scg total {scg_total:g}: nothing to compare")
+    rows = sorted(cells.items(), key=lambda kv: -(kv[1][0] / of_total + kv[1][1] / scg_total))
+    lines = [f"erosion (Finnie), regions of {region * 1e3:g} mm: share of each code's total",
+             f"  total volume removed: OpenFOAM {of_total:.4e} m³, scg {scg_total:.4e} m³ "
+             f"(ratio {scg_total / of_total:.3f})",
+             "  region centre [mm]            OpenFOAM    scg"]
+    for key, (a, b) in rows[:8]:
+        ctr = " ".join(f"{(k + 0.5) * region * 1e3:7.1f}" for k in key)
+        lines.append(f"  {ctr}      {a / of_total:8.3f} {b / scg_total:8.3f}")
+    top_of = max(cells, key=lambda k: cells[k][0])
+    top_scg = max(cells, key=lambda k: cells[k][1])
+    d = math.dist(of_max[1], scg_max[1])
+    lines.append(f"  most wear: OpenFOAM's region {'=' if top_of == top_scg else '!='} scg's; "
+                 f"deepest faces {d * 1e3:.1f} mm apart (OpenFOAM at "
+                 f"{' '.join(f'{x * 1e3:.1f}' for x in of_max[1])} mm, scg at "
+                 f"{' '.join(f'{x * 1e3:.1f}' for x in scg_max[1])} mm)")
+    text = "\n".join(lines) + "\n"
+    print(text, end="")
+    if dest:
+        with open(dest, "w") as f:
+            json.dump({"openfoam_total": of_total, "scg_total": scg_total,
+                       "same_region": top_of == top_scg, "deepest_distance": d,
+                       "regions": [[list(k), v[0] / of_total, v[1] / scg_total] for k, v in rows]}, f, indent=1)
+    return 0
+
+
 def main(argv):
     import argparse
     ap = argparse.ArgumentParser(prog="vs_openfoam.py")
@@ -258,7 +339,16 @@ def main(argv):
     t.add_argument("scg")
     t.add_argument("--plan", help="the OpenFOAM cases' plan.json (patch roles; default next to GRADE)")
     t.add_argument("--json")
+    e = sub.add_parser("erosion")
+    e.add_argument("of_time_dir", help="the OpenFOAM case's last time folder (kinematicCloudQ)")
+    e.add_argument("centres", help="a C field (postProcess -func writeCellCentres): face centres")
+    e.add_argument("scg_csv", help="scg run --erosion-csv")
+    e.add_argument("--patches", default="walls")
+    e.add_argument("--region", type=float, default=0.0125, help="region edge, m")
+    e.add_argument("--json")
     a = ap.parse_args(argv[1:])
+    if a.cmd == "erosion":
+        return erosion(a.of_time_dir, a.centres, a.patches.split(","), a.scg_csv, a.region, a.json)
     if a.cmd == "openfoam":
         openfoam_table(a.grade, a.json)
         return 0
