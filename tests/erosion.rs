@@ -133,7 +133,11 @@ fn the_log_survives_a_checkpoint_and_bad_tables_are_refused() {
     b.run(s.steps() - 80, |_| true).unwrap();
     assert_eq!(*b.world.resource::<ErosionLog>(), whole);
     // impacts happen at t ≈ 0.1 s: before the checkpoint nothing, after all
-    assert!(c.erosion.as_ref().is_some_and(|e| e.is_empty()));
+    assert!(
+        c.erosion
+            .as_ref()
+            .is_some_and(|e| e.0.is_empty() && e.1.is_empty())
+    );
     for (erosion, key) in [
         ("[erosion]\nmodel = \"finnie\"", "erosion.flow_stress"),
         ("[erosion]\nmodel = \"oka\"", "model"),
@@ -168,4 +172,72 @@ fn the_log_survives_a_checkpoint_and_bad_tables_are_refused() {
     std::fs::write(&p, format!("duration = 1.0\ndt = 0.1\n{FINNIE}\n[[groups]]\nname = \"a\"\ndiameter = 1e-4\ndensity = 1000.0\npositions = [[0.0, 0.0, 0.0]]\n")).unwrap();
     let e = scg::scene::load(&p, &[]).expect_err("erosion without a mesh flow");
     assert!(e.to_string().contains("erosion"), "{e}");
+}
+
+/// The total's interval resamples particles, the ones that wore nothing as zeros.
+#[test]
+fn the_total_carries_a_particle_interval() {
+    let mut log = ErosionLog::new(
+        ErosionModel::Finnie {
+            flow_stress: 1.0,
+            psi: 1.0,
+            k: 2.0,
+        },
+        vec![true],
+    );
+    // two particles, head-on (θ = 90°: f = K·cos²θ/6 = 0): use 30° impacts instead, with
+    // masses 1 and 3 (volumes in the ratio 1 : 3)
+    let t = 30f64.to_radians();
+    let v = DVec3::new(t.cos(), 0.0, -t.sin());
+    log.add(vec![(0, v, DVec3::Z, 1.0, 7), (1, v, DVec3::Z, 3.0, 9)]);
+    let q1 = log.by_particle[&7];
+    assert!((log.by_particle[&9] - 3.0 * q1).abs() < 1e-15);
+    // four entered: values q1·[1, 3, 0, 0], mean q1, s² = q1²·(0 + 4 + 1 + 1)/3
+    let (total, lo, hi) = log.total_interval(4);
+    let se = (2.0f64).sqrt() * q1 * 2.0;
+    assert!((total - 4.0 * q1).abs() < 1e-15);
+    assert!((hi - (total + 1.96 * se)).abs() < 1e-12 * hi && lo == 0.0);
+}
+
+/// The squareBend duct with rebounding walls: SCG α = 2 and 4 (the feed scaled by 1/α³)
+/// wear the walls as the originals do, within the intervals of the difference.
+#[test]
+fn scg_wears_the_bend_as_the_originals_do() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/squarebend.toml");
+    let run = |alpha: f64| {
+        let set: Vec<String> = [
+            "flow.patches.wall_model=\"rebound\"".to_string(),
+            "flow.patches.restitution=0.8".into(),
+            format!("coarse_grain.alpha={alpha}"),
+            format!("feed_scale={}", 1.0 / alpha.powi(3)),
+        ]
+        .into();
+        let mut text = std::fs::read_to_string(&path).unwrap();
+        text.push_str("\n[erosion]\nmodel = \"finnie\"\nflow_stress = 1.0e9\n");
+        let dir = path.parent().unwrap();
+        let s = scg::scene::parse_in(&text, &path.display().to_string(), dir, "squarebend", &set)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let mut sim = s.build(false);
+        sim.run(s.steps(), |_| true).unwrap();
+        let fed = sim
+            .world
+            .resource::<scg::core::state::Tally>()
+            .fed
+            .iter()
+            .sum::<u64>();
+        let (t, lo, hi) = sim.world.resource::<ErosionLog>().total_interval(fed);
+        (t, (hi - lo) / (2.0 * 1.96))
+    };
+    let (q1, s1) = run(1.0);
+    eprintln!("originals: {q1:.4e} m³ ± {:.2e}", 1.96 * s1);
+    for alpha in [2.0, 4.0] {
+        let (q, s) = run(alpha);
+        let band = 1.96 * (s * s + s1 * s1).sqrt();
+        eprintln!(
+            "α = {alpha}: {q:.4e} m³ ± {:.2e}; difference {:.2e} within ±{band:.2e}",
+            1.96 * s,
+            q - q1
+        );
+        assert!((q - q1).abs() <= band, "α {alpha}: {q} vs {q1} (±{band})");
+    }
 }

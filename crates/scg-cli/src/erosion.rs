@@ -70,8 +70,16 @@ pub fn render(scene: &Scene, sim: &Simulation, rows: &[FaceRow]) -> String {
         log.model.name(),
         sim.time()
     );
-    let mut patches: Vec<&str> = rows.iter().map(|r| r.patch.as_str()).collect();
-    patches.dedup();
+    let entered = scene.initial_count()
+        + sim
+            .world
+            .get_resource::<scg_core::state::Tally>()
+            .map_or(0, |t| t.fed.iter().sum::<u64>());
+    let (total, lo, hi) = log.total_interval(entered);
+    s += &format!(
+        "  total {total:.4e} m³ [{lo:.4e}, {hi:.4e}] (95 %, over the {entered} particles that \
+         entered)\n"
+    );
     if let Some(m) = &scene.mesh_flow {
         for (p, on) in m.flow.mesh().patches.iter().zip(&log.patches) {
             if !on {

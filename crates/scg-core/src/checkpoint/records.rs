@@ -125,9 +125,13 @@ pub struct Checkpoint {
     /// they entered), in id order.
     pub collect_inside: Vec<(u32, u32, u64)>,
     /// Erosion log: (face, impacts, represented mass kg, volume m³) per face hit, in
-    /// face order.
-    pub erosion: Option<Vec<(u32, u64, f64, f64)>>,
+    /// face order; (particle id, volume m³) per particle that wore a wall, in id order.
+    pub erosion: Option<ErosionRecord>,
 }
+
+/// The erosion log in a checkpoint: per face (face, impacts, mass kg, volume m³), per
+/// particle (id, volume m³).
+pub type ErosionRecord = (Vec<(u32, u64, f64, f64)>, Vec<(u32, f64)>);
 
 /// A stage's part of a checkpoint: the stage that holds the state saves and restores it.
 /// Its plugin registers it ([`Persistence::register`]); `Simulation::checkpoint` and

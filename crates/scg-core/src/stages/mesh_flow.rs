@@ -141,7 +141,7 @@ type MeshMoveQuery<'w, 's> = Query<
         Option<&'static BodyAcceleration>,
         (&'static mut CellHint, &'static mut FlowAtCentre),
         Option<&'static CarrierOffset>,
-        &'static CoarseGrain,
+        (&'static CoarseGrain, &'static ParticleId),
     ),
 >;
 
@@ -166,7 +166,7 @@ pub fn integrate_mesh_flow(mut d: MeshInputs, mut q: MeshMoveQuery) {
     let disp = d.disp.as_deref();
     let departures = &d.state.departures;
     departures.store(0, Ordering::Relaxed);
-    let Some((xs, vs, drag, ms, fs, gs, (hs, us), offs, cgs)) = columns_mut(&mut q) else {
+    let Some((xs, vs, drag, ms, fs, gs, (hs, us), offs, (cgs, ids))) = columns_mut(&mut q) else {
         if let Some(dd) = disp {
             dd.mark_reported();
         }
@@ -180,7 +180,7 @@ pub fn integrate_mesh_flow(mut d: MeshInputs, mut q: MeshMoveQuery) {
         fs,
         gs,
         (bypass(hs), bypass(us)),
-        (offs, cgs),
+        (offs, (cgs, ids)),
     );
     let flow: &MeshFlow = &d.state.spec.flow;
     let sink = d.erosion.as_ref().map(|_| Mutex::new(Vec::new()));
@@ -240,7 +240,10 @@ type MeshPiece<'a> = (
     Option<&'a [Force]>,
     Option<&'a [BodyAcceleration]>,
     (&'a mut [CellHint], &'a mut [FlowAtCentre]),
-    (Option<&'a [CarrierOffset]>, &'a [CoarseGrain]),
+    (
+        Option<&'a [CarrierOffset]>,
+        (&'a [CoarseGrain], &'a [ParticleId]),
+    ),
 );
 
 /// One step of the mesh integration: what every particle's step reads besides its own
@@ -268,7 +271,7 @@ impl MeshStep<'_> {
         piece: MeshPiece,
         carrier: impl Fn(usize) -> C,
     ) -> (f64, u64) {
-        let (xs, vs, (sfs, fcs), ms, fs, gs, (hs, us), (offs, cgs)) = piece;
+        let (xs, vs, (sfs, fcs), ms, fs, gs, (hs, us), (offs, (cgs, ids))) = piece;
         let MeshStep {
             scheme,
             flow,
@@ -334,7 +337,7 @@ impl MeshStep<'_> {
             if let (Some(w), Some((log, _))) = (&l.impact, erosion)
                 && log.wants(flow.patch_of(w.face))
             {
-                impacts.push(super::erosion::impact(w, &cgs[i]));
+                impacts.push(super::erosion::impact(w, &cgs[i], ids[i].0));
             }
             if l.hint >= n_cells {
                 gone += 1;
