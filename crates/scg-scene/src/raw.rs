@@ -442,6 +442,7 @@ impl From<RawIntegrator> for Integrator {
 pub enum RawDragLaw {
     Stokes,
     SchillerNaumann,
+    Putnam,
 }
 
 impl From<RawDragLaw> for DragLaw {
@@ -449,6 +450,7 @@ impl From<RawDragLaw> for DragLaw {
         match l {
             RawDragLaw::Stokes => DragLaw::Stokes,
             RawDragLaw::SchillerNaumann => DragLaw::SchillerNaumann,
+            RawDragLaw::Putnam => DragLaw::Putnam,
         }
     }
 }

@@ -17,6 +17,10 @@ pub enum DragLaw {
     Stokes,
     /// Schiller & Naumann (1933): C_d = 24/Re·(1 + 0.15·Re^0.687), for Re < 1000.
     SchillerNaumann,
+    /// Putnam (1961), OpenFOAM's `sphereDrag`: C_d = 24/Re·(1 + Re^(2/3)/6) for
+    /// Re < 1000, 0.424 beyond (the law OpenFOAM's particle tracker runs by default, for
+    /// like-for-like comparisons).
+    Putnam,
 }
 
 impl DragLaw {
@@ -25,6 +29,7 @@ impl DragLaw {
         match self {
             DragLaw::Stokes => "stokes",
             DragLaw::SchillerNaumann => "schiller_naumann",
+            DragLaw::Putnam => "putnam",
         }
     }
 
@@ -34,6 +39,7 @@ impl DragLaw {
         match self {
             DragLaw::Stokes => 1.0,
             DragLaw::SchillerNaumann => schiller_naumann_correction(re),
+            DragLaw::Putnam => putnam_correction(re),
         }
     }
 
@@ -42,6 +48,7 @@ impl DragLaw {
         match self {
             DragLaw::Stokes => stokes_cd(re),
             DragLaw::SchillerNaumann => schiller_naumann_cd(re),
+            DragLaw::Putnam => 24.0 / re * putnam_correction(re),
         }
     }
 }
@@ -73,6 +80,17 @@ pub fn schiller_naumann_cd(re: f64) -> f64 {
 #[inline]
 pub fn schiller_naumann_correction(re: f64) -> f64 {
     1.0 + 0.15 * re.powf(0.687)
+}
+
+/// Putnam's correction to Stokes drag as OpenFOAM's `sphereDrag` writes it:
+/// f = 1 + Re^(2/3)/6 for Re < 1000, else 0.424·Re/24 (C_d = 0.424).
+#[inline]
+pub fn putnam_correction(re: f64) -> f64 {
+    if re < 1000.0 {
+        1.0 + re.powf(2.0 / 3.0) / 6.0
+    } else {
+        0.424 * re / 24.0
+    }
 }
 
 /// Particle Reynolds number Re = ρ_f·d·|u_r|/μ (paper eq. 5).
@@ -164,5 +182,15 @@ mod tests {
         let kn = 1e4;
         let tiny = cunningham_davies(2.0 * 6.6e-8 / kn, 6.6e-8);
         assert!((tiny / kn - 1.657).abs() < 1e-3);
+    }
+
+    #[test]
+    fn putnam_is_openfoams_sphere_drag() {
+        // CdRe/24 = 1 + Re^(2/3)/6 below 1000, C_d = 0.424 above; continuous at 1000
+        assert!((putnam_correction(8.0) - (1.0 + 4.0 / 6.0)).abs() < 1e-15);
+        assert!((DragLaw::Putnam.coefficient(2000.0) - 0.424).abs() < 1e-15);
+        let (a, b) = (putnam_correction(1000.0 - 1e-9), putnam_correction(1000.0));
+        assert!((a - b).abs() < 1e-9 * b);
+        assert_eq!(DragLaw::Putnam.name(), "putnam");
     }
 }

@@ -70,6 +70,7 @@ fn drag_effect_name(law: DragLaw) -> &'static str {
     match law {
         DragLaw::Stokes => "drag:stokes",
         DragLaw::SchillerNaumann => "drag:schiller_naumann",
+        DragLaw::Putnam => "drag:putnam",
     }
 }
 
