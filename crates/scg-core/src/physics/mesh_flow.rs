@@ -183,21 +183,14 @@ impl MeshFlow {
     pub fn cell_imbalance(&self) -> f64 {
         let m = self.mesh();
         let g = self.geometry();
-        let u = self.interp.cell_values();
         let ni = m.n_internal_faces();
         let mut net = vec![0.0f64; m.n_cells];
         for f in 0..m.n_faces() {
             let o = m.owner[f] as usize;
             let (a, xf) = (g.face_areas[f], g.face_centres[f]);
             let q = if f < ni {
-                let n = m.neighbour[f] as usize;
-                let (dof, dnf) = (
-                    (xf - g.cell_centres[o]).length(),
-                    (g.cell_centres[n] - xf).length(),
-                );
-                let w = dnf / (dof + dnf);
-                let uf = u[o] * w + u[n] * (1.0 - w);
-                net[n] -= uf.dot(a);
+                let uf = self.linear_face_value(f);
+                net[m.neighbour[f] as usize] -= uf.dot(a);
                 uf.dot(a)
             } else {
                 self.velocity(o as u32, xf).0.dot(a)
@@ -205,6 +198,23 @@ impl MeshFlow {
             net[o] += q;
         }
         net.iter().map(|q| q.abs()).sum()
+    }
+
+    /// The cell field at internal face `f`'s centre, linear between its two cells' values
+    /// (weighted by the distances of their centres to the face), m/s.
+    fn linear_face_value(&self, f: usize) -> DVec3 {
+        let (m, g, u) = (self.mesh(), self.geometry(), self.interp.cell_values());
+        let (o, n, xf) = (
+            m.owner[f] as usize,
+            m.neighbour[f] as usize,
+            g.face_centres[f],
+        );
+        let (dof, dnf) = (
+            (xf - g.cell_centres[o]).length(),
+            (g.cell_centres[n] - xf).length(),
+        );
+        let w = dnf / (dof + dnf);
+        u[o] * w + u[n] * (1.0 - w)
     }
 
     /// The wall-adjacent cells of the wall function (`None` without one).

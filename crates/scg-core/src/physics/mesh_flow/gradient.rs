@@ -18,7 +18,6 @@ impl MeshFlow {
     fn gauss_gradients(&self) -> Vec<glam::DMat3> {
         let m = self.mesh();
         let g = self.geometry();
-        let u = self.interp.cell_values();
         let nodes = self.interp.node_values();
         let np = m.points.len();
         let ni = m.n_internal_faces();
@@ -38,13 +37,7 @@ impl MeshFlow {
                 }
                 sum
             } else if f < ni {
-                let n = m.neighbour[f] as usize;
-                let (dof, dnf) = (
-                    (xf - g.cell_centres[o]).length(),
-                    (g.cell_centres[n] - xf).length(),
-                );
-                let w = dnf / (dof + dnf);
-                let uf = u[o] * w + u[n] * (1.0 - w);
+                let uf = self.linear_face_value(f);
                 // u_f ⊗ A_f: column k is u_f·A_k
                 glam::DMat3::from_cols(uf * a.x, uf * a.y, uf * a.z)
             } else {

@@ -80,6 +80,24 @@ fn assert_ks(
     );
 }
 
+/// The CDF of the density `g(d)·d` in ln d over [min, max] (the trapezoid rule on 2·10^5
+/// intervals, linear between them), normalised.
+fn quadrature_cdf(min: f64, max: f64, g: impl Fn(f64) -> f64) -> impl Fn(f64) -> f64 {
+    let k = 200_000;
+    let h = (max / min).ln() / k as f64;
+    let f = |i: usize| g(min * (h * i as f64).exp());
+    let mut cum = vec![0.0; k + 1];
+    for i in 1..=k {
+        cum[i] = cum[i - 1] + 0.5 * h * (f(i - 1) + f(i));
+    }
+    let total = cum[k];
+    move |d: f64| {
+        let x = ((d / min).ln() / h).clamp(0.0, k as f64);
+        let i = (x as usize).min(k - 1);
+        (cum[i] + (cum[i + 1] - cum[i]) * (x - i as f64)) / total
+    }
+}
+
 fn rr(d: f64, d63: f64, n: f64) -> f64 {
     1.0 - (-(d / d63).powf(n)).exp()
 }
@@ -96,26 +114,11 @@ fn rosin_rammler_number_basis_sampled_and_mass_share_follows() {
     )
     .unwrap();
     let number = truncated(|d| rr(d, d63, n), min, max);
-    // the mass CDF of a number-basis RR by a fine independent quadrature (Simpson in ln d)
-    let mass = {
-        let k = 200_000;
-        let h = (max / min).ln() / k as f64;
-        let f = |i: usize| {
-            let d = min * (h * i as f64).exp();
-            let x = (d / d63).powf(n);
-            n * x * (-x).exp() * d * d * d // q0(d)·d³·d (dd = d·d ln d)
-        };
-        let mut cum = vec![0.0; k + 1];
-        for i in 1..=k {
-            cum[i] = cum[i - 1] + 0.5 * h * (f(i - 1) + f(i));
-        }
-        let total = cum[k];
-        move |d: f64| {
-            let x = ((d / min).ln() / h).clamp(0.0, k as f64);
-            let i = (x as usize).min(k - 1);
-            (cum[i] + (cum[i + 1] - cum[i]) * (x - i as f64)) / total
-        }
-    };
+    // the mass CDF of a number-basis RR by a fine independent quadrature in ln d
+    let mass = quadrature_cdf(min, max, |d| {
+        let x = (d / d63).powf(n);
+        n * x * (-x).exp() * d * d * d // q0(d)·d³·d (dd = d·d ln d)
+    });
     assert_ks("RR number", &dist, number, mass);
 }
 
@@ -133,25 +136,10 @@ fn rosin_rammler_mass_basis_sampled() {
     .unwrap();
     let mass = truncated(|d| rr(d, d63, n), min, max);
     // number CDF ∝ ∫ q3/d³: by quadrature in ln d
-    let number = {
-        let k = 200_000;
-        let h = (max / min).ln() / k as f64;
-        let f = |i: usize| {
-            let d = min * (h * i as f64).exp();
-            let x = (d / d63).powf(n);
-            n * x * (-x).exp() / (d * d * d)
-        };
-        let mut cum = vec![0.0; k + 1];
-        for i in 1..=k {
-            cum[i] = cum[i - 1] + 0.5 * h * (f(i - 1) + f(i));
-        }
-        let total = cum[k];
-        move |d: f64| {
-            let x = ((d / min).ln() / h).clamp(0.0, k as f64);
-            let i = (x as usize).min(k - 1);
-            (cum[i] + (cum[i + 1] - cum[i]) * (x - i as f64)) / total
-        }
-    };
+    let number = quadrature_cdf(min, max, |d| {
+        let x = (d / d63).powf(n);
+        n * x * (-x).exp() / (d * d * d)
+    });
     assert_ks("RR mass", &dist, number, mass);
     // at a node (d63 made one), the grid's mass CDF is the truncated closed form to 1e-12
     let at = SizeDistribution::new(
