@@ -21,6 +21,8 @@
 #   --no-scg      OpenFOAM only (its table; no scg run)
 #   --scg-set KEY=VALUE  passed to scg as --set (repeatable); keys that change the physics
 #                 break the like-for-like
+#   --erosion P   the scene with its walls rebounding (e = 0.8) and [erosion] finnie with
+#                 flow stress P Pa (written to DIR/scene-erosion.toml), for both codes
 #   With [erosion] (model "finnie") in the scene: OpenFOAM's ParticleErosion on the same
 #   patches, and the wear of both codes side by side in regions of REGION m (default
 #   0.025): totals, the regions' shares, where each puts the most (erosion.txt, .json)
@@ -41,6 +43,7 @@ scene=$root/cases/squarebend.toml
 out=/tmp/scg-squarebend-vs-openfoam
 quick=0
 no_scg=0
+erosion_p=
 case_args=()
 set_args=()
 scg_set=()
@@ -54,6 +57,7 @@ while [ $# -gt 0 ]; do
         --scg) SCG=$2; shift ;;
         --no-scg) no_scg=1 ;;
         --scg-set) scg_set+=(--set "$2"); shift ;;
+        --erosion) erosion_p=$2; shift ;;
         -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$self"; exit 0 ;;
         *) echo "vs-openfoam.sh: unknown argument $1" >&2; exit 2 ;;
     esac
@@ -63,6 +67,11 @@ done
 scene=$(realpath "$scene")
 mkdir -p "$out"
 out=$(realpath "$out")
+if [ -n "$erosion_p" ]; then
+    scene=$(python3 "$root/cases/squarebend/vs_openfoam.py" erosion-scene "$scene" "$out/scene-erosion.toml" \
+        --flow-stress "$erosion_p")
+    echo "--erosion: the walls rebound (e = 0.8) and wear by Finnie (p = $erosion_p Pa): $scene"
+fi
 
 # --- OpenFOAM (as cases/squarebend/build.sh) ------------------------------------------------
 # shellcheck source=../foam-env.sh

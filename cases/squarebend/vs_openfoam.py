@@ -327,6 +327,22 @@ def erosion(of_time_dir, centres_file, patches, scg_csv, region, dest=None):
     return 0
 
 
+def erosion_scene(path, dest, flow_stress, restitution):
+    """The scene of `path` with its walls rebounding (e = `restitution`) and Finnie's
+    erosion on them (p = `flow_stress` Pa), written to `dest` for both codes."""
+    s = cyc.read_toml(path)
+    flow = s.setdefault("flow", {})
+    patches = flow.setdefault("patches", {})
+    patches["wall_model"] = "rebound"
+    patches["restitution"] = float(restitution)
+    s["erosion"] = {"model": "finnie", "flow_stress": float(flow_stress)}
+    if "case" in flow and not os.path.isabs(flow["case"]):
+        flow["case"] = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(path)), flow["case"]))
+    with open(dest, "w", encoding="utf-8") as f:
+        f.write(cyc.toml_dump(s))
+    return dest
+
+
 def main(argv):
     import argparse
     ap = argparse.ArgumentParser(prog="vs_openfoam.py")
@@ -339,6 +355,11 @@ def main(argv):
     t.add_argument("scg")
     t.add_argument("--plan", help="the OpenFOAM cases' plan.json (patch roles; default next to GRADE)")
     t.add_argument("--json")
+    es = sub.add_parser("erosion-scene")
+    es.add_argument("scene")
+    es.add_argument("dest")
+    es.add_argument("--flow-stress", type=float, default=1.0e9)
+    es.add_argument("--restitution", type=float, default=0.8)
     e = sub.add_parser("erosion")
     e.add_argument("of_time_dir", help="the OpenFOAM case's last time folder (kinematicCloudQ)")
     e.add_argument("centres", help="a C field (postProcess -func writeCellCentres): face centres")
@@ -347,6 +368,9 @@ def main(argv):
     e.add_argument("--region", type=float, default=0.0125, help="region edge, m")
     e.add_argument("--json")
     a = ap.parse_args(argv[1:])
+    if a.cmd == "erosion-scene":
+        print(erosion_scene(a.scene, a.dest, a.flow_stress, a.restitution))
+        return 0
     if a.cmd == "erosion":
         return erosion(a.of_time_dir, a.centres, a.patches.split(","), a.scg_csv, a.region, a.json)
     if a.cmd == "openfoam":

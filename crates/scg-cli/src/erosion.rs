@@ -138,3 +138,74 @@ pub fn csv(rows: &[FaceRow]) -> String {
     }
     s
 }
+
+/// The logged patches as a legacy-VTK surface (an unstructured grid of polygons, ASCII,
+/// which ParaView and meshio read) with the wear per face
+/// as cell data: `volume_m3`, `depth_rate_m_per_s`, `impacts` (zero on faces not hit), to
+/// open in ParaView (`None` without `[erosion]`).
+pub fn vtk(scene: &Scene, sim: &Simulation) -> Option<String> {
+    let log = sim.world.get_resource::<ErosionLog>()?;
+    let m = scene.mesh_flow.as_ref()?;
+    let (mesh, g) = (m.flow.mesh(), m.flow.geometry());
+    let t = sim.time().max(f64::MIN_POSITIVE);
+    let faces: Vec<usize> = mesh
+        .patches
+        .iter()
+        .zip(&log.patches)
+        .filter(|(_, on)| **on)
+        .flat_map(|(p, _)| p.start..p.start + p.size)
+        .collect();
+    // the points the faces use, renumbered in order of first use
+    let mut index = std::collections::HashMap::new();
+    let mut points = Vec::new();
+    for &f in &faces {
+        for &p in mesh.face(f) {
+            index.entry(p).or_insert_with(|| {
+                points.push(mesh.points[p as usize]);
+                points.len() - 1
+            });
+        }
+    }
+    let mut s = format!(
+        "# vtk DataFile Version 3.0\nscg erosion ({}) of {} over {t} s\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS {} double\n",
+        log.model.name(),
+        scene.name,
+        points.len()
+    );
+    for p in &points {
+        s += &format!("{:e} {:e} {:e}\n", p.x, p.y, p.z);
+    }
+    let size: usize = faces.iter().map(|&f| mesh.face(f).len() + 1).sum();
+    s += &format!("CELLS {} {size}\n", faces.len());
+    for &f in &faces {
+        let ids: Vec<String> = mesh.face(f).iter().map(|p| index[p].to_string()).collect();
+        s += &format!("{} {}\n", ids.len(), ids.join(" "));
+    }
+    // VTK_TRIANGLE, VTK_QUAD, else VTK_POLYGON
+    s += &format!("CELL_TYPES {}\n", faces.len());
+    for &f in &faces {
+        s += match mesh.face(f).len() {
+            3 => "5\n",
+            4 => "9\n",
+            _ => "7\n",
+        };
+    }
+    let wear = |f: usize| log.faces.get(&(f as u32)).copied().unwrap_or_default();
+    s += &format!(
+        "CELL_DATA {}\nSCALARS volume_m3 double 1\nLOOKUP_TABLE default\n",
+        faces.len()
+    );
+    for &f in &faces {
+        s += &format!("{:e}\n", wear(f).volume);
+    }
+    s += "SCALARS depth_rate_m_per_s double 1\nLOOKUP_TABLE default\n";
+    for &f in &faces {
+        let area = g.face_areas[f].length();
+        s += &format!("{:e}\n", wear(f).volume / (area * t));
+    }
+    s += "SCALARS impacts double 1\nLOOKUP_TABLE default\n";
+    for &f in &faces {
+        s += &format!("{}\n", wear(f).impacts);
+    }
+    Some(s)
+}

@@ -64,6 +64,10 @@ pub struct RunArgs {
     /// volume removed, depth rate) as CSV to FILE.
     #[arg(long, value_name = "FILE")]
     pub erosion_csv: Option<PathBuf>,
+    /// With `[erosion]`: write the logged wall patches with the wear per face (volume,
+    /// depth rate, impacts) as a legacy-VTK surface to FILE (ParaView).
+    #[arg(long, value_name = "FILE")]
+    pub erosion_vtk: Option<PathBuf>,
 }
 
 impl Default for RunArgs {
@@ -83,6 +87,7 @@ impl Default for RunArgs {
             summary_json: None,
             fates_csv: None,
             erosion_csv: None,
+            erosion_vtk: None,
         }
     }
 }
@@ -343,6 +348,13 @@ pub fn run(args: RunArgs) -> i32 {
         eprint!("{}", crate::erosion::render(&scene, &sim, &rows));
         if let Some(path) = &args.erosion_csv {
             if let Err(e) = std::fs::write(path, crate::erosion::csv(&rows)) {
+                eprintln!("error: cannot write {}: {e}", path.display());
+                return 1;
+            }
+            eprintln!("wrote {}", path.display());
+        }
+        if let (Some(path), Some(text)) = (&args.erosion_vtk, crate::erosion::vtk(&scene, &sim)) {
+            if let Err(e) = std::fs::write(path, text) {
                 eprintln!("error: cannot write {}: {e}", path.display());
                 return 1;
             }
