@@ -215,6 +215,26 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         }
         return EXIT_BAD_INPUT;
     }
+    // What the one-rank run reports at its end from logs a rank holds only its share of:
+    // refused rather than reported from rank 0's share.
+    let per_rank = [
+        ("--summary-json", args.summary_json.is_some()),
+        ("--fates-csv", args.fates_csv.is_some()),
+        ("--erosion-csv", args.erosion_csv.is_some()),
+        ("--erosion-vtk", args.erosion_vtk.is_some()),
+        ("[erosion]", scene.erosion.is_some()),
+    ];
+    if comm.size() > 1
+        && let Some((what, _)) = per_rank.iter().find(|(_, on)| *on)
+    {
+        if root {
+            eprintln!(
+                "error: {what} is not yet gathered over MPI ranks ({} here): run with one rank",
+                comm.size()
+            );
+        }
+        return EXIT_BAD_INPUT;
+    }
     // The recording stage is the driver's (gathered on rank 0), not the schedule's.
     let mut sim = scene.build(false);
     let by_id = std::env::var("SCG_MPI_DECOMP").as_deref() == Ok("ids");
