@@ -38,10 +38,19 @@ density = 1000.0
 positions = [[0.0, 0.0, 0.0]]
 "#;
 
-fn run(set: &[&str]) -> (scg::scene::Scene, Vec<scg::core::sim::ParticleState>) {
+/// The scene `text` with the overrides `set`, or the error loading it gives.
+fn load(text: &str, set: &[&str]) -> Result<scg::scene::Scene, scg::scene::SceneError> {
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-    let scene =
-        scg::scene::parse(SCENE, "slip.toml", "slip", &set).unwrap_or_else(|e| panic!("{e}"));
+    scg::scene::parse(text, "forces.toml", "forces", &set)
+}
+
+/// [`load`] that must succeed.
+fn scene(text: &str, set: &[&str]) -> scg::scene::Scene {
+    load(text, set).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn run(set: &[&str]) -> (scg::scene::Scene, Vec<scg::core::sim::ParticleState>) {
+    let scene = scene(SCENE, set);
     let mut sim = scene.build(false);
     sim.run(scene.steps(), |_| true).unwrap();
     let p = sim.particles();
@@ -94,19 +103,12 @@ fn scg_follows_the_original_with_the_slip_taken_at_its_size() {
 
 #[test]
 fn the_plan_names_the_slip_and_bad_input_is_refused() {
-    let scene = scg::scene::parse(SCENE, "slip.toml", "slip", &[]).unwrap();
-    let plan = scene.build(false).plan().render();
+    let plan = scene(SCENE, &[]).build(false).plan().render();
     assert!(plan.contains("cunningham_davies"), "{plan}");
-    let none = scg::scene::parse(
-        SCENE,
-        "slip.toml",
-        "slip",
-        &["forces.cunningham.mean_free_path=1e-30".into()],
-    )
-    .unwrap();
+    let none = scene(SCENE, &["forces.cunningham.mean_free_path=1e-30"]);
     assert!(none.build(false).plan().render().contains("cunningham"));
     let plain = SCENE.replace("[forces]\ncunningham = { mean_free_path = 6.6e-8 }\n", "");
-    let off = scg::scene::parse(&plain, "slip.toml", "slip", &[]).unwrap();
+    let off = scene(&plain, &[]);
     assert!(!off.build(false).plan().render().contains("cunningham"));
     for (set, key) in [
         (
@@ -115,11 +117,11 @@ fn the_plan_names_the_slip_and_bad_input_is_refused() {
         ),
         ("forces.lift=true", "lift"),
     ] {
-        let e = scg::scene::parse(SCENE, "slip.toml", "slip", &[set.into()]).expect_err(set);
+        let e = load(SCENE, &[set]).expect_err(set);
         assert!(e.to_string().contains(key), "{set}: {e}");
     }
     let nodrag = SCENE.replace("[drag]\nlaw = \"stokes\"\n", "");
-    let e = scg::scene::parse(&nodrag, "slip.toml", "slip", &[]).expect_err("no drag");
+    let e = load(&nodrag, &[]).expect_err("no drag");
     assert!(e.to_string().contains("forces.cunningham"), "{e}");
 }
 
@@ -160,8 +162,7 @@ velocities = [[0.0, 0.1, 0.0]]
 /// The largest relative departure of the particle's distance from the axis from 0.1 m
 /// over one revolution (checked every 100 steps).
 fn radius_drift(set: &[&str]) -> f64 {
-    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-    let scene = scg::scene::parse(NEUTRAL, "neutral.toml", "neutral", &set).unwrap();
+    let scene = scene(NEUTRAL, set);
     let mut sim = scene.build(false);
     let mut worst = 0.0f64;
     let mut done = 0;
@@ -229,9 +230,7 @@ positions = [[0.02, 0.0, 0.0]]
 "#;
 
 fn swirl(set: &[&str]) -> glam::DVec3 {
-    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-    let scene =
-        scg::scene::parse(SWIRL, "swirl.toml", "swirl", &set).unwrap_or_else(|e| panic!("{e}"));
+    let scene = scene(SWIRL, set);
     let mut sim = scene.build(false);
     sim.run(scene.steps(), |_| true).unwrap();
     sim.particles()[0].position
@@ -267,8 +266,7 @@ fn scg_keeps_the_originals_path_with_every_force_on() {
 
 #[test]
 fn the_plan_lists_the_step_forces() {
-    let scene = scg::scene::parse(SWIRL, "swirl.toml", "swirl", &[]).unwrap();
-    let plan = scene.build(false).plan().render();
+    let plan = scene(SWIRL, &[]).build(false).plan().render();
     for want in [
         "forces:pressure_gradient+added_mass+saffman_mei",
         "added_mass inertia",
@@ -277,16 +275,10 @@ fn the_plan_lists_the_step_forces() {
     ] {
         assert!(plan.contains(want), "{want}: {plan}");
     }
-    let off = scg::scene::parse(
+    let off = scene(
         SWIRL,
-        "swirl.toml",
-        "swirl",
-        &[
-            "forces.saffman_mei=false".into(),
-            "forces.pressure_gradient=false".into(),
-        ],
-    )
-    .unwrap();
+        &["forces.saffman_mei=false", "forces.pressure_gradient=false"],
+    );
     let plan = off.build(false).plan().render();
     assert!(
         plan.contains("forces:added_mass") && !plan.contains("saffman"),

@@ -92,7 +92,7 @@ pub fn by_mass(scene: &Scene, fates: &[GroupFates]) -> Vec<DistributionFates> {
         let mut counts: BTreeMap<String, Vec<u64>> = BTreeMap::new();
         let mut order: Vec<String> = Vec::new();
         for (b, (_, f, _)) in bins.iter().enumerate() {
-            for (what, k) in fate_counts(f) {
+            for (what, k) in crate::fates::lines(f) {
                 if !counts.contains_key(&what) {
                     order.push(what.clone());
                 }
@@ -140,35 +140,6 @@ pub fn by_mass(scene: &Scene, fates: &[GroupFates]) -> Vec<DistributionFates> {
         });
     }
     out
-}
-
-/// A group's fates as (what, count), named as in the fates table.
-fn fate_counts(f: &GroupFates) -> Vec<(String, u64)> {
-    let mut v = Vec::new();
-    for (patch, role, esc, stuck) in &f.patches {
-        if *role != "wall" {
-            v.push((format!("escaped through `{patch}` ({role})"), *esc));
-        }
-        if *role == "wall" || *stuck > 0 {
-            v.push((format!("stuck on `{patch}` ({role})"), *stuck));
-        }
-    }
-    if !f.patches.iter().any(|p| p.1 == "outlet") {
-        v.push(("drained (outlet)".into(), f.drained));
-    }
-    v.push(("lost (left the domain elsewhere)".into(), f.lost));
-    for (zone, collects, k) in &f.zones {
-        v.push((
-            if *collects {
-                format!("collected in zone `{zone}`")
-            } else {
-                format!("in zone `{zone}` at the end")
-            },
-            *k,
-        ));
-    }
-    v.push(("airborne (in the domain)".into(), f.airborne));
-    v
 }
 
 /// The console lines.

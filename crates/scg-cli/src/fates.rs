@@ -174,6 +174,41 @@ fn share(n: u64, of: u64) -> String {
     }
 }
 
+/// A group's fates as the console table names them, (fate, count), in its order: per
+/// patch escaped (outlets and inlets always, walls when some did) and stuck (walls
+/// always, other patches when some did), drained without an outlet patch, lost, per zone,
+/// airborne.
+pub fn lines(f: &GroupFates) -> Vec<(String, u64)> {
+    let mut v = Vec::new();
+    for (patch, role, esc, stuck) in &f.patches {
+        if *esc > 0 || *role != "wall" {
+            v.push((format!("escaped through `{patch}` ({role})"), *esc));
+        }
+        if *stuck > 0 || *role == "wall" {
+            v.push((format!("stuck on `{patch}` ({role})"), *stuck));
+        }
+    }
+    if !f.patches.iter().any(|p| p.1 == "outlet") {
+        v.push(("drained (outlet)".into(), f.drained));
+    }
+    v.push(("lost (left the domain elsewhere)".into(), f.lost));
+    for (zone, collects, k) in &f.zones {
+        let what = if *collects {
+            format!("collected in zone `{zone}`")
+        } else {
+            format!("in zone `{zone}` at the end")
+        };
+        v.push((what, *k));
+    }
+    let what = if f.zones.is_empty() {
+        "airborne (in the domain)"
+    } else {
+        "airborne (in the domain, no zone)"
+    };
+    v.push((what.into(), f.airborne));
+    v
+}
+
 /// The console table: one line per group and fate, with the share of what entered and the
 /// original-powder mass.
 pub fn render(fates: &[GroupFates]) -> String {
@@ -194,39 +229,13 @@ pub fn render(fates: &[GroupFates]) -> String {
             f.fed,
             mass(n)
         );
-        let mut line = |what: String, k: u64| {
+        for (what, k) in lines(f) {
             s += &format!(
                 "    {what:<34} {k:>9}  {:>7}  {:.4e} kg\n",
                 share(k, n),
                 mass(k)
             );
-        };
-        for (patch, role, esc, stuck) in &f.patches {
-            if *esc > 0 || *role != "wall" {
-                line(format!("escaped through `{patch}` ({role})"), *esc);
-            }
-            if *stuck > 0 || *role == "wall" {
-                line(format!("stuck on `{patch}` ({role})"), *stuck);
-            }
         }
-        if !f.patches.iter().any(|p| p.1 == "outlet") {
-            line("drained (outlet)".into(), f.drained);
-        }
-        line("lost (left the domain elsewhere)".into(), f.lost);
-        for (zone, collects, k) in &f.zones {
-            let what = if *collects {
-                format!("collected in zone `{zone}`")
-            } else {
-                format!("in zone `{zone}` at the end")
-            };
-            line(what, *k);
-        }
-        let what = if f.zones.is_empty() {
-            "airborne (in the domain)"
-        } else {
-            "airborne (in the domain, no zone)"
-        };
-        line(what.into(), f.airborne);
         if f.accounted() != n {
             s += &format!(
                 "    warning: {} accounted for, {n} entered\n",

@@ -346,27 +346,21 @@ pub fn run(args: RunArgs) -> i32 {
     eprint!("{}", crate::distribution::render(&by_mass));
     if let Some(rows) = crate::erosion::rows(&scene, &sim) {
         eprint!("{}", crate::erosion::render(&scene, &sim, &rows));
-        if let Some(path) = &args.erosion_csv {
-            if let Err(e) = std::fs::write(path, crate::erosion::csv(&rows)) {
-                eprintln!("error: cannot write {}: {e}", path.display());
-                return 1;
-            }
-            eprintln!("wrote {}", path.display());
-        }
-        if let (Some(path), Some(text)) = (&args.erosion_vtk, crate::erosion::vtk(&scene, &sim)) {
-            if let Err(e) = std::fs::write(path, text) {
-                eprintln!("error: cannot write {}: {e}", path.display());
-                return 1;
-            }
-            eprintln!("wrote {}", path.display());
-        }
-    }
-    if let Some(path) = &args.fates_csv {
-        if let Err(e) = std::fs::write(path, crate::fates::csv(&fates)) {
-            eprintln!("error: cannot write {}: {e}", path.display());
+        if let Some(path) = &args.erosion_csv
+            && !write_text(path, &crate::erosion::csv(&rows))
+        {
             return 1;
         }
-        eprintln!("wrote {}", path.display());
+        if let (Some(path), Some(text)) = (&args.erosion_vtk, crate::erosion::vtk(&scene, &sim))
+            && !write_text(path, &text)
+        {
+            return 1;
+        }
+    }
+    if let Some(path) = &args.fates_csv
+        && !write_text(path, &crate::fates::csv(&fates))
+    {
+        return 1;
     }
     let resolved = sim.contact_resolution();
     for line in resolved.summary() {
@@ -419,11 +413,9 @@ pub fn run(args: RunArgs) -> i32 {
             json["distributions"] = crate::distribution::json(&by_mass);
         }
         let text = serde_json::to_string_pretty(&json).unwrap_or_default();
-        if let Err(e) = std::fs::write(path, text + "\n") {
-            eprintln!("error: cannot write {}: {e}", path.display());
+        if !write_text(path, &(text + "\n")) {
             return 1;
         }
-        eprintln!("wrote {}", path.display());
     }
     if result.is_err() {
         return 1;
@@ -510,6 +502,20 @@ pub fn summary_json(
         "particle_steps_per_s": run.particle_steps as f64 / run.wall_s.max(1e-12),
         "threads": run.threads,
     })
+}
+
+/// Write `text` to `path` and say so, or say why not (false).
+fn write_text(path: &std::path::Path, text: &str) -> bool {
+    match std::fs::write(path, text) {
+        Ok(()) => {
+            eprintln!("wrote {}", path.display());
+            true
+        }
+        Err(e) => {
+            eprintln!("error: cannot write {}: {e}", path.display());
+            false
+        }
+    }
 }
 
 /// Write a command's text files and its SVG (drawn by `draw` into the path given), print

@@ -433,10 +433,14 @@ fn force_notes(f: &ExtraForces, stepped: bool) -> Vec<(StepSet, String)> {
             ),
         ));
     }
-    if stepped && let Some(l) = f.step_label() {
+    let names = f.step_names();
+    if stepped && !names.is_empty() {
         v.push((
             StepSet::Forces,
-            format!("[{l}] in the integration's step, at mid-step, for the original"),
+            format!(
+                "[forces:{}] in the integration's step, at mid-step, for the original",
+                names.join("+")
+            ),
         ));
     }
     v

@@ -5,7 +5,7 @@ use glam::DVec3;
 
 use scg_core::physics::contact::NormalLaw;
 use scg_core::physics::contact::normal::{hertz_contact_time, linear_contact_time};
-use scg_core::physics::drag::{DragLaw, particle_reynolds, stokes_response_time};
+use scg_core::physics::drag::{DragLaw, particle_reynolds};
 use scg_core::physics::flow::FlowField;
 use scg_core::physics::integrate::Integrator;
 use scg_core::physics::scaling::coarse_grain;
@@ -273,8 +273,24 @@ fn group_report(scene: &Scene, g: &crate::Group) -> GroupReport {
     let s = coarse_grain(g.law, g.alpha, g.min_diameter(), g.density);
     let (tau, slip, re, ratio) = match (scene.fluid, scene.drag) {
         (Some(f), Some(_)) => {
-            let tau = stokes_response_time(s.mass(), f.viscosity, s.drag_diameter, s.force_scale)
-                * slip::tau_factor(scene, g, &s);
+            // τ as the spawn sets it (the slip correction and added mass included)
+            let cg = scg_core::components::CoarseGrain {
+                alpha: g.alpha,
+                law: g.law,
+                original_diameter: g.min_diameter(),
+                original_density: g.density,
+            };
+            let as_original =
+                scene.scg_at_original && g.law == scg_core::physics::scaling::CoarseGrainLaw::Scg;
+            let tau = scg_core::spawn::coarse_grained(
+                &cg,
+                Some(&f),
+                scene.dt.max(f64::MIN_POSITIVE),
+                as_original,
+                &scene.extra_forces,
+            )
+            .3
+            .tau;
             let law = scene.drag.unwrap_or_default();
             let mut slip: f64 = 0.0;
             for (x, v) in group_velocities(scene, g) {

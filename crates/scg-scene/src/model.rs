@@ -100,6 +100,17 @@ impl Group {
         self.size.as_ref().map_or(self.diameter, |s| s.range().0)
     }
 
+    /// The original powder's volume one particle a feeder of this group feeds stands for,
+    /// m³: α³ originals (under every law, `sample` too) of `diameter`, or of a size
+    /// distribution's mean particle (its feeders feed every bin).
+    pub fn fed_volume(&self) -> f64 {
+        let d = self
+            .size
+            .as_ref()
+            .map_or(self.diameter, |s| s.distribution.mean_d3().cbrt());
+        scg_core::physics::scaling::represented_volume(self.alpha, d)
+    }
+
     /// Number of particles at the start.
     pub fn count(&self) -> usize {
         match &self.placement {

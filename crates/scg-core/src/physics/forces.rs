@@ -68,22 +68,16 @@ impl ExtraForces {
         }
     }
 
-    /// The names of the step's forces, for the plan (`None`: none acts each step).
-    pub fn step_label(&self) -> Option<&'static str> {
-        match (
-            self.pressure_gradient,
-            self.added_mass.is_some(),
-            self.saffman_mei,
-        ) {
-            (false, false, false) => None,
-            (true, false, false) => Some("forces:pressure_gradient"),
-            (false, true, false) => Some("forces:added_mass"),
-            (false, false, true) => Some("forces:saffman_mei"),
-            (true, true, false) => Some("forces:pressure_gradient+added_mass"),
-            (true, false, true) => Some("forces:pressure_gradient+saffman_mei"),
-            (false, true, true) => Some("forces:added_mass+saffman_mei"),
-            (true, true, true) => Some("forces:pressure_gradient+added_mass+saffman_mei"),
-        }
+    /// The names of the forces evaluated each step, in a fixed order (for the plan).
+    pub fn step_names(&self) -> Vec<&'static str> {
+        [
+            ("pressure_gradient", self.pressure_gradient),
+            ("added_mass", self.added_mass.is_some()),
+            ("saffman_mei", self.saffman_mei),
+        ]
+        .into_iter()
+        .filter_map(|(name, on)| on.then_some(name))
+        .collect()
     }
 }
 

@@ -104,6 +104,18 @@ pub struct SizeDistribution {
     q3: Vec<f64>,
     /// Number-mean d³ over [min, max], m³.
     mean_d3: f64,
+    /// The unnormalised mass integral over [min, max] (the rule's ∫ q₃ before Q₃ is
+    /// normalised), the denominator of [`SizeDistribution::total_efficiency`].
+    mass_norm: f64,
+}
+
+/// The weights turning a density on `basis` into the number and the mass densities (up
+/// to one common constant): q₀ ∝ q·w₀, q₃ ∝ q·w₃.
+fn weights(basis: Basis) -> (Weight, Weight) {
+    match basis {
+        Basis::Number => (|_| 1.0, |x| x * x * x),
+        Basis::Mass => (|x| 1.0 / (x * x * x), |_| 1.0),
+    }
 }
 
 impl SizeDistribution {
@@ -119,10 +131,7 @@ impl SizeDistribution {
         if !(min.is_finite() && max.is_finite() && min > 0.0 && max > min) {
             return Err(format!("needs 0 < min < max, got min {min:e}, max {max:e}"));
         }
-        let mut nodes: Vec<f64> = (0..=GRID)
-            .map(|i| min * (max / min).powf(i as f64 / GRID as f64))
-            .collect();
-        nodes[GRID] = max;
+        let mut nodes = log_edges(min, max, GRID);
         match &shape {
             Shape::RosinRammler { d63, spread } => {
                 if !(*d63 > 0.0 && d63.is_finite() && *spread > 0.0 && spread.is_finite()) {
@@ -168,11 +177,7 @@ impl SizeDistribution {
         nodes.sort_by(f64::total_cmp);
         nodes.dedup();
         let native = |x: f64| density(&shape, x);
-        // number and mass densities, up to one common constant
-        let (w0, w3): (Weight, Weight) = match basis {
-            Basis::Number => (|_| 1.0, |x| x * x * x),
-            Basis::Mass => (|x| 1.0 / (x * x * x), |_| 1.0),
-        };
+        let (w0, w3) = weights(basis);
         let mut q0 = vec![0.0; nodes.len()];
         let mut q3 = vec![0.0; nodes.len()];
         for i in 1..nodes.len() {
@@ -195,6 +200,7 @@ impl SizeDistribution {
             q0,
             q3,
             mean_d3: m_all / n_all,
+            mass_norm: m_all,
         })
     }
 
@@ -273,22 +279,15 @@ impl SizeDistribution {
     /// Total efficiency of the grade curve `eta` (a share 0..1 at each size d in m):
     /// ∫ η(d)·q₃(d) dd over [min, max], by the grid's Gauss–Legendre rule.
     pub fn total_efficiency(&self, eta: impl Fn(f64) -> f64) -> f64 {
-        let w3: fn(f64) -> f64 = match self.basis {
-            Basis::Number => |x| x * x * x,
-            Basis::Mass => |_| 1.0,
-        };
+        let (_, w3) = weights(self.basis);
         let mut sum = 0.0;
         for i in 1..self.nodes.len() {
             let (a, b) = (self.nodes[i - 1], self.nodes[i]);
             sum += gauss8(a, b, &|x| eta(x) * density(&self.shape, x) * w3(x));
         }
-        // the same integral with η = 1, so the rule's own error cancels in the ratio
-        let mut all = 0.0;
-        for i in 1..self.nodes.len() {
-            let (a, b) = (self.nodes[i - 1], self.nodes[i]);
-            all += gauss8(a, b, &|x| density(&self.shape, x) * w3(x));
-        }
-        sum / all
+        // over the same integral with η = 1 (summed alike at construction), so the rule's
+        // own error cancels in the ratio
+        sum / self.mass_norm
     }
 }
 
@@ -305,14 +304,10 @@ fn density(shape: &Shape, d: f64) -> f64 {
             (-0.5 * z * z).exp() / (d * s * (2.0 * std::f64::consts::PI).sqrt())
         }
         Shape::Table { d: ds, q } => {
-            // the piece holding d (grid intervals never straddle a table point)
+            // the piece holding d (the rule evaluates inside grid intervals, which never
+            // straddle a table point)
             let i = ds.partition_point(|x| *x <= d);
             if i == 0 || i >= ds.len() {
-                // the last point itself belongs to the last piece
-                if d == ds[ds.len() - 1] {
-                    let n = ds.len() - 1;
-                    return (q[n] - q[n - 1]) / (ds[n] - ds[n - 1]);
-                }
                 return 0.0;
             }
             (q[i] - q[i - 1]) / (ds[i] - ds[i - 1])

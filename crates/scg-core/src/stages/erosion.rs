@@ -17,7 +17,7 @@ use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
 use crate::components::CoarseGrain;
 use crate::physics::erosion::ErosionModel;
 use crate::physics::mesh_flow::WallImpact;
-use crate::physics::scaling::sphere_mass;
+use crate::physics::scaling::represented_volume;
 
 /// What one face has taken.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -51,7 +51,7 @@ pub type Impact = (u32, DVec3, DVec3, f64, u32);
 /// The original powder's mass a particle stands for: α³ originals, kg.
 #[inline]
 pub fn represented_mass(cg: &CoarseGrain) -> f64 {
-    cg.alpha.powi(3) * sphere_mass(cg.original_diameter, cg.original_density)
+    cg.original_density * represented_volume(cg.alpha, cg.original_diameter)
 }
 
 impl ErosionLog {

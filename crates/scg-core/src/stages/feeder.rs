@@ -148,7 +148,8 @@ struct FeederState {
     spec: FeederSpec,
     rng: ChaCha8Rng,
     fed: u64,
-    /// Simulated (coarse-grained) radius of the particles fed, m.
+    /// Simulated (coarse-grained) radius of the particles fed, m (one size; the particles
+    /// of a size distribution take each their own).
     radius: f64,
     /// Flux-weighted patch feeders: the bound of u·n the draws are accepted against, m/s
     /// (found at the first feed, from the flow).
@@ -287,13 +288,13 @@ pub fn feed_particles(
         let due = fed_by(f.spec.rate, f.spec.start, f.spec.stop, t);
         while f.fed < due {
             // the size first (the start point sits its radius inward of a patch)
-            let (group, diameter) = match &f.spec.size {
-                None => (f.spec.group, f.spec.diameter),
+            let (group, diameter, radius) = match &f.spec.size {
+                None => (f.spec.group, f.spec.diameter, f.radius),
                 Some(s) => {
                     let d = s.distribution.sample(&mut f.rng);
-                    f.radius =
+                    let r =
                         0.5 * coarse_grain(f.spec.law, f.spec.alpha, d, f.spec.density).diameter;
-                    (s.group_of(d), d)
+                    (s.group_of(d), d, r)
                 }
             };
             let (position, cell, u) = match (&f.spec.source, flow) {
@@ -305,7 +306,7 @@ pub fn feed_particles(
                         .then(|| *f.flux_bound.get_or_insert_with(|| flux_bound(p, flow)));
                     let mut tries = 0;
                     loop {
-                        let s = p.sample(&mut f.rng, f.radius);
+                        let s = p.sample(&mut f.rng, radius);
                         let (cell, u) = settle(flow, p.faces()[s.face].owner, s.centre);
                         let accept = match bound {
                             None => true,
@@ -322,7 +323,7 @@ pub fn feed_particles(
                 }
                 // (the scene rejects a patch without a mesh flow)
                 (FeedSource::Patch(p), None) => {
-                    (p.sample(&mut f.rng, f.radius).centre, hint::UNLOCATED, None)
+                    (p.sample(&mut f.rng, radius).centre, hint::UNLOCATED, None)
                 }
             };
             let given = match u {

@@ -40,20 +40,16 @@ pub fn render(scene: &Scene, r: &Report) -> String {
     s.push_str(&time_scales(scene, r));
     for (i, f) in scene.feeders.iter().enumerate() {
         let g = &scene.groups[f.group];
-        // one size, or a distribution's mean particle (fed into its bins)
-        let (name, d3) = match &g.size {
-            None => (format!("`{}`", g.name), g.diameter.powi(3)),
-            Some(b) => (
-                format!(
-                    "`{}` ({} bins by size: `{}`, …)",
-                    b.parent,
-                    b.edges.len() - 1,
-                    g.name
-                ),
-                b.distribution.mean_d3(),
+        let name = match &g.size {
+            None => format!("`{}`", g.name),
+            Some(b) => format!(
+                "`{}` ({} bins by size: `{}`, …)",
+                b.parent,
+                b.edges.len() - 1,
+                g.name
             ),
         };
-        let represented = g.alpha.powi(3) * g.density * std::f64::consts::PI / 6.0 * d3;
+        let represented = g.density * g.fed_volume();
         s.push_str(&format!(
             "feeders[{i}] → {}: {:.6e} simulated particles/s ({:.6e} kg/s of the original powder, {} originals each), from {} s to {}\n",
             name,

@@ -39,28 +39,6 @@ pub(crate) fn terminal_slip(law: DragLaw, tau: f64, a: f64, d: f64, fluid: Fluid
     v
 }
 
-/// The factor the opt-in forces put on a group's Stokes τ (at its smallest size): the
-/// Cunningham C_c and the added mass's inertia 1 + C_A·ρ_f/ρ_p, each at the diameter and
-/// density the spawn takes them at (the original's for SCG under `forces_at =
-/// "original"`, parcels and samples).
-pub(crate) fn tau_factor(
-    scene: &Scene,
-    g: &crate::Group,
-    s: &scg_core::physics::scaling::Scaled,
-) -> f64 {
-    let original =
-        scene.scg_at_original && g.law == scg_core::physics::scaling::CoarseGrainLaw::Scg;
-    let (d, rho) = if original || s.drag_diameter == g.min_diameter() {
-        (g.min_diameter(), g.density)
-    } else {
-        (s.drag_diameter, s.density)
-    };
-    let f = &scene.extra_forces;
-    f.cunningham
-        .map_or(1.0, |l| scg_core::physics::drag::cunningham_davies(d, l))
-        * f.inertia(scene.fluid.as_ref(), rho)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

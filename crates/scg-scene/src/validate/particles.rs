@@ -188,14 +188,7 @@ pub(super) fn feeder(
         })
         .ok_or_else(|| cx.err(&k("group"), format!("no group named `{}`", f.group)))?;
     let g = &groups[group];
-    // Each simulated particle stands for α³ originals (under every law, `sample` too): the
-    // original powder's volume (and mass) it carries is α³ originals' volume (their mean
-    // volume for a size distribution).
-    let d3 = g
-        .size
-        .as_ref()
-        .map_or(g.diameter.powi(3), |s| s.distribution.mean_d3());
-    let volume = scg_core::physics::scaling::represented_volume(g.alpha, d3.cbrt());
+    let volume = g.fed_volume();
     let rate = match (f.rate, f.volume_rate, f.mass_rate) {
         (Some(r), None, None) => cx.non_negative(&k("rate"), r)?,
         (None, Some(v), None) => cx.non_negative(&k("volume_rate"), v)? / volume,
