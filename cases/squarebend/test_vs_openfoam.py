@@ -318,6 +318,13 @@ class Erosion(unittest.TestCase):
             self.assertEqual(entry(e, "patches"), "(walls)")
             self.assertEqual(float(entry(e, "p")), 2.0e9)
             self.assertEqual((float(entry(e, "psi")), float(entry(e, "K"))), (2.0, 2.0))
+            # --erosion's scene: rebound, Finnie, and OpenFOAM's drag for scg too
+            d = sb.erosion_scene(SCENE, os.path.join(tmp, "e.toml"), 1.5e9, 0.7)
+            s = cyc.read_toml(d)
+            self.assertEqual(s["drag"]["law"], "putnam")
+            self.assertEqual(s["erosion"], {"model": "finnie", "flow_stress": 1.5e9})
+            self.assertEqual(s["flow"]["patches"]["restitution"], 0.7)
+            self.assertTrue(os.path.isabs(s["flow"]["case"]))
             with open(p, "w") as f:
                 f.write(base + '\n[erosion]\nmodel = "dnv"\nwall_density = 7800.0\n')
             with self.assertRaises(cyc.SceneError) as c:

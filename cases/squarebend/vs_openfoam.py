@@ -328,14 +328,16 @@ def erosion(of_time_dir, centres_file, patches, scg_csv, region, dest=None):
 
 
 def erosion_scene(path, dest, flow_stress, restitution):
-    """The scene of `path` with its walls rebounding (e = `restitution`) and Finnie's
-    erosion on them (p = `flow_stress` Pa), written to `dest` for both codes."""
+    """The scene of `path` with its walls rebounding (e = `restitution`), Finnie's erosion
+    on them (p = `flow_stress` Pa) and OpenFOAM's drag (`putnam`, its sphereDrag), written
+    to `dest` for both codes."""
     s = cyc.read_toml(path)
     flow = s.setdefault("flow", {})
     patches = flow.setdefault("patches", {})
     patches["wall_model"] = "rebound"
     patches["restitution"] = float(restitution)
     s["erosion"] = {"model": "finnie", "flow_stress": float(flow_stress)}
+    s.setdefault("drag", {})["law"] = "putnam"
     if "case" in flow and not os.path.isabs(flow["case"]):
         flow["case"] = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(path)), flow["case"]))
     with open(dest, "w", encoding="utf-8") as f:
