@@ -358,6 +358,7 @@ fn every_shipped_case_accounts_for_every_particle() {
         ("classifier-cut", "0.004"),
         ("cyclone", "0.04"),
         ("squarebend", "0.02"),
+        ("elbow", "0.02"),
         ("duct", "0.1"),
     ] {
         let path = format!("{}/cases/{case}.toml", env!("CARGO_MANIFEST_DIR"));

@@ -210,3 +210,99 @@ fn mesh_flow_patches_are_recorded() {
         assert_eq!(meshes, counts, "{}", file.display());
     }
 }
+
+/// A run with `[erosion]` (the elbow, briefly): its recorders get the wear map once, at
+/// the end. The MCAP carries it (read back exactly, also what `scg replay` rebuilds the
+/// `.rrd` from); the `.rrd` has `erosion/<patch>` as a `Mesh3D` with one colour and one
+/// `depth_rate` per vertex (three vertices per triangle, the face's rate) at the last
+/// step, and `erosion/deepest`; the VTK folder `<case>_erosion.vtu` with the cell data.
+#[test]
+fn the_wear_map_is_recorded_at_the_end() {
+    use rerun::Mesh3D;
+    use scg::core::stages::erosion::ErosionLog;
+    use scg::record::VtkSink;
+    use scg::record::layout::COMPONENT_DEPTH_RATE;
+
+    let scene = common::case("elbow", &["duration=0.02", "feed_scale=0.05"]);
+    let dir = tempfile::tempdir().unwrap();
+    let (rrd, mcap, vtk) = (
+        dir.path().join("e.rrd"),
+        dir.path().join("e.mcap"),
+        dir.path().join("vtk"),
+    );
+    let meta = scene.run_meta(Vec::new());
+    let mut sim = scene.build(true);
+    let mem = MemorySink::default();
+    let wear = mem.wear.clone();
+    sim.add_recorder(Box::new(mem));
+    sim.add_recorder(Box::new(Background::spawn(vec![
+        Box::new(RrdSink::create(&rrd, &meta).unwrap()),
+        Box::new(McapSink::create(&mcap, &meta).unwrap()),
+        Box::new(VtkSink::create(&vtk, &meta).unwrap()),
+    ])));
+    sim.record_now().unwrap();
+    sim.run(scene.steps(), |_| true).unwrap();
+    let total = sim.world.resource::<ErosionLog>().total_volume();
+    sim.finish_recorders().unwrap();
+    let w = wear.lock().unwrap().clone().expect("the wear map");
+    assert_eq!((w.model.as_str(), w.step), ("finnie", scene.steps()));
+    assert_eq!(w.patches.len(), 1);
+    let p = &w.patches[0];
+    assert_eq!((p.name.as_str(), p.faces.len()), ("walls", 2688));
+    assert_eq!(p.triangles.len(), 2 * 2688); // quads
+    let sum: f64 = p.volume.iter().sum();
+    assert!(
+        total > 0.0 && (sum - total).abs() <= 1e-12 * total,
+        "{sum} {total}"
+    );
+    let (_, _, rate) = w.deepest().unwrap();
+    assert_eq!(rate, p.depth_rate.iter().cloned().fold(0.0, f64::max));
+
+    // MCAP: the map read back bit for bit, and an .rrd rebuilt from it
+    let rec = read_mcap(&mcap).unwrap();
+    assert_eq!(rec.wear.as_ref(), Some(&w));
+    let rebuilt = dir.path().join("r.rrd");
+    scg::record::write_rrd(&rec, &rebuilt).unwrap();
+
+    for file in [&rrd, &rebuilt] {
+        let mut seen = BTreeMap::new();
+        for msg in DecoderApp::decode_eager(BufReader::new(File::open(file).unwrap())).unwrap() {
+            let LogMsg::ArrowMsg(_, arrow) = msg.unwrap() else {
+                continue;
+            };
+            let chunk = Chunk::from_arrow_msg(&arrow).unwrap();
+            let path = chunk.entity_path().to_string();
+            if !path.starts_with("/erosion/") {
+                continue;
+            }
+            let steps =
+                chunk.timelines()[&TimelineName::from_static_str(TIMELINE_STEP)].times_raw();
+            assert!(steps.iter().all(|&s| s == w.step as i64), "{path}");
+            if path == "/erosion/walls" {
+                let pos: Vec<&[[f32; 3]]> = chunk
+                    .iter_slices::<[f32; 3]>(Mesh3D::descriptor_vertex_positions().component)
+                    .collect();
+                let rates: Vec<&[f64]> = chunk
+                    .iter_slices::<f64>(COMPONENT_DEPTH_RATE.into())
+                    .collect();
+                assert_eq!(pos[0].len(), 3 * p.triangles.len());
+                let want: Vec<f64> = p
+                    .triangle_face
+                    .iter()
+                    .flat_map(|&f| [p.depth_rate[f as usize]; 3])
+                    .collect();
+                assert_eq!(rates[0], &want[..]);
+            }
+            seen.insert(path, chunk.num_rows());
+        }
+        assert_eq!(
+            seen.keys().cloned().collect::<Vec<_>>(),
+            ["/erosion/deepest", "/erosion/walls"],
+            "{}",
+            file.display()
+        );
+    }
+    let text = std::fs::read_to_string(vtk.join(format!("{}_erosion.vtu", meta.case))).unwrap();
+    assert!(text.contains(&format!("NumberOfCells=\"{}\"", p.triangles.len())));
+    assert!(text.contains("Name=\"depth_rate_m_per_s\""));
+}

@@ -321,8 +321,9 @@ def erosion(of_time_dir, centres_file, patches, scg_csv, region, dest=None):
     print(text, end="")
     if dest:
         with open(dest, "w") as f:
-            json.dump({"openfoam_total": of_total, "scg_total": scg_total,
+            json.dump({"openfoam_total": of_total, "scg_total": scg_total, "region": region,
                        "same_region": top_of == top_scg, "deepest_distance": d,
+                       "openfoam_deepest": list(of_max[1]), "scg_deepest": list(scg_max[1]),
                        "regions": [[list(k), v[0] / of_total, v[1] / scg_total] for k, v in rows]}, f, indent=1)
     return 0
 

@@ -44,6 +44,8 @@ import numpy as np
 VERIFIED = "1 file verified without error"
 POINT_FIELDS = ["x", "y", "z", "vx", "vy", "vz", "diameter", "density", "id", "group"]
 POINT_STRIDE = 72
+# a run with turbulent dispersion adds |u'| (FLOAT64) after `group`
+POINT_LAYOUTS = [(POINT_FIELDS, POINT_STRIDE), (POINT_FIELDS + ["fluctuation"], POINT_STRIDE + 8)]
 FLOAT64, UINT32 = 8, 5  # foxglove.PackedElementField.NumericType
 
 
@@ -116,7 +118,7 @@ def read_mcap(path: Path, validate_crcs: bool) -> dict:
                 cloud = PointCloud()
                 cloud.ParseFromString(message.data)
                 names = [field.name for field in cloud.fields]
-                if names != POINT_FIELDS or cloud.point_stride != POINT_STRIDE:
+                if (names, cloud.point_stride) not in POINT_LAYOUTS:
                     raise ValueError(f"unexpected point layout {names}, stride {cloud.point_stride}")
                 if cloud.frame_id != "world" or cloud.pose.orientation.w != 1.0:
                     raise ValueError("unexpected frame_id or pose")
@@ -314,6 +316,52 @@ def check_patches(rrd: Path, mcap: Path) -> str:
     return ", ".join(f"{n} ({want[n][0]}, {len(want[n][2])} triangles)" for n in sorted(want))
 
 
+def check_erosion(rrd: Path, mcap_path: Path, vtk: Path | None = None) -> str:
+    """The wear map of a run with [erosion]: the MCAP's `erosion.json` attachment, the
+    rrd's `/erosion/<patch>` Mesh3D (three vertices per triangle, the face's depth rate
+    per vertex, float64 exactly) and, with a VTK folder, `*_erosion.vtu` read by meshio
+    (the same rate per triangle)."""
+    from rerun.experimental import RrdReader
+
+    raw = read_mcap(mcap_path, validate_crcs=False)["attachments"].get("erosion.json")
+    meshes = {}
+    for chunk in RrdReader(rrd).stream():
+        if chunk.entity_path.startswith("/erosion/") and chunk.entity_path != "/erosion/deepest":
+            batch = chunk.to_record_batch()
+            pos = batch.column("Mesh3D:vertex_positions")[0].values.flatten()
+            rate = batch.column("depth_rate")[0].values.to_numpy(zero_copy_only=False)
+            meshes[chunk.entity_path.removeprefix("/erosion/")] = (len(pos) // 3, rate)
+    if raw is None:
+        if meshes:
+            raise ValueError(f"rrd has erosion meshes {sorted(meshes)} but the MCAP no erosion.json")
+        return "no [erosion]: no wear map in either file"
+    wear = json.loads(raw)
+    names = [p["name"] for p in wear["patches"]]
+    if sorted(meshes) != sorted(names):
+        raise ValueError(f"wear patches: rrd {sorted(meshes)}, mcap {names}")
+    parts = []
+    for p in wear["patches"]:
+        per_vertex = np.repeat(np.asarray(p["depth_rate"])[np.asarray(p["triangle_face"], dtype=int)], 3)
+        n, rate = meshes[p["name"]]
+        if n != 3 * len(p["triangles"]) or not np.array_equal(rate, per_vertex):
+            raise ValueError(f"wear of {p['name']!r}: rrd mesh differs from the MCAP's map")
+        parts.append(f"{p['name']} ({len(p['faces'])} faces, max {max(p['depth_rate']):.3e} m/s)")
+    if vtk is not None:
+        import meshio
+
+        files = list(vtk.glob("*_erosion.vtu"))
+        if len(files) != 1:
+            raise ValueError(f"expected one *_erosion.vtu in {vtk}, found {len(files)}")
+        m = meshio.read(files[0])
+        got = np.concatenate(m.cell_data["depth_rate_m_per_s"])
+        want = np.concatenate([np.asarray(p["depth_rate"])[np.asarray(p["triangle_face"], dtype=int)]
+                               for p in wear["patches"]])
+        if not np.array_equal(got, want):
+            raise ValueError(f"{files[0].name}: depth rates differ from the MCAP's map")
+        parts.append(f"meshio reads {files[0].name} ({len(got)} triangles)")
+    return ", ".join(parts)
+
+
 def check_vtk(vtk: Path, mcap_path: Path) -> str:
     import xml.etree.ElementTree as ET
 
@@ -331,9 +379,15 @@ def check_vtk(vtk: Path, mcap_path: Path) -> str:
         raise ValueError(f"{len(files)} frames in the .pvd, {len(by_step)} in the MCAP")
     n = 0
     for name in files:
-        mesh = meshio.read(vtk / name)
         step = int(name.rsplit("_", 1)[1].split(".")[0])
         points = by_step[step]
+        if len(points) == 0:
+            # meshio reads no grid without cells (vtk.rs): an empty frame is checked as XML
+            piece = ET.parse(vtk / name).getroot().find("UnstructuredGrid/Piece")
+            if piece is None or piece.get("NumberOfPoints") != "0":
+                raise ValueError(f"{name}: the MCAP's frame is empty, the file is not")
+            continue
+        mesh = meshio.read(vtk / name)
         order = np.argsort(mesh.point_data["id"], kind="stable")
         ids = np.asarray(mesh.point_data["id"])[order]
         if not np.array_equal(ids, points["id"]):
@@ -377,6 +431,8 @@ def main() -> int:
     if args.vtk is not None:
         vtk = args.vtk
         checks.append(("meshio reads the VTK export", lambda _rrd, mcap: check_vtk(vtk, mcap)))
+    checks.append(("wear map rrd Mesh3D == mcap erosion.json",
+                   lambda rrd, mcap: check_erosion(rrd, mcap, args.vtk)))
     failures = 0
     for number, (name, check) in enumerate(checks, start=1):
         try:

@@ -85,6 +85,9 @@ pub fn replay(a: ReplayArgs) -> i32 {
                     for f in &rec.frames {
                         s.write_frame(f)?;
                     }
+                    if let Some(w) = &rec.wear {
+                        s.write_wear(w)?;
+                    }
                     s.finish()?;
                 }
                 Ok(())

@@ -129,10 +129,67 @@ pub struct RunMeta {
     pub warnings: Vec<String>,
 }
 
+/// The wear of a run's walls (`[erosion]`), handed to the recorders once, at the end of
+/// the run, before they finish.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct WearMap {
+    /// Erosion model (`finnie`, `dnv`).
+    pub model: String,
+    /// Step and time (s) the wear was summed up to.
+    pub step: u64,
+    /// Time, s.
+    pub time: f64,
+    /// The logged patches.
+    pub patches: Vec<WearPatch>,
+}
+
+/// One patch's wear, face by face.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct WearPatch {
+    /// Patch name.
+    pub name: String,
+    /// The mesh points the faces use, m.
+    pub vertices: Vec<[f64; 3]>,
+    /// The faces fanned into triangles (indices into `vertices`).
+    pub triangles: Vec<[u32; 3]>,
+    /// The face (index into the per-face vectors) of each triangle.
+    pub triangle_face: Vec<u32>,
+    /// The mesh's index of each face.
+    pub faces: Vec<u32>,
+    /// Volume removed per face, m³.
+    pub volume: Vec<f64>,
+    /// Mean depth rate per face over the run, m/s: volume / (area · time).
+    pub depth_rate: Vec<f64>,
+    /// Impacts per face (simulated particles).
+    pub impacts: Vec<u64>,
+}
+
+impl WearMap {
+    /// The deepest face: (patch index, face index in it, depth rate m/s), if any wore.
+    pub fn deepest(&self) -> Option<(usize, usize, f64)> {
+        self.patches
+            .iter()
+            .enumerate()
+            .flat_map(|(p, w)| {
+                w.depth_rate
+                    .iter()
+                    .enumerate()
+                    .map(move |(f, &r)| (p, f, r))
+            })
+            .filter(|x| x.2 > 0.0)
+            .max_by(|a, b| a.2.total_cmp(&b.2))
+    }
+}
+
 /// Something that stores frames: a file writer, an in-memory buffer in tests…
 pub trait FrameSink: Send + Sync {
     /// Store one frame. An error stops the run.
     fn write_frame(&mut self, frame: &Frame) -> Result<(), String>;
+    /// Store the wear of the run's walls (called once before [`FrameSink::finish`] when
+    /// the run logs erosion). By default, ignored.
+    fn write_wear(&mut self, _wear: &WearMap) -> Result<(), String> {
+        Ok(())
+    }
     /// Flush and close; called exactly once at the end of a run (also after an interrupt).
     fn finish(&mut self) -> Result<(), String>;
 }
@@ -152,6 +209,8 @@ pub struct Recorders {
 pub struct MemorySink {
     /// Frames received so far.
     pub frames: std::sync::Arc<std::sync::Mutex<Vec<Frame>>>,
+    /// The wear of the walls, once the run hands it over.
+    pub wear: std::sync::Arc<std::sync::Mutex<Option<WearMap>>>,
 }
 
 impl FrameSink for MemorySink {
@@ -160,6 +219,11 @@ impl FrameSink for MemorySink {
             .lock()
             .map_err(|e| e.to_string())?
             .push(frame.clone());
+        Ok(())
+    }
+
+    fn write_wear(&mut self, wear: &WearMap) -> Result<(), String> {
+        *self.wear.lock().map_err(|e| e.to_string())? = Some(wear.clone());
         Ok(())
     }
     fn finish(&mut self) -> Result<(), String> {

@@ -354,10 +354,21 @@ impl Simulation {
         Ok(steps)
     }
 
-    /// Flush and close every recorder.
+    /// Flush and close every recorder, handing each the wear of the walls first when the
+    /// run logs erosion ([`FrameSink::write_wear`](crate::frame::FrameSink::write_wear)).
     pub fn finish_recorders(&mut self) -> Result<(), SimError> {
+        let wear = crate::stages::erosion::wear_map(&self.world, self.step_count(), self.time());
         let mut rec = self.world.resource_mut::<Recorders>();
         let mut first = None;
+        if let Some(w) = &wear {
+            for s in rec.sinks.iter_mut() {
+                if let Err(e) = s.write_wear(w)
+                    && first.is_none()
+                {
+                    first = Some(e);
+                }
+            }
+        }
         for s in rec.sinks.iter_mut() {
             if let Err(e) = s.finish()
                 && first.is_none()

@@ -5,7 +5,13 @@ use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 
-use scg_core::frame::{Frame, FrameSink};
+use scg_core::frame::{Frame, FrameSink, WearMap};
+
+/// What the writer thread is handed.
+enum Msg {
+    Frame(Frame),
+    Wear(WearMap),
+}
 
 /// Frames waiting for the writer at most (back-pressure beyond that).
 const QUEUE: usize = 2;
@@ -16,23 +22,27 @@ const QUEUE: usize = 2;
 /// at the next `write_frame` or at `finish`, which closes the queue, waits for the writer
 /// and finishes every sink (so the files are complete when it returns).
 pub struct Background {
-    tx: Option<SyncSender<Frame>>,
+    tx: Option<SyncSender<Msg>>,
     writer: Option<JoinHandle<Result<(), String>>>,
     error: Arc<Mutex<Option<String>>>,
 }
 
 fn writer(
-    rx: Receiver<Frame>,
+    rx: Receiver<Msg>,
     mut sinks: Vec<Box<dyn FrameSink>>,
     error: Arc<Mutex<Option<String>>>,
 ) -> Result<(), String> {
     let mut first: Option<String> = None;
-    for frame in rx {
+    for msg in rx {
         if first.is_some() {
             continue; // drain so the sender never blocks
         }
         for s in sinks.iter_mut() {
-            if let Err(e) = s.write_frame(&frame) {
+            let written = match &msg {
+                Msg::Frame(frame) => s.write_frame(frame),
+                Msg::Wear(wear) => s.write_wear(wear),
+            };
+            if let Err(e) = written {
                 if let Ok(mut slot) = error.lock() {
                     *slot = Some(e.clone());
                 }
@@ -67,8 +77,8 @@ impl Background {
     }
 }
 
-impl FrameSink for Background {
-    fn write_frame(&mut self, frame: &Frame) -> Result<(), String> {
+impl Background {
+    fn send(&mut self, msg: Msg) -> Result<(), String> {
         if let Some(e) = self.error.lock().map_err(|e| e.to_string())?.clone() {
             return Err(e);
         }
@@ -76,8 +86,18 @@ impl FrameSink for Background {
         if self.writer.is_none() {
             return Err("could not start the recorder thread".into());
         }
-        tx.send(frame.clone())
+        tx.send(msg)
             .map_err(|_| "the recorder thread stopped".to_string())
+    }
+}
+
+impl FrameSink for Background {
+    fn write_frame(&mut self, frame: &Frame) -> Result<(), String> {
+        self.send(Msg::Frame(frame.clone()))
+    }
+
+    fn write_wear(&mut self, wear: &WearMap) -> Result<(), String> {
+        self.send(Msg::Wear(wear.clone()))
     }
 
     fn finish(&mut self) -> Result<(), String> {

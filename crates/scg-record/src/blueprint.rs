@@ -35,8 +35,8 @@ use scg_core::frame::RunMeta;
 
 use crate::RecordError;
 use crate::layout::{
-    ENTITY_GEOMETRY, ENTITY_PARTICLES, ENTITY_PATCHES, ENTITY_SCENE, ENTITY_STATS, ENTITY_WARNINGS,
-    RRD_APPLICATION_ID, TIMELINE_SIM_TIME,
+    ENTITY_EROSION, ENTITY_GEOMETRY, ENTITY_PARTICLES, ENTITY_PATCHES, ENTITY_SCENE, ENTITY_STATS,
+    ENTITY_WARNINGS, RRD_APPLICATION_ID, TIMELINE_SIM_TIME,
 };
 
 /// Radius (UI points) of the points of the group with the largest diameter; the smallest
@@ -285,7 +285,7 @@ fn build(meta: &RunMeta, stat_names: &[String]) -> Result<Vec<LogMsg>, RecordErr
     rec.set_time_sequence("blueprint", 0);
     let mut b = Builder { rec, next_id: 0 };
 
-    // 3D view of particles and geometry.
+    // 3D view of particles and geometry (and, at the end of a run with erosion, the wear).
     let scene3d = b.view(
         "3D",
         &meta.case,
@@ -294,6 +294,7 @@ fn build(meta: &RunMeta, stat_names: &[String]) -> Result<Vec<LogMsg>, RecordErr
             format!("+ /{ENTITY_PARTICLES}/**"),
             format!("+ /{ENTITY_GEOMETRY}/**"),
             format!("+ /{}/**", ENTITY_PATCHES.join("/")),
+            format!("+ /{ENTITY_EROSION}/**"),
         ],
     )?;
     if let Some((position, target)) = eye(meta) {

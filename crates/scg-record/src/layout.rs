@@ -31,6 +31,15 @@ pub const ENTITY_PATCHES: [&str; 2] = ["flow", "patches"];
 pub const ENTITY_WARNINGS: &str = "warnings";
 /// Entity of the static `TextDocument` holding the scene file.
 pub const ENTITY_SCENE: &str = "scene";
+/// Parent entity of the wear of a run with `[erosion]`: `erosion/<patch name>` holds a
+/// `Mesh3D` logged once at the run's last step, each face coloured by its depth rate
+/// ([`wear_color`]), with the extra component [`COMPONENT_DEPTH_RATE`] per vertex;
+/// `erosion/deepest` a `Points3D` on the deepest face's centre, labelled with its rate.
+pub const ENTITY_EROSION: &str = "erosion";
+/// Extra component of the `erosion/<patch>` meshes: the depth rate of the face each
+/// vertex belongs to (m/s, Float64, one per vertex; the faces' triangles do not share
+/// vertices).
+pub const COMPONENT_DEPTH_RATE: &str = "depth_rate";
 /// Name of the recording property (under `/__properties`) holding the run description.
 pub const RRD_PROPERTY: &str = "scg";
 /// Extra component logged with each group's `Points3D`: the particle ids (UInt32, one per
@@ -61,6 +70,9 @@ pub const FRAME_ID: &str = "world";
 pub const METADATA_NAME: &str = "scg";
 /// Name of the attachment holding the scene file.
 pub const SCENE_ATTACHMENT: &str = "scene.toml";
+/// Name of the attachment holding the run's wear (`[erosion]`): the
+/// [`scg_core::frame::WearMap`] as JSON, written when the run finishes.
+pub const EROSION_ATTACHMENT: &str = "erosion.json";
 /// Media type of the scene attachment.
 pub const SCENE_MEDIA_TYPE: &str = "application/toml";
 /// Bytes per point in the point clouds.
@@ -276,4 +288,27 @@ impl<'de> Deserialize<'de> for OrderedValuesIn {
         }
         deserializer.deserialize_map(V)
     }
+}
+
+/// The colour of a face worn at `rate` (m/s) when the deepest face wears at `max`: a log
+/// scale over three decades below `max`, dark blue to yellow (viridis' ends and middle,
+/// interpolated); faces that wore nothing grey. RGBA.
+pub fn wear_color(rate: f64, max: f64) -> [u8; 4] {
+    if !(rate > 0.0 && max > 0.0) {
+        return [150, 150, 150, 255];
+    }
+    let x = ((rate / max).log10() / 3.0 + 1.0).clamp(0.0, 1.0);
+    // viridis at 0, 1/4, 1/2, 3/4, 1
+    const STOPS: [[f64; 3]; 5] = [
+        [68.0, 1.0, 84.0],
+        [59.0, 82.0, 139.0],
+        [33.0, 145.0, 140.0],
+        [94.0, 201.0, 98.0],
+        [253.0, 231.0, 37.0],
+    ];
+    let f = x * 4.0;
+    let i = (f.floor() as usize).min(3);
+    let t = f - i as f64;
+    let c = |k: usize| (STOPS[i][k] + t * (STOPS[i + 1][k] - STOPS[i][k])).round() as u8;
+    [c(0), c(1), c(2), 255]
 }

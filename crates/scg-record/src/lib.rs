@@ -97,6 +97,9 @@ pub struct Recording {
     /// True when the file was closed properly (summary and footer present and valid); false
     /// for a file cut short, e.g. by a killed run, whose complete frames were recovered.
     pub complete: bool,
+    /// The wear of the walls at the end of a run with `[erosion]` (`None` without, or when
+    /// the run did not finish).
+    pub wear: Option<scg_core::frame::WearMap>,
 }
 
 /// `<path>.partial`: where a sink writes until it is finished.

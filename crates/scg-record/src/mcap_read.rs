@@ -13,10 +13,10 @@ use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOp
 use scg_core::frame::{Frame, GroupMeta, Outline, PatchSurface, RunMeta};
 
 use crate::layout::{
-    FORMAT_VERSION, FieldType, GroupJson, META_CASE, META_DT, META_FORMAT, META_GROUPS,
-    META_OUTLINES, META_RECORD_EVERY, META_SCENE_DIR, META_SCG_VERSION, META_SEED, META_WARNINGS,
-    METADATA_NAME, OutlineJson, POINT_FIELD_FLUCTUATION, POINT_FIELDS, SCENE_ATTACHMENT, StatsIn,
-    TOPIC_PARTICLES, TOPIC_PATCHES, TOPIC_STATS,
+    EROSION_ATTACHMENT, FORMAT_VERSION, FieldType, GroupJson, META_CASE, META_DT, META_FORMAT,
+    META_GROUPS, META_OUTLINES, META_RECORD_EVERY, META_SCENE_DIR, META_SCG_VERSION, META_SEED,
+    META_WARNINGS, METADATA_NAME, OutlineJson, POINT_FIELD_FLUCTUATION, POINT_FIELDS,
+    SCENE_ATTACHMENT, StatsIn, TOPIC_PARTICLES, TOPIC_PATCHES, TOPIC_STATS,
 };
 use crate::{RecordError, Recording};
 
@@ -123,6 +123,7 @@ pub fn read_mcap(path: &Path) -> Result<Recording, RecordError> {
         meta,
         frames,
         complete,
+        wear: state.wear.take(),
     })
 }
 
@@ -151,6 +152,7 @@ struct ReadState {
     channels: HashMap<u16, ChannelKind>,
     meta: Option<RunMeta>,
     scene_toml: Option<String>,
+    wear: Option<scg_core::frame::WearMap>,
     patches: Vec<PatchSurface>,
     pending: BTreeMap<u32, Pending>,
 }
@@ -222,6 +224,12 @@ impl ReadState {
             }
             Record::Metadata(metadata) if metadata.name == METADATA_NAME => {
                 self.meta = Some(parse_meta(&metadata.metadata)?);
+            }
+            Record::Attachment { header, data, .. } if header.name == EROSION_ATTACHMENT => {
+                self.wear = Some(
+                    serde_json::from_slice(&data)
+                        .map_err(|e| format!("attachment `{EROSION_ATTACHMENT}`: {e}"))?,
+                );
             }
             Record::Attachment { header, data, .. } if header.name == SCENE_ATTACHMENT => {
                 let text = String::from_utf8(data.into_owned())

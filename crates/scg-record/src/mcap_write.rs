@@ -17,14 +17,15 @@ use foxglove::messages::{
 };
 use mcap::records::{MessageHeader, Metadata};
 use mcap::{Attachment, Compression, WriteOptions, Writer};
-use scg_core::frame::{Frame, FrameSink, RunMeta};
+use scg_core::frame::{Frame, FrameSink, RunMeta, WearMap};
 
 use crate::layout::{
-    FORMAT_VERSION, FRAME_ID, FieldType, GroupJson, META_CASE, META_DT, META_FORMAT, META_GROUPS,
-    META_OUTLINES, META_RECORD_EVERY, META_SCENE_DIR, META_SCG_VERSION, META_SEED, META_WARNINGS,
-    METADATA_NAME, OrderedValues, OutlineJson, POINT_FIELD_FLUCTUATION, POINT_FIELDS, POINT_STRIDE,
-    POINT_STRIDE_FLUCTUATION, SCENE_ATTACHMENT, SCENE_MEDIA_TYPE, STATS_JSON_SCHEMA,
-    STATS_SCHEMA_NAME, StatsOut, TOPIC_PARTICLES, TOPIC_PATCHES, TOPIC_STATS, patch_color,
+    EROSION_ATTACHMENT, FORMAT_VERSION, FRAME_ID, FieldType, GroupJson, META_CASE, META_DT,
+    META_FORMAT, META_GROUPS, META_OUTLINES, META_RECORD_EVERY, META_SCENE_DIR, META_SCG_VERSION,
+    META_SEED, META_WARNINGS, METADATA_NAME, OrderedValues, OutlineJson, POINT_FIELD_FLUCTUATION,
+    POINT_FIELDS, POINT_STRIDE, POINT_STRIDE_FLUCTUATION, SCENE_ATTACHMENT, SCENE_MEDIA_TYPE,
+    STATS_JSON_SCHEMA, STATS_SCHEMA_NAME, StatsOut, TOPIC_PARTICLES, TOPIC_PATCHES, TOPIC_STATS,
+    patch_color,
 };
 use crate::{RecordError, check_frame, commit_partial, partial_path};
 
@@ -70,6 +71,8 @@ impl Default for McapOptions {
 ///   file, both written first so that a truncated file keeps them;
 /// * with a mesh flow, `/flow/patches`: one `foxglove.SceneUpdate` at time 0 with every
 ///   boundary patch as a triangle list ([`TOPIC_PATCHES`]), in the first chunk;
+/// * with `[erosion]`, attachment `erosion.json` ([`EROSION_ATTACHMENT`]): the wear of
+///   the walls per face, written when the run finishes;
 /// * zstd-compressed chunks (see [`McapOptions`]), message and chunk indexes, statistics,
 ///   summary and CRCs.
 ///
@@ -460,6 +463,27 @@ impl McapSink {
         Ok(())
     }
 
+    /// Attaches the wear of the walls ([`EROSION_ATTACHMENT`], JSON; f64 values round-trip
+    /// exactly), logged at its time.
+    pub fn push_wear(&mut self, wear: &WearMap) -> Result<(), RecordError> {
+        let json = to_json(wear)?;
+        let time = (wear.time * 1e9).round() as u64;
+        let writer = self
+            .writer
+            .get_mut()
+            .unwrap_or_else(PoisonError::into_inner);
+        let writer = writer.as_mut().ok_or(RecordError::Finished)?;
+        writer
+            .attach(&Attachment {
+                log_time: time,
+                create_time: time,
+                name: EROSION_ATTACHMENT.to_owned(),
+                media_type: "application/json".to_owned(),
+                data: Cow::Owned(json.into_bytes()),
+            })
+            .map_err(mcap_err)
+    }
+
     /// Writes the summary and footer, syncs the file and renames `<path>.partial` to `<path>`.
     /// Idempotent.
     pub fn close(&mut self) -> Result<(), RecordError> {
@@ -484,6 +508,10 @@ impl McapSink {
 impl FrameSink for McapSink {
     fn write_frame(&mut self, frame: &Frame) -> Result<(), String> {
         self.push(frame).map_err(|e| e.to_string())
+    }
+
+    fn write_wear(&mut self, wear: &WearMap) -> Result<(), String> {
+        self.push_wear(wear).map_err(|e| e.to_string())
     }
 
     fn finish(&mut self) -> Result<(), String> {

@@ -25,12 +25,13 @@ use rerun::{
     Points3D, RecordingInfo, RecordingStream, Scalars, TextDocument, TextLog, TextLogLevel,
     ViewCoordinates,
 };
-use scg_core::frame::{Frame, FrameSink, RunMeta};
+use scg_core::frame::{Frame, FrameSink, RunMeta, WearMap};
 
 use crate::layout::{
-    COMPONENT_FLUCTUATION, COMPONENT_PARTICLE_ID, COMPONENT_SPEED, ENTITY_GEOMETRY,
-    ENTITY_PARTICLES, ENTITY_PATCHES, ENTITY_SCENE, ENTITY_STATS, ENTITY_WARNINGS,
-    RRD_APPLICATION_ID, RRD_PROPERTY, TIMELINE_SIM_TIME, TIMELINE_STEP, patch_color,
+    COMPONENT_DEPTH_RATE, COMPONENT_FLUCTUATION, COMPONENT_PARTICLE_ID, COMPONENT_SPEED,
+    ENTITY_EROSION, ENTITY_GEOMETRY, ENTITY_PARTICLES, ENTITY_PATCHES, ENTITY_SCENE, ENTITY_STATS,
+    ENTITY_WARNINGS, RRD_APPLICATION_ID, RRD_PROPERTY, TIMELINE_SIM_TIME, TIMELINE_STEP,
+    patch_color, wear_color,
 };
 use crate::{RecordError, Recording, check_frame, commit_partial, partial_path};
 
@@ -102,6 +103,9 @@ struct GroupEntity {
 ///   flow's boundary patches coloured by role), `warnings` (`TextLog`, one warning per
 ///   line), `scene` (`TextDocument` with the scene file), and the recording property `scg`
 ///   (case, scg_version, seed, dt, record_every, groups), and Z-up `ViewCoordinates` at `/`;
+/// * with `[erosion]`, at the last step: `erosion/<patch>` (`Mesh3D`, faces coloured by
+///   depth rate, the rate per vertex as `depth_rate`) and `erosion/deepest` (`Points3D`,
+///   labelled);
 /// * a blueprint (viewer layout, see the `blueprint` module), sent with the first frame.
 ///
 /// The file is written as `<path>.partial` and renamed to `<path>` by [`RrdSink::close`]
@@ -415,6 +419,77 @@ impl RrdSink {
         Ok(())
     }
 
+    /// Logs the wear of the walls at its step / time: per patch a `Mesh3D` whose faces are
+    /// coloured by depth rate (their triangles do not share vertices, so each face keeps
+    /// its own colour) with the rate per vertex, and the deepest face's centre labelled.
+    pub fn push_wear(&mut self, wear: &WearMap) -> Result<(), RecordError> {
+        self.check_encoder()?;
+        let rec = self.stream.as_ref().ok_or(RecordError::Finished)?;
+        let step = i64::try_from(wear.step).map_err(|_| RecordError::InvalidFrame {
+            step: wear.step,
+            reason: "step does not fit in an i64".into(),
+        })?;
+        rec.set_time_sequence(TIMELINE_STEP, step);
+        rec.set_duration_secs(TIMELINE_SIM_TIME, wear.time);
+        let deepest = wear.deepest();
+        let max = deepest.map_or(0.0, |d| d.2);
+        for p in &wear.patches {
+            let n = 3 * p.triangles.len();
+            let (mut positions, mut colors, mut rates) = (
+                Vec::with_capacity(n),
+                Vec::with_capacity(n),
+                Vec::with_capacity(n),
+            );
+            for (t, &f) in p.triangles.iter().zip(&p.triangle_face) {
+                let rate = p.depth_rate[f as usize];
+                let [r, g, b, a] = wear_color(rate, max);
+                for &v in t {
+                    let q = p.vertices[v as usize];
+                    positions.push([q[0] as f32, q[1] as f32, q[2] as f32]);
+                    colors.push(Color::from_unmultiplied_rgba(r, g, b, a));
+                    rates.push(rate);
+                }
+            }
+            let mesh = Mesh3D::new(positions).with_vertex_colors(colors);
+            let extra = AnyValues::default()
+                .with_component_from_data(COMPONENT_DEPTH_RATE, one(Float64Array::from(rates)));
+            rec.log(
+                child_path(ENTITY_EROSION, &p.name),
+                &[&mesh as &dyn AsComponents, &extra],
+            )
+            .map_err(rerun_err)?;
+        }
+        if let Some((pi, fi, rate)) = deepest {
+            let p = &wear.patches[pi];
+            let (mut c, mut k) = ([0.0f64; 3], 0.0);
+            for (t, &f) in p.triangles.iter().zip(&p.triangle_face) {
+                if f as usize == fi {
+                    for &v in t {
+                        let q = p.vertices[v as usize];
+                        (0..3).for_each(|i| c[i] += q[i]);
+                        k += 1.0;
+                    }
+                }
+            }
+            let label = format!(
+                "deepest ({}): {:.3e} m/s = {:.3e} mm/year, {} impacts",
+                wear.model,
+                rate,
+                rate * 365.25 * 86_400.0 * 1e3,
+                p.impacts[fi]
+            );
+            rec.log(
+                child_path(ENTITY_EROSION, "deepest"),
+                &Points3D::new([[(c[0] / k) as f32, (c[1] / k) as f32, (c[2] / k) as f32]])
+                    .with_labels([label])
+                    .with_colors([Color::from_rgb(255, 60, 60)])
+                    .with_radii([rerun::Radius::new_ui_points(6.0)]),
+            )
+            .map_err(rerun_err)?;
+        }
+        Ok(())
+    }
+
     /// Flushes the stream, writes the footer, syncs the file and renames `<path>.partial` to
     /// `<path>`. Idempotent.
     pub fn close(&mut self) -> Result<(), RecordError> {
@@ -459,6 +534,10 @@ impl FrameSink for RrdSink {
         self.push(frame).map_err(|e| e.to_string())
     }
 
+    fn write_wear(&mut self, wear: &WearMap) -> Result<(), String> {
+        self.push_wear(wear).map_err(|e| e.to_string())
+    }
+
     fn finish(&mut self) -> Result<(), String> {
         self.close().map_err(|e| e.to_string())
     }
@@ -480,6 +559,9 @@ pub fn write_rrd(rec: &Recording, path: &Path) -> Result<usize, RecordError> {
     let mut sink = RrdSink::create(path, &rec.meta)?;
     for frame in &rec.frames {
         sink.push(frame)?;
+    }
+    if let Some(w) = &rec.wear {
+        sink.push_wear(w)?;
     }
     sink.close()?;
     Ok(rec.frames.len())

@@ -3,7 +3,8 @@
 //! group (and, with dispersion, the fluctuation |u′|) as point data; a ParaView
 //! collection (`<case>.pvd`) that puts the frames on the simulation time; the scene
 //! geometry as line cells in `<case>_geometry.vtu`; and a mesh flow's boundary patches as
-//! triangles in `<case>_patches.vtu` (cell data `patch`, `role`).
+//! triangles in `<case>_patches.vtu` (cell data `patch`, `role`); with `[erosion]`, the
+//! wear of the walls per face in `<case>_erosion.vtu`, written when the run finishes.
 //!
 //! A frame without particles is a grid of no points and no cells, which VTK's reader and
 //! ParaView load; meshio 5.3 reads no grid without cells (not even one it writes itself).
@@ -15,7 +16,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use scg_core::frame::{Frame, FrameSink, Outline, PatchSurface, RunMeta};
+use scg_core::frame::{Frame, FrameSink, Outline, PatchSurface, RunMeta, WearMap};
 
 use crate::RecordError;
 
@@ -72,6 +73,11 @@ impl FrameSink for VtkSink {
         Ok(())
     }
 
+    fn write_wear(&mut self, wear: &WearMap) -> Result<(), String> {
+        let path = self.dir.join(format!("{}_erosion.vtu", self.case));
+        write_file(&path, &wear_vtu(wear)).map_err(|e| e.to_string())
+    }
+
     fn finish(&mut self) -> Result<(), String> {
         let mut pvd = String::from(
             "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
@@ -113,7 +119,7 @@ macro_rules! ascii_int {
         }
     )*};
 }
-ascii_int!(u8, u32, usize);
+ascii_int!(u8, u32, u64, usize);
 
 impl<T: Ascii> Ascii for &T {
     fn put(&self, out: &mut String) {
@@ -225,6 +231,42 @@ pub fn patches_vtu(patches: &[PatchSurface]) -> String {
     let mut cd = String::from("<CellData>\n");
     data_array(&mut cd, "UInt32", "patch", 1, &patch);
     data_array(&mut cd, "UInt32", "role", 1, &role);
+    cd.push_str("</CellData>\n");
+    let at = s.find("<Points>").unwrap_or(s.len());
+    s.insert_str(at, &cd);
+    s
+}
+
+/// The `.vtu` text of a run's wear (`[erosion]`): the logged patches' faces as triangles
+/// (each face fanned from its first point), with cell data `patch` (index in the map),
+/// `face` (the mesh's face index), `volume_m3`, `depth_rate_m_per_s` and `impacts` of the
+/// face each triangle belongs to.
+pub fn wear_vtu(wear: &WearMap) -> String {
+    let mut points: Vec<[f64; 3]> = Vec::new();
+    let (mut conn, mut offsets) = (Vec::new(), Vec::new());
+    let (mut patch, mut face, mut volume, mut rate, mut impacts) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for (i, p) in wear.patches.iter().enumerate() {
+        let base = points.len();
+        points.extend_from_slice(&p.vertices);
+        for (t, &f) in p.triangles.iter().zip(&p.triangle_face) {
+            conn.extend(t.iter().map(|&v| base + v as usize));
+            offsets.push(conn.len());
+            let f = f as usize;
+            patch.push(i as u32);
+            face.push(p.faces[f]);
+            volume.push(p.volume[f]);
+            rate.push(p.depth_rate[f]);
+            impacts.push(p.impacts[f]);
+        }
+    }
+    let mut s = grid(&points, (&conn, &offsets, VTK_TRIANGLE), |_| {});
+    let mut cd = String::from("<CellData>\n");
+    data_array(&mut cd, "UInt32", "patch", 1, &patch);
+    data_array(&mut cd, "UInt32", "face", 1, &face);
+    data_array(&mut cd, "Float64", "volume_m3", 1, &volume);
+    data_array(&mut cd, "Float64", "depth_rate_m_per_s", 1, &rate);
+    data_array(&mut cd, "UInt64", "impacts", 1, &impacts);
     cd.push_str("</CellData>\n");
     let at = s.find("<Points>").unwrap_or(s.len());
     s.insert_str(at, &cd);

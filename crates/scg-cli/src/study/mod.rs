@@ -9,6 +9,7 @@
 //! sampling where particles collide.
 
 pub mod cyclone;
+pub mod elbow;
 pub mod loading;
 pub(crate) mod plot;
 mod report;
@@ -39,9 +40,10 @@ pub const CLASSIFIER_CUT: &str = include_str!("../../../../cases/classifier-cut.
 pub struct StudyArgs {
     /// `classifier` (paper Table 3), `classifier-psd` (size distribution, partition curve),
     /// `classifier-cut` (classes at the cut: the steady-state d50), `cyclone` (grade
-    /// efficiency of cases/cyclone.toml in seven variants and the tracer check) or
-    /// `loading` (the classifier at several feed rates: SCG against sampling where
-    /// particles collide).
+    /// efficiency of cases/cyclone.toml in seven variants and the tracer check), `elbow`
+    /// (pneumatic conveying through cases/elbow.toml: penetration per class and where the
+    /// bend wears, in seven variants, and the tracer check) or `loading` (the classifier
+    /// at several feed rates: SCG against sampling where particles collide).
     pub study: String,
     /// Fewer particles (feed rates scaled down): a few minutes in all.
     #[arg(long)]
@@ -60,8 +62,8 @@ pub struct StudyArgs {
     #[arg(long, value_name = "FILE")]
     pub openfoam: Option<PathBuf>,
     /// `cyclone`: do not run; re-write the tables and plots of the finished study in this
-    /// folder (its summary.json and MCAPs) into `--out`, e.g. with `--openfoam`. `loading`:
-    /// with `--markdown`, print the finished study's table.
+    /// folder (its summary.json and MCAPs) into `--out`, e.g. with `--openfoam`. `loading`
+    /// and `elbow`: with `--markdown`, print the finished study's table.
     #[arg(long, value_name = "DIR")]
     pub from: Option<PathBuf>,
     /// `cyclone` only: run just these variants (comma-separated: original, scg2, scg4,
@@ -72,7 +74,7 @@ pub struct StudyArgs {
     /// count (more particles: less sampling noise, no longer the same cost).
     #[arg(long, value_name = "F", default_value_t = 1.0)]
     pub cg_feed: f64,
-    /// `cyclone` and `loading`, with `--from` (and no `--run`): print the study's tables in
+    /// `cyclone`, `elbow` and `loading`, with `--from` (and no `--run`): print the study's tables in
     /// Markdown (as docs/ quotes them) and write nothing.
     #[arg(long)]
     pub markdown: bool,
@@ -133,6 +135,33 @@ pub const VARIANTS: [(&str, [&str; 2]); 4] = [
     ),
 ];
 
+/// An embedded scene `text` whose mesh case `case = "<case>"` (relative to `cases/`) is
+/// made an absolute path, found under `SCG_CASES`, else `./cases`, else the `cases/` of
+/// the source tree the executable was built from.
+pub fn case_scene(text: &str, case: &str) -> Result<String, String> {
+    let built = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../cases");
+    let candidates: Vec<PathBuf> = match std::env::var_os("SCG_CASES") {
+        Some(c) => vec![PathBuf::from(c)],
+        None => vec![PathBuf::from("cases"), built],
+    };
+    let Some(dir) = candidates
+        .iter()
+        .map(|c| c.join(case))
+        .find(|d| d.join("constant/polyMesh").is_dir())
+    else {
+        return Err(format!(
+            "the mesh case is not at {} (set SCG_CASES to the repository's cases/ folder)",
+            candidates[0].join(case).display()
+        ));
+    };
+    let dir = dir.canonicalize().map_err(|e| e.to_string())?;
+    let key = format!("case = \"{case}\"");
+    if !text.contains(&key) {
+        return Err(format!("the embedded scene has no `{key}`"));
+    }
+    Ok(text.replacen(&key, &format!("case = {:?}", dir.display().to_string()), 1))
+}
+
 /// Write every table and plot of a study into `out`; returns the text report.
 pub fn write_outputs(runs: &[VariantRun], nozzle: f64, out: &Path) -> Result<String, String> {
     let text = write_tables(runs, out)?;
@@ -151,6 +180,9 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
     if a.study == "cyclone" {
         return cyclone::study(a, points);
     }
+    if a.study == "elbow" {
+        return elbow::study(a, points);
+    }
     if a.study == "loading" {
         if a.openfoam.is_some() || a.run.is_some() {
             eprintln!("error: --openfoam and --run are for `scg study cyclone`");
@@ -161,7 +193,7 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
     let Some(spec) = spec(&a.study) else {
         eprintln!(
             "error: unknown study `{}` (classifier, classifier-psd, classifier-cut, cyclone, \
-             loading)",
+             elbow, loading)",
             a.study
         );
         return EXIT_BAD_INPUT;

@@ -15,9 +15,11 @@ use glam::DVec3;
 
 use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
 use crate::components::CoarseGrain;
+use crate::frame::{WearMap, WearPatch};
 use crate::physics::erosion::ErosionModel;
 use crate::physics::mesh_flow::WallImpact;
 use crate::physics::scaling::represented_volume;
+use crate::stages::mesh_flow::MeshFlowState;
 
 /// What one face has taken.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -42,6 +44,10 @@ pub struct ErosionLog {
     /// Per particle that wore a wall: its id and the volume it removed, m³ (the
     /// interval of the total resamples particles).
     pub by_particle: BTreeMap<u32, f64>,
+    /// Every impact as (particle id, face, volume removed m³), in the log's order, when
+    /// asked for ([`ErosionLog::keep_impacts`]): a study's per-region shares resample
+    /// particles from it. Not in checkpoints (a restored run keeps the impacts after it).
+    pub impacts: Option<Vec<(u32, u32, f64)>>,
 }
 
 /// One impact as the integration reports it: the face, the particle's velocity and the
@@ -62,7 +68,13 @@ impl ErosionLog {
             patches,
             faces: BTreeMap::new(),
             by_particle: BTreeMap::new(),
+            impacts: None,
         }
+    }
+
+    /// Keep every impact from now on ([`ErosionLog::impacts`]).
+    pub fn keep_impacts(&mut self) {
+        self.impacts.get_or_insert_with(Vec::new);
     }
 
     /// The impact of a landing worth logging: on a logged patch (`patch_of` gives a face's
@@ -90,6 +102,9 @@ impl ErosionLog {
             w.mass += m;
             w.volume += q;
             *self.by_particle.entry(id).or_default() += q;
+            if let Some(v) = &mut self.impacts {
+                v.push((id, face, q));
+            }
         }
     }
 
@@ -165,6 +180,59 @@ impl Persist for ErosionPart {
         l.by_particle = particles.iter().copied().collect();
         Ok(())
     }
+}
+
+/// The wear of the logged patches for the recorders (`None` without `[erosion]` on a
+/// mesh flow), summed up to `step` at `time` s: each patch's faces fanned from their first
+/// point, with volume, depth rate and impacts per face.
+pub fn wear_map(world: &World, step: u64, time: f64) -> Option<WearMap> {
+    let log = world.get_resource::<ErosionLog>()?;
+    let state = world.get_resource::<MeshFlowState>()?;
+    let flow = &state.spec.flow;
+    let (mesh, g) = (flow.mesh(), flow.geometry());
+    let t = time.max(f64::MIN_POSITIVE);
+    let patches = mesh
+        .patches
+        .iter()
+        .zip(&log.patches)
+        .filter(|(_, on)| **on)
+        .map(|(p, _)| {
+            let mut w = WearPatch {
+                name: p.name.clone(),
+                ..Default::default()
+            };
+            let mut index = std::collections::HashMap::new();
+            for (k, f) in (p.start..p.start + p.size).enumerate() {
+                let ids: Vec<u32> = mesh
+                    .face(f)
+                    .iter()
+                    .map(|&q| {
+                        *index.entry(q).or_insert_with(|| {
+                            w.vertices.push(mesh.points[q as usize].to_array());
+                            (w.vertices.len() - 1) as u32
+                        })
+                    })
+                    .collect();
+                for j in 1..ids.len().saturating_sub(1) {
+                    w.triangles.push([ids[0], ids[j], ids[j + 1]]);
+                    w.triangle_face.push(k as u32);
+                }
+                let wear = log.faces.get(&(f as u32)).copied().unwrap_or_default();
+                let area = g.face_areas[f].length();
+                w.faces.push(f as u32);
+                w.volume.push(wear.volume);
+                w.depth_rate.push(wear.volume / (area * t));
+                w.impacts.push(wear.impacts);
+            }
+            w
+        })
+        .collect();
+    Some(WearMap {
+        model: log.model.name().to_string(),
+        step,
+        time,
+        patches,
+    })
 }
 
 /// Add the erosion log (the mesh integration fills it).

@@ -82,31 +82,9 @@ pub fn variant_overrides(alpha: f64, law: &str, feed: f64, duration: f64) -> Vec
     ]
 }
 
-/// The cyclone scene with its mesh case as an absolute path (the embedded scene's
-/// `case = "cyclone/coarse"` is relative to `cases/`), found under `SCG_CASES`, else
-/// `./cases`, else the `cases/` of the source tree the executable was built from.
+/// The cyclone scene with its mesh case as an absolute path (see [`super::case_scene`]).
 pub fn scene_text() -> Result<String, String> {
-    let built = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../cases");
-    let candidates: Vec<PathBuf> = match std::env::var_os("SCG_CASES") {
-        Some(c) => vec![PathBuf::from(c)],
-        None => vec![PathBuf::from("cases"), built],
-    };
-    let Some(dir) = candidates
-        .iter()
-        .map(|c| c.join("cyclone/coarse"))
-        .find(|d| d.join("constant/polyMesh").is_dir())
-    else {
-        return Err(format!(
-            "the cyclone mesh is not at {} (set SCG_CASES to the repository's cases/ folder)",
-            candidates[0].join("cyclone/coarse").display()
-        ));
-    };
-    let dir = dir.canonicalize().map_err(|e| e.to_string())?;
-    Ok(CYCLONE.replacen(
-        "case = \"cyclone/coarse\"",
-        &format!("case = {:?}", dir.display().to_string()),
-        1,
-    ))
+    super::case_scene(CYCLONE, "cyclone/coarse")
 }
 
 /// The cyclone scene's air field on Barth–Muschelknautz's control surface (the roof at

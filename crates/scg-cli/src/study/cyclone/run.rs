@@ -6,9 +6,11 @@ use std::time::Instant;
 
 use glam::DVec3;
 use scg_core::components::{GroupId, ParticleId};
+use scg_core::sim::Simulation;
 use scg_core::stages::collect::CollectLog;
 use scg_core::stages::outlet::OutletLog;
 use scg_core::state::Tally;
+use scg_scene::Scene;
 
 use super::grade::ClassGrade;
 
@@ -163,10 +165,25 @@ pub fn run_variant(
     snapshot_at: f64,
     mcap: Option<&Path>,
 ) -> Result<CycloneRun, String> {
+    run_variant_with(name, text, overrides, snapshot_at, mcap, |_| {}).map(|(r, _, _)| r)
+}
+
+/// [`run_variant`] for any scene with fates by patch (the elbow's too), with `setup`
+/// called on the built simulation before the first step; also returns the scene and the
+/// simulation as they ended (their logs: erosion…).
+pub fn run_variant_with(
+    name: &str,
+    text: &str,
+    overrides: &[String],
+    snapshot_at: f64,
+    mcap: Option<&Path>,
+    setup: impl FnOnce(&mut Simulation),
+) -> Result<(CycloneRun, Scene, Simulation), String> {
     let scene =
         scg_scene::parse(text, &format!("<{name}>"), name, overrides).map_err(|e| e.to_string())?;
     let ng = scene.groups.len();
     let mut sim = scene.build(mcap.is_some());
+    setup(&mut sim);
     if let Some(p) = mcap {
         let meta = scene.run_meta(scg_scene::check::check(&scene).messages());
         let sink = scg_record::McapSink::create(p, &meta).map_err(|e| e.to_string())?;
@@ -248,7 +265,7 @@ pub fn run_variant(
         .collect();
     let g0 = &scene.groups[0];
     let sampled = g0.alpha == 1.0 && name.starts_with("sample");
-    Ok(CycloneRun {
+    let run = CycloneRun {
         name: name.to_string(),
         alpha: g0.alpha,
         law: if sampled {
@@ -265,7 +282,8 @@ pub fn run_variant(
         escaped_late,
         unmatched: tracker.unmatched,
         snapshot,
-    })
+    };
+    Ok((run, scene, sim))
 }
 
 #[cfg(test)]
