@@ -1,5 +1,5 @@
 //! Numbers in docs that cannot drift: every table docs/ marks as generated
-//! (`<!-- generated: scg study cyclone|loading --from DIR --markdown ... -->` up to
+//! (`<!-- generated: scg study cyclone|elbow|loading --from DIR --markdown ... -->` up to
 //! `<!-- end of generated -->`) equals what the command prints from the committed summary.
 //!
 //! Run: `cargo test --release --test docs_tables`; after a rerun of the study, copy its
@@ -51,6 +51,21 @@ fn the_loading_table_is_the_studys_output() {
             body,
             scg::cli::study::loading::markdown(&records, duration),
             "docs/performance.md's table from {dir} differs from `scg study loading --from {dir} --markdown`"
+        );
+    }
+}
+
+/// The elbow study's table in cases/elbow/README.md is `scg study elbow --from DIR
+/// --markdown` of the committed summary.
+#[test]
+fn the_elbow_table_is_the_studys_output() {
+    for (dir, body) in generated("cases/elbow/README.md", "elbow") {
+        let (runs, tracers) =
+            scg::cli::study::elbow::read_summary(&common::repo(&dir)).expect(&dir);
+        assert_eq!(
+            body,
+            scg::cli::study::elbow::markdown(&runs, tracers.as_ref()),
+            "cases/elbow/README.md's table from {dir} differs from `scg study elbow --from {dir} --markdown`"
         );
     }
 }
@@ -112,6 +127,15 @@ fn markdown_needs_a_finished_study() {
             args(Some("docs/data/loading-study"), None, "loading"),
             &local
         ),
+        0
+    );
+    // the elbow study: --markdown needs --from, --from needs --markdown
+    assert_eq!(scg::cli::study::study(args(None, None, "elbow"), &local), 2);
+    let mut a = args(Some("docs/data/elbow-study"), None, "elbow");
+    a.markdown = false;
+    assert_eq!(scg::cli::study::study(a, &local), 2);
+    assert_eq!(
+        scg::cli::study::study(args(Some("docs/data/elbow-study"), None, "elbow"), &local),
         0
     );
 }
