@@ -108,6 +108,12 @@ fn each_impact_wears_finnies_volume_for_the_mass_it_stands_for() {
         }
         let got = originals.total_volume();
         assert!((got - want).abs() <= 1e-12 * want, "{got} vs {want}");
+        // the log keeps how they struck: 30° at 5 m/s normal, 8.66 m/s tangential
+        for w in originals.faces.values() {
+            assert!((w.mean_angle() - t).abs() <= 1e-12, "{}", w.mean_angle());
+            assert!((w.mean_normal_speed() - 10.0 * t.sin()).abs() <= 1e-12);
+            assert!((w.mean_tangential_speed() - 10.0 * t.cos()).abs() <= 1e-12);
+        }
         // SCG and sampling, α = 2: one particle standing for 8 originals, the same wear
         // (its own mass would count 2 originals under SCG: a quarter)
         for law in ["scg", "sample", "parcel"] {

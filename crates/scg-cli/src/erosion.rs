@@ -2,7 +2,7 @@
 //! deepest.
 
 use scg_core::sim::Simulation;
-use scg_core::stages::erosion::ErosionLog;
+use scg_core::stages::erosion::{ErosionLog, FaceWear};
 use scg_scene::Scene;
 
 /// One face's wear with where it is.
@@ -24,6 +24,12 @@ pub struct FaceRow {
     pub volume: f64,
     /// Mean depth rate, m/s: volume / (area · time).
     pub depth_rate: f64,
+    /// Mean impact angle to the wall plane over the powder mass that struck, degrees.
+    pub angle_deg: f64,
+    /// Mean normal impact speed (mass-weighted), m/s.
+    pub normal_speed: f64,
+    /// Mean tangential impact speed (mass-weighted), m/s.
+    pub tangential_speed: f64,
 }
 
 /// Every face hit, in face order (`None` without `[erosion]`).
@@ -50,6 +56,9 @@ pub fn rows(scene: &Scene, sim: &Simulation) -> Option<Vec<FaceRow>> {
                     mass: w.mass,
                     volume: w.volume,
                     depth_rate: w.volume / (area * t),
+                    angle_deg: w.mean_angle().to_degrees(),
+                    normal_speed: w.mean_normal_speed(),
+                    tangential_speed: w.mean_tangential_speed(),
                 }
             })
             .collect(),
@@ -101,7 +110,8 @@ pub fn render(scene: &Scene, sim: &Simulation, rows: &[FaceRow]) -> String {
     {
         s += &format!(
             "  deepest: face {} of `{}` at [{:.4}, {:.4}, {:.4}] m ({:.3e} m²): {} impacts, \
-             {:.4e} m³, {:.4e} m/s ({:.4e} mm/year at this feed)\n",
+             {:.4e} m³, {:.4e} m/s ({:.4e} mm/year at this feed); struck at {:.1}° on \
+             average, normal {:.2} m/s, tangential {:.2} m/s (mass-weighted)\n",
             r.face,
             r.patch,
             r.centre[0],
@@ -111,19 +121,26 @@ pub fn render(scene: &Scene, sim: &Simulation, rows: &[FaceRow]) -> String {
             r.impacts,
             r.volume,
             r.depth_rate,
-            r.depth_rate * YEAR * 1e3
+            r.depth_rate * YEAR * 1e3,
+            r.angle_deg,
+            r.normal_speed,
+            r.tangential_speed
         );
     }
     s
 }
 
-/// CSV: `patch,face,x,y,z,area_m2,impacts,mass_kg,volume_m3,depth_rate_m_per_s`.
+/// CSV: `patch,face,x,y,z,area_m2,impacts,mass_kg,volume_m3,depth_rate_m_per_s,
+/// angle_deg,normal_speed_m_per_s,tangential_speed_m_per_s` (the last three mass-weighted
+/// means of the impacts).
 pub fn csv(rows: &[FaceRow]) -> String {
-    let mut s =
-        String::from("patch,face,x,y,z,area_m2,impacts,mass_kg,volume_m3,depth_rate_m_per_s\n");
+    let mut s = String::from(
+        "patch,face,x,y,z,area_m2,impacts,mass_kg,volume_m3,depth_rate_m_per_s,angle_deg,\
+         normal_speed_m_per_s,tangential_speed_m_per_s\n",
+    );
     for r in rows {
         s += &format!(
-            "{},{},{:e},{:e},{:e},{:e},{},{:e},{:e},{:e}\n",
+            "{},{},{:e},{:e},{:e},{:e},{},{:e},{:e},{:e},{:e},{:e},{:e}\n",
             r.patch,
             r.face,
             r.centre[0],
@@ -133,7 +150,10 @@ pub fn csv(rows: &[FaceRow]) -> String {
             r.impacts,
             r.mass,
             r.volume,
-            r.depth_rate
+            r.depth_rate,
+            r.angle_deg,
+            r.normal_speed,
+            r.tangential_speed
         );
     }
     s
@@ -141,8 +161,9 @@ pub fn csv(rows: &[FaceRow]) -> String {
 
 /// The logged patches as a legacy-VTK surface (an unstructured grid of polygons, ASCII,
 /// which ParaView and meshio read) with the wear per face
-/// as cell data: `volume_m3`, `depth_rate_m_per_s`, `impacts` (zero on faces not hit), to
-/// open in ParaView (`None` without `[erosion]`).
+/// as cell data: `volume_m3`, `depth_rate_m_per_s`, `impacts`, and the impacts'
+/// mass-weighted `angle_deg`, `normal_speed_m_per_s`, `tangential_speed_m_per_s` (zero
+/// on faces not hit), to open in ParaView (`None` without `[erosion]`).
 pub fn vtk(scene: &Scene, sim: &Simulation) -> Option<String> {
     let log = sim.world.get_resource::<ErosionLog>()?;
     let m = scene.mesh_flow.as_ref()?;
@@ -206,6 +227,19 @@ pub fn vtk(scene: &Scene, sim: &Simulation) -> Option<String> {
     s += "SCALARS impacts double 1\nLOOKUP_TABLE default\n";
     for &f in &faces {
         s += &format!("{}\n", wear(f).impacts);
+    }
+    // the impacts' mass-weighted means, 0 on faces not hit
+    let mean = |w: FaceWear, x: f64| if w.mass > 0.0 { x / w.mass } else { 0.0 };
+    for (name, get) in [
+        ("angle_deg", (|w: FaceWear| w.angle_mass.to_degrees()) as fn(FaceWear) -> f64),
+        ("normal_speed_m_per_s", |w| w.normal_mass),
+        ("tangential_speed_m_per_s", |w| w.tangential_mass),
+    ] {
+        s += &format!("SCALARS {name} double 1\nLOOKUP_TABLE default\n");
+        for &f in &faces {
+            let w = wear(f);
+            s += &format!("{:e}\n", mean(w, get(w)));
+        }
     }
     Some(s)
 }

@@ -162,6 +162,12 @@ pub struct WearPatch {
     pub depth_rate: Vec<f64>,
     /// Impacts per face (simulated particles).
     pub impacts: Vec<u64>,
+    /// Mean impact angle to the wall per face (mass-weighted), rad; 0 where none struck.
+    pub angle: Vec<f64>,
+    /// Mean normal impact speed per face (mass-weighted), m/s; 0 where none struck.
+    pub normal_speed: Vec<f64>,
+    /// Mean tangential impact speed per face (mass-weighted), m/s; 0 where none struck.
+    pub tangential_speed: Vec<f64>,
 }
 
 impl WearMap {

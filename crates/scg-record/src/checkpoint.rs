@@ -11,8 +11,8 @@ use scg_core::checkpoint::Checkpoint;
 const MAGIC: &[u8; 8] = b"SCGCKPT\0";
 /// 2: particle records carry the carrier offset and the dispersion state; 3: the
 /// collecting zones' log; 4: the particles waiting in a collecting zone; 5: the erosion
-/// log.
-const FORMAT: u32 = 5;
+/// log; 6: its impact angles and speeds per face.
+const FORMAT: u32 = 6;
 
 /// Write `c` to `path` atomically.
 pub fn write_checkpoint(path: &Path, c: &Checkpoint) -> Result<(), String> {

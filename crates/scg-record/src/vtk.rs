@@ -239,13 +239,15 @@ pub fn patches_vtu(patches: &[PatchSurface]) -> String {
 
 /// The `.vtu` text of a run's wear (`[erosion]`): the logged patches' faces as triangles
 /// (each face fanned from its first point), with cell data `patch` (index in the map),
-/// `face` (the mesh's face index), `volume_m3`, `depth_rate_m_per_s` and `impacts` of the
-/// face each triangle belongs to.
+/// `face` (the mesh's face index), `volume_m3`, `depth_rate_m_per_s`, `impacts` and the
+/// impacts' mass-weighted `angle_deg`, `normal_speed_m_per_s` and
+/// `tangential_speed_m_per_s` (0 where none struck) of the face each triangle belongs to.
 pub fn wear_vtu(wear: &WearMap) -> String {
     let mut points: Vec<[f64; 3]> = Vec::new();
     let (mut conn, mut offsets) = (Vec::new(), Vec::new());
     let (mut patch, mut face, mut volume, mut rate, mut impacts) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut angle, mut normal, mut tangential) = (Vec::new(), Vec::new(), Vec::new());
     for (i, p) in wear.patches.iter().enumerate() {
         let base = points.len();
         points.extend_from_slice(&p.vertices);
@@ -258,6 +260,9 @@ pub fn wear_vtu(wear: &WearMap) -> String {
             volume.push(p.volume[f]);
             rate.push(p.depth_rate[f]);
             impacts.push(p.impacts[f]);
+            angle.push(p.angle[f].to_degrees());
+            normal.push(p.normal_speed[f]);
+            tangential.push(p.tangential_speed[f]);
         }
     }
     let mut s = grid(&points, (&conn, &offsets, VTK_TRIANGLE), |_| {});
@@ -267,6 +272,9 @@ pub fn wear_vtu(wear: &WearMap) -> String {
     data_array(&mut cd, "Float64", "volume_m3", 1, &volume);
     data_array(&mut cd, "Float64", "depth_rate_m_per_s", 1, &rate);
     data_array(&mut cd, "UInt64", "impacts", 1, &impacts);
+    data_array(&mut cd, "Float64", "angle_deg", 1, &angle);
+    data_array(&mut cd, "Float64", "normal_speed_m_per_s", 1, &normal);
+    data_array(&mut cd, "Float64", "tangential_speed_m_per_s", 1, &tangential);
     cd.push_str("</CellData>\n");
     let at = s.find("<Points>").unwrap_or(s.len());
     s.insert_str(at, &cd);

@@ -16,7 +16,7 @@ use glam::DVec3;
 use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
 use crate::components::CoarseGrain;
 use crate::frame::{WearMap, WearPatch};
-use crate::physics::erosion::ErosionModel;
+use crate::physics::erosion::{ErosionModel, impact_angle};
 use crate::physics::mesh_flow::WallImpact;
 use crate::physics::scaling::represented_volume;
 use crate::stages::mesh_flow::MeshFlowState;
@@ -30,6 +30,29 @@ pub struct FaceWear {
     pub mass: f64,
     /// Wall volume removed, m³.
     pub volume: f64,
+    /// Σ m·θ over the impacts: mass-weighted impact angle to the wall plane, kg·rad.
+    pub angle_mass: f64,
+    /// Σ m·v_n: mass-weighted normal (into the wall) impact speed, kg·m/s.
+    pub normal_mass: f64,
+    /// Σ m·|v_t|: mass-weighted tangential impact speed, kg·m/s.
+    pub tangential_mass: f64,
+}
+
+impl FaceWear {
+    /// Mean impact angle to the wall plane over the powder mass that struck, rad.
+    pub fn mean_angle(&self) -> f64 {
+        self.angle_mass / self.mass
+    }
+
+    /// Mean normal impact speed over the powder mass that struck, m/s.
+    pub fn mean_normal_speed(&self) -> f64 {
+        self.normal_mass / self.mass
+    }
+
+    /// Mean tangential impact speed over the powder mass that struck, m/s.
+    pub fn mean_tangential_speed(&self) -> f64 {
+        self.tangential_mass / self.mass
+    }
 }
 
 /// The erosion log (resource, with `[erosion]` on a mesh flow).
@@ -97,10 +120,15 @@ impl ErosionLog {
         impacts.sort_unstable_by_key(key);
         for (face, v, n, m, id) in impacts {
             let q = self.model.volume(m, v, n);
+            let vn = -v.dot(n);
+            let vt = (v + vn * n).length();
             let w = self.faces.entry(face).or_default();
             w.impacts += 1;
             w.mass += m;
             w.volume += q;
+            w.angle_mass += m * impact_angle(v, n);
+            w.normal_mass += m * vn;
+            w.tangential_mass += m * vt;
             *self.by_particle.entry(id).or_default() += q;
             if let Some(v) = &mut self.impacts {
                 v.push((id, face, q));
@@ -153,7 +181,10 @@ impl Persist for ErosionPart {
         c.erosion = Some((
             l.faces
                 .iter()
-                .map(|(f, w)| (*f, w.impacts, w.mass, w.volume))
+                .map(|(f, w)| {
+                    let sums = [w.mass, w.volume, w.angle_mass, w.normal_mass, w.tangential_mass];
+                    (*f, w.impacts, sums)
+                })
                 .collect(),
             l.by_particle.iter().map(|(i, q)| (*i, *q)).collect(),
         ));
@@ -166,13 +197,16 @@ impl Persist for ErosionPart {
         let mut l = world.resource_mut::<ErosionLog>();
         l.faces = rows
             .iter()
-            .map(|&(f, impacts, mass, volume)| {
+            .map(|&(f, impacts, [mass, volume, angle_mass, normal_mass, tangential_mass])| {
                 (
                     f,
                     FaceWear {
                         impacts,
                         mass,
                         volume,
+                        angle_mass,
+                        normal_mass,
+                        tangential_mass,
                     },
                 )
             })
@@ -223,6 +257,10 @@ pub fn wear_map(world: &World, step: u64, time: f64) -> Option<WearMap> {
                 w.volume.push(wear.volume);
                 w.depth_rate.push(wear.volume / (area * t));
                 w.impacts.push(wear.impacts);
+                let mean = |x: f64| if wear.mass > 0.0 { x / wear.mass } else { 0.0 };
+                w.angle.push(mean(wear.angle_mass));
+                w.normal_speed.push(mean(wear.normal_mass));
+                w.tangential_speed.push(mean(wear.tangential_mass));
             }
             w
         })
