@@ -8,7 +8,7 @@
 use glam::DVec3;
 use scg::core::physics::erosion::ErosionModel;
 use scg::core::physics::scaling::sphere_mass;
-use scg::core::stages::erosion::ErosionLog;
+use scg::core::stages::erosion::{ErosionLog, ErosionSpec};
 use scg_mesh::build::{BoxMesh, CellShape, PatchNaming};
 use scg_mesh::foam::{Format, write_case};
 
@@ -183,14 +183,15 @@ fn the_log_survives_a_checkpoint_and_bad_tables_are_refused() {
 /// The total's interval resamples particles, the ones that wore nothing as zeros.
 #[test]
 fn the_total_carries_a_particle_interval() {
-    let mut log = ErosionLog::new(
-        ErosionModel::Finnie {
+    let mut log = ErosionLog::new(ErosionSpec {
+        model: ErosionModel::Finnie {
             flow_stress: 1.0,
             psi: 1.0,
             k: 2.0,
         },
-        vec![true],
-    );
+        patches: vec![true],
+        walls: Vec::new(),
+    });
     // two particles, head-on (θ = 90°: f = K·cos²θ/6 = 0): use 30° impacts instead, with
     // masses 1 and 3 (volumes in the ratio 1 : 3)
     let t = 30f64.to_radians();
@@ -278,4 +279,122 @@ fn the_erosion_map_holds_every_logged_face() {
     );
     let csv = scg::cli::erosion::csv(&rows);
     assert_eq!(csv.lines().count(), rows.len() + 1);
+}
+
+/// `[erosion]` on `[[walls]]` that act as impulses, without a mesh flow: particles fired
+/// at an analytic plane at 30° (no air, no gravity: they strike at their own velocity)
+/// wear it Finnie's volume per impact to 1e-12, as one face without a centre or area;
+/// beads dropped into an STL box that sticks wear the triangles they land on, and the
+/// wear map and the VTK surface carry the box's triangles; bad `erosion.walls` entries and
+/// a scene with nothing to erode are refused naming the key.
+#[test]
+fn impulse_walls_wear_too_stl_per_triangle() {
+    let d = tempfile::tempdir().unwrap();
+    let t = THETA_DEG.to_radians();
+    let plane = format!(
+        "duration = 0.002\ndt = 1.0e-5\n[[walls]]\nname = \"floor\"\nkind = \"plane\"\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\nmodel = \"rebound\"\nrestitution = 0.5\n{FINNIE}\n[[groups]]\nname = \"a\"\ndiameter = 1.0e-4\ndensity = 2000.0\npositions = [[0.0, 0.0, 1.0e-3], [0.0, 1.0e-3, 1.0e-3], [0.0, 2.0e-3, 1.0e-3], [0.0, 3.0e-3, 1.0e-3]]\nvelocity = [{}, 0.0, {}]\n",
+        10.0 * t.cos(),
+        -10.0 * t.sin()
+    );
+    let path = d.path().join("plane.toml");
+    std::fs::write(&path, &plane).unwrap();
+    let sc = scg::scene::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = sc.build(false);
+    sim.run(sc.steps(), |_| true).unwrap();
+    let log = sim.world.resource::<ErosionLog>().clone();
+    let model = ErosionModel::Finnie {
+        flow_stress: 1e9,
+        psi: 2.0,
+        k: 2.0,
+    };
+    let v = 10.0 * DVec3::new(t.cos(), 0.0, -t.sin());
+    let want = 4.0 * model.volume(sphere_mass(1e-4, 2000.0), v, DVec3::Z);
+    assert!((log.total_volume() - want).abs() <= 1e-12 * want);
+    assert_eq!(log.wall_faces.len(), 1);
+    let w = log.wall_faces[&(0, 0)];
+    assert_eq!(w.impacts, 4);
+    assert!((w.mean_angle() - t).abs() <= 1e-12);
+    let rows = scg::cli::erosion::rows(&sc, &sim).unwrap();
+    assert_eq!(rows.len(), 1);
+    assert!(rows[0].patch == "floor" && rows[0].area.is_nan() && rows[0].centre[0].is_nan());
+    let text = scg::cli::erosion::render(&sc, &sim, &rows);
+    assert!(
+        text.contains("wall `floor`: 4 impacts on 1 faces"),
+        "{text}"
+    );
+    assert!(!text.contains("deepest"), "no area, no depth: {text}");
+
+    // the STL box, beads dropped in, sticking
+    let fixture = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/mesh-box.stl");
+    let mut text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/mesh-box.toml"
+    ))
+    .unwrap()
+    .replace(
+        "file = \"mesh-box.stl\"",
+        &format!("file = \"{fixture}\"\nmodel = \"stick\""),
+    )
+    .replace("duration = 0.02", "duration = 0.1");
+    let i = text.find("[material]").unwrap();
+    let j = text.find("[[walls]]").unwrap();
+    text.replace_range(i..j, &format!("{FINNIE}\n\n"));
+    let path = d.path().join("box.toml");
+    std::fs::write(&path, &text).unwrap();
+    let sc = scg::scene::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim = sc.build(false);
+    sim.run(sc.steps(), |_| true).unwrap();
+    let log = sim.world.resource::<ErosionLog>().clone();
+    let hits: u64 = log.wall_faces.values().map(|w| w.impacts).sum();
+    assert_eq!(hits, 4, "each bead strikes once, and sticks");
+    assert!(log.total_volume() > 0.0);
+    let rows = scg::cli::erosion::rows(&sc, &sim).unwrap();
+    // the beads drift sideways and stick to the side walls (the one thrown at 0.3 m/s
+    // along +y strikes the y = 5 mm side at 0.3 m/s normal)
+    assert!(rows.iter().all(|r| r.patch == "box"
+        && r.area > 0.0
+        && r.centre.iter().all(|c| c.abs() <= 5e-3 + 1e-12)));
+    assert!(
+        rows.iter()
+            .any(|r| r.centre[1] == 5e-3 && (r.normal_speed - 0.3).abs() < 1e-12)
+    );
+    let map =
+        scg::core::stages::erosion::wear_map(&sim.world, sim.step_count(), sim.time()).unwrap();
+    assert_eq!(map.patches.len(), 1);
+    let p = &map.patches[0];
+    let scg::core::physics::wall_shape::WallShape::Mesh(m) = &sc.impulse_walls[0].wall.shape else {
+        panic!()
+    };
+    assert_eq!(
+        (p.name.as_str(), p.faces.len()),
+        ("box", m.triangles().len())
+    );
+    let sum: f64 = p.volume.iter().sum();
+    assert!((sum - log.total_volume()).abs() <= 1e-12 * sum);
+    let vtk = scg::cli::erosion::vtk(&sc, &sim).unwrap();
+    assert!(vtk.contains(&format!(
+        "CELLS {} {}",
+        m.triangles().len(),
+        4 * m.triangles().len()
+    )));
+
+    // refused: an unknown wall, a wall particles escape through, nothing to erode
+    for (edit, key) in [
+        ("flow_stress = 1.0e9\nwalls = [\"lid\"]", "erosion.walls"),
+        (
+            "flow_stress = 1.0e9\npatches = [\"walls\"]",
+            "erosion.patches",
+        ),
+    ] {
+        std::fs::write(&path, text.replace("flow_stress = 1.0e9", edit)).unwrap();
+        let e = scg::scene::load(&path, &[]).unwrap_err().to_string();
+        assert!(e.contains(key), "{e}");
+    }
+    std::fs::write(
+        &path,
+        text.replace("model = \"stick\"", "model = \"escape\""),
+    )
+    .unwrap();
+    let e = scg::scene::load(&path, &[]).unwrap_err().to_string();
+    assert!(e.contains("nothing to erode"), "{e}");
 }

@@ -154,7 +154,7 @@ pub struct WearPatch {
     pub triangles: Vec<[u32; 3]>,
     /// The face (index into the per-face vectors) of each triangle.
     pub triangle_face: Vec<u32>,
-    /// The mesh's index of each face.
+    /// The mesh's face index (an STL wall's triangle index) of each face.
     pub faces: Vec<u32>,
     /// Volume removed per face, m³.
     pub volume: Vec<f64>,

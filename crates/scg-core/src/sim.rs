@@ -82,6 +82,8 @@ pub struct InletOutlet {
     /// Collecting zones and the steps a particle's centre must stay in each before it is
     /// removed as collected (0: on entry).
     pub collect_zones: Vec<(crate::region::Region, u64)>,
+    /// `[erosion]`: what is logged (mesh patches, impulse walls).
+    pub erosion: Option<crate::stages::erosion::ErosionSpec>,
 }
 
 /// Why a run stopped early.
@@ -253,6 +255,9 @@ impl Simulation {
             carrier::plugin(&mut world, &mut b, m);
         }
         motion::plugin(&mut b, &motion_res, rotation, cfg.mesh_flow.is_some());
+        if let Some(e) = io.erosion {
+            crate::stages::erosion::plugin(&mut world, crate::stages::erosion::ErosionLog::new(e));
+        }
         if let Some(m) = cfg.mesh_flow.clone() {
             mesh_flow::plugin(&mut world, &mut b, m, ng);
         }

@@ -274,7 +274,13 @@ pub fn wear_vtu(wear: &WearMap) -> String {
     data_array(&mut cd, "UInt64", "impacts", 1, &impacts);
     data_array(&mut cd, "Float64", "angle_deg", 1, &angle);
     data_array(&mut cd, "Float64", "normal_speed_m_per_s", 1, &normal);
-    data_array(&mut cd, "Float64", "tangential_speed_m_per_s", 1, &tangential);
+    data_array(
+        &mut cd,
+        "Float64",
+        "tangential_speed_m_per_s",
+        1,
+        &tangential,
+    );
     cd.push_str("</CellData>\n");
     let at = s.find("<Points>").unwrap_or(s.len());
     s.insert_str(at, &cd);

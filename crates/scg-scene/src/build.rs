@@ -103,6 +103,7 @@ impl Scene {
             outlet: self.outlet.as_ref().map(|o| self.outlet_spec(o)),
             seed: self.seed,
             impulse_walls: self.impulse_walls.clone(),
+            erosion: self.erosion.clone(),
             collect_zones: self
                 .zones
                 .iter()
@@ -128,7 +129,6 @@ impl Scene {
                 flow: m.flow.clone(),
                 interactions: self.patch_models.iter().map(|p| p.interaction).collect(),
                 sort_every: m.sort_every,
-                erosion: self.erosion.clone(),
             }),
             gravity: self.gravity,
             buoyancy: self.buoyancy,

@@ -172,8 +172,9 @@ pub struct Scene {
     pub scg_at_original: bool,
     /// `[forces]`: forces besides drag and gravity, each for the original particle.
     pub extra_forces: ExtraForces,
-    /// `[erosion]`: the wear model and, per patch of the mesh flow, whether it is logged.
-    pub erosion: Option<(scg_core::physics::erosion::ErosionModel, Vec<bool>)>,
+    /// `[erosion]`: the wear model and, per patch of the mesh flow and per impulse wall,
+    /// whether it is logged.
+    pub erosion: Option<scg_core::stages::erosion::ErosionSpec>,
     /// Contact material (required with walls).
     pub material: Option<Material>,
     /// Normal contact law derived from the material.

@@ -306,7 +306,13 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
     };
     let erosion = match &raw.erosion {
         None => None,
-        Some(e) => Some(patches::erosion(e, mesh_flow.as_ref(), &patch_models, cx)?),
+        Some(e) => Some(patches::erosion(
+            e,
+            mesh_flow.as_ref(),
+            &patch_models,
+            &impulse_walls,
+            cx,
+        )?),
     };
     let mut scene = Scene {
         name: raw.name.clone().unwrap_or_else(|| stem.to_string()),

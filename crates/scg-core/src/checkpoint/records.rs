@@ -124,14 +124,15 @@ pub struct Checkpoint {
     /// Particles inside a collecting zone that waits (`collects_after`): (id, zone, step
     /// they entered), in id order.
     pub collect_inside: Vec<(u32, u32, u64)>,
-    /// Erosion log: (face, impacts, sums) per face hit, in face order; (particle id,
+    /// Erosion log: (face key, (impacts, sums)) per face hit, in key order; (particle id,
     /// volume m³) per particle that wore a wall, in id order.
     pub erosion: Option<ErosionRecord>,
 }
 
-/// The erosion log in a checkpoint: per face (face, impacts, [represented mass kg, volume
-/// m³, Σ m·θ, Σ m·v_n, Σ m·v_t]), per particle (id, volume m³).
-pub type ErosionRecord = (Vec<(u32, u64, [f64; 5])>, Vec<(u32, f64)>);
+/// The erosion log in a checkpoint: per face ((u32::MAX, mesh face) or (impulse wall,
+/// triangle), (impacts, [represented mass kg, volume m³, Σ m·θ, Σ m·v_n, Σ m·v_t])), per
+/// particle (id, volume m³).
+pub type ErosionRecord = (Vec<((u32, u32), (u64, [f64; 5]))>, Vec<(u32, f64)>);
 
 /// A stage's part of a checkpoint: the stage that holds the state saves and restores it.
 /// Its plugin registers it ([`Persistence::register`]); `Simulation::checkpoint` and

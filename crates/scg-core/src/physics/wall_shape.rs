@@ -51,6 +51,8 @@ pub struct WallTouch {
     pub overlap: f64,
     /// Unit normal from the wall toward the sphere centre.
     pub normal: DVec3,
+    /// The mesh triangle touched (its index in the mesh); 0 for an analytic shape.
+    pub element: u32,
 }
 
 fn in_extent(extent: Option<(f64, f64)>, h: f64) -> bool {
@@ -162,11 +164,16 @@ impl WallShape {
                 .map(|c| WallTouch {
                     overlap: c.overlap,
                     normal: c.normal,
+                    element: c.triangle,
                 });
         }
         let (dist, normal) = self.distance(x)?;
         let overlap = radius - dist;
-        (overlap > 0.0).then_some(WallTouch { overlap, normal })
+        (overlap > 0.0).then_some(WallTouch {
+            overlap,
+            normal,
+            element: 0,
+        })
     }
 
     /// True when a sphere centre `x` is on the domain side (distance ≥ 0).

@@ -1,12 +1,13 @@
 //! Wall erosion (`[erosion]`): every impact of a particle on a wall patch of the mesh
-//! flow that rebounds or sticks, worn into the face it hit by the scene's
+//! flow, or on a `[[walls]]` entry (STL or analytic), that rebounds or sticks, worn into
+//! the face (the STL triangle; an analytic wall is one face) it hit by the scene's
 //! [`ErosionModel`], with the original powder's mass the particle stands for (α³
 //! originals under every coarse-graining law).
 //!
 //! The mesh integration hands over the step's impacts ([`WallImpact`] from the landing,
-//! the first of each particle's step); they are summed per face in a canonical order
-//! (face, then the impact's bits), so the log is the same whatever the thread count.
-//! Walls of other kinds (analytic, STL, contact-law mesh walls) are not logged.
+//! the first of each particle's step), the impulse walls theirs; they are summed per face
+//! in a canonical order (face, then the impact's bits), so the log is the same whatever
+//! the thread count. Contact-law walls (whose impacts last several steps) are not logged.
 
 use std::collections::BTreeMap;
 
@@ -19,6 +20,8 @@ use crate::frame::{WearMap, WearPatch};
 use crate::physics::erosion::{ErosionModel, impact_angle};
 use crate::physics::mesh_flow::WallImpact;
 use crate::physics::scaling::represented_volume;
+use crate::physics::wall_shape::WallShape;
+use crate::stages::impulse_walls::ImpulseWalls;
 use crate::stages::mesh_flow::MeshFlowState;
 
 /// What one face has taken.
@@ -55,15 +58,31 @@ impl FaceWear {
     }
 }
 
-/// The erosion log (resource, with `[erosion]` on a mesh flow).
+/// What `[erosion]` logs: the model, per patch of the mesh flow and per impulse wall
+/// (`[[walls]]` that rebound, stick or escape, in their order) whether it is logged.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ErosionSpec {
+    /// The model.
+    pub model: ErosionModel,
+    /// Per patch of the mesh flow (empty without one).
+    pub patches: Vec<bool>,
+    /// Per impulse wall.
+    pub walls: Vec<bool>,
+}
+
+/// The erosion log (resource, with `[erosion]`).
 #[derive(Resource, Clone, Debug, PartialEq)]
 pub struct ErosionLog {
     /// The model.
     pub model: ErosionModel,
     /// Per patch of the mesh: logged or not.
     pub patches: Vec<bool>,
-    /// Per face hit.
+    /// Per impulse wall: logged or not.
+    pub walls: Vec<bool>,
+    /// Per mesh face hit.
     pub faces: BTreeMap<u32, FaceWear>,
+    /// Per impulse-wall face hit: (wall, triangle; 0 for an analytic wall).
+    pub wall_faces: BTreeMap<(u32, u32), FaceWear>,
     /// Per particle that wore a wall: its id and the volume it removed, m³ (the
     /// interval of the total resamples particles).
     pub by_particle: BTreeMap<u32, f64>,
@@ -77,6 +96,9 @@ pub struct ErosionLog {
 /// face's normal (into the fluid), the original mass it stands for (kg) and its id.
 pub type Impact = (u32, DVec3, DVec3, f64, u32);
 
+/// One impact on an impulse wall: (wall, triangle), then as [`Impact`].
+pub type WallHit = ((u32, u32), DVec3, DVec3, f64, u32);
+
 /// The original powder's mass a particle stands for: α³ originals, kg.
 #[inline]
 pub fn represented_mass(cg: &CoarseGrain) -> f64 {
@@ -84,12 +106,14 @@ pub fn represented_mass(cg: &CoarseGrain) -> f64 {
 }
 
 impl ErosionLog {
-    /// A log of `model` on the patches flagged in `patches`.
-    pub fn new(model: ErosionModel, patches: Vec<bool>) -> Self {
+    /// A log of `spec.model` on the patches and walls it flags.
+    pub fn new(spec: ErosionSpec) -> Self {
         ErosionLog {
-            model,
-            patches,
+            model: spec.model,
+            patches: spec.patches,
+            walls: spec.walls,
             faces: BTreeMap::new(),
+            wall_faces: BTreeMap::new(),
             by_particle: BTreeMap::new(),
             impacts: None,
         }
@@ -106,33 +130,29 @@ impl ErosionLog {
         self.patches.get(patch as usize).copied().unwrap_or(false)
     }
 
-    /// Add a step's impacts (in any order: they are sorted first).
+    /// Whether impulse wall `wall`'s impacts are logged.
+    pub fn wants_wall(&self, wall: usize) -> bool {
+        self.walls.get(wall).copied().unwrap_or(false)
+    }
+
+    /// Add a step's impacts on mesh faces (in any order: they are sorted first).
     pub fn add(&mut self, mut impacts: Vec<Impact>) {
-        let key = |i: &Impact| {
-            (
-                i.0,
-                i.1.to_array().map(f64::to_bits),
-                i.2.to_array().map(f64::to_bits),
-                i.3.to_bits(),
-                i.4,
-            )
-        };
-        impacts.sort_unstable_by_key(key);
+        impacts.sort_unstable_by_key(|i| (i.0, bits(i)));
         for (face, v, n, m, id) in impacts {
-            let q = self.model.volume(m, v, n);
-            let vn = -v.dot(n);
-            let vt = (v + vn * n).length();
-            let w = self.faces.entry(face).or_default();
-            w.impacts += 1;
-            w.mass += m;
-            w.volume += q;
-            w.angle_mass += m * impact_angle(v, n);
-            w.normal_mass += m * vn;
-            w.tangential_mass += m * vt;
+            let q = wear(self.model, self.faces.entry(face).or_default(), v, n, m);
             *self.by_particle.entry(id).or_default() += q;
             if let Some(v) = &mut self.impacts {
                 v.push((id, face, q));
             }
+        }
+    }
+
+    /// Add a step's impacts on impulse walls (in any order: they are sorted first).
+    pub fn add_walls(&mut self, mut hits: Vec<WallHit>) {
+        hits.sort_unstable_by_key(|i| (i.0, bits(i)));
+        for (key, v, n, m, id) in hits {
+            let q = wear(self.model, self.wall_faces.entry(key).or_default(), v, n, m);
+            *self.by_particle.entry(id).or_default() += q;
         }
     }
 
@@ -159,8 +179,37 @@ impl ErosionLog {
 
     /// Total volume removed, m³.
     pub fn total_volume(&self) -> f64 {
-        self.faces.values().map(|w| w.volume).sum()
+        self.faces
+            .values()
+            .chain(self.wall_faces.values())
+            .map(|w| w.volume)
+            .sum()
     }
+}
+
+/// The bits of an impact after its face: the canonical order within a face.
+fn bits<K>(i: &(K, DVec3, DVec3, f64, u32)) -> ([u64; 3], [u64; 3], u64, u32) {
+    (
+        i.1.to_array().map(f64::to_bits),
+        i.2.to_array().map(f64::to_bits),
+        i.3.to_bits(),
+        i.4,
+    )
+}
+
+/// Wear one impact of original mass `m` at `v` on a face of normal `n` (into the fluid)
+/// into `w`; returns the volume removed, m³.
+fn wear(model: ErosionModel, w: &mut FaceWear, v: DVec3, n: DVec3, m: f64) -> f64 {
+    let q = model.volume(m, v, n);
+    let vn = -v.dot(n);
+    let vt = (v + vn * n).length();
+    w.impacts += 1;
+    w.mass += m;
+    w.volume += q;
+    w.angle_mass += m * impact_angle(v, n);
+    w.normal_mass += m * vn;
+    w.tangential_mass += m * vt;
+    q
 }
 
 /// The record of a [`WallImpact`] for the log.
@@ -178,13 +227,21 @@ impl Persist for ErosionPart {
 
     fn save(&self, world: &World, c: &mut Checkpoint) {
         let l = world.resource::<ErosionLog>();
+        let sums = |w: &FaceWear| {
+            let s = [
+                w.mass,
+                w.volume,
+                w.angle_mass,
+                w.normal_mass,
+                w.tangential_mass,
+            ];
+            (w.impacts, s)
+        };
         c.erosion = Some((
             l.faces
                 .iter()
-                .map(|(f, w)| {
-                    let sums = [w.mass, w.volume, w.angle_mass, w.normal_mass, w.tangential_mass];
-                    (*f, w.impacts, sums)
-                })
+                .map(|(f, w)| ((u32::MAX, *f), sums(w)))
+                .chain(l.wall_faces.iter().map(|(k, w)| (*k, sums(w))))
                 .collect(),
             l.by_particle.iter().map(|(i, q)| (*i, *q)).collect(),
         ));
@@ -195,42 +252,53 @@ impl Persist for ErosionPart {
             return Err(Part::Erosion.mismatch());
         };
         let mut l = world.resource_mut::<ErosionLog>();
-        l.faces = rows
-            .iter()
-            .map(|&(f, impacts, [mass, volume, angle_mass, normal_mass, tangential_mass])| {
-                (
-                    f,
-                    FaceWear {
-                        impacts,
-                        mass,
-                        volume,
-                        angle_mass,
-                        normal_mass,
-                        tangential_mass,
-                    },
-                )
-            })
-            .collect();
+        let face = |impacts, [mass, volume, angle_mass, normal_mass, tangential_mass]: [f64; 5]| {
+            FaceWear {
+                impacts,
+                mass,
+                volume,
+                angle_mass,
+                normal_mass,
+                tangential_mass,
+            }
+        };
+        l.faces.clear();
+        l.wall_faces.clear();
+        for &((wall, f), (impacts, sums)) in rows {
+            if wall == u32::MAX {
+                l.faces.insert(f, face(impacts, sums));
+            } else {
+                l.wall_faces.insert((wall, f), face(impacts, sums));
+            }
+        }
         l.by_particle = particles.iter().copied().collect();
         Ok(())
     }
 }
 
-/// The wear of the logged patches for the recorders (`None` without `[erosion]` on a
-/// mesh flow), summed up to `step` at `time` s: each patch's faces fanned from their first
-/// point, with volume, depth rate and impacts per face.
+/// The wear of the logged patches and STL walls for the recorders (`None` without
+/// `[erosion]`), summed up to `step` at `time` s: each mesh patch's faces fanned from
+/// their first point, each STL wall's triangles as its faces, with volume, depth rate,
+/// impacts and the impacts' mean angle and speeds per face. Analytic walls have no faces
+/// to draw and are left out (their wear is in the log).
 pub fn wear_map(world: &World, step: u64, time: f64) -> Option<WearMap> {
     let log = world.get_resource::<ErosionLog>()?;
-    let state = world.get_resource::<MeshFlowState>()?;
-    let flow = &state.spec.flow;
-    let (mesh, g) = (flow.mesh(), flow.geometry());
     let t = time.max(f64::MIN_POSITIVE);
-    let patches = mesh
-        .patches
-        .iter()
-        .zip(&log.patches)
-        .filter(|(_, on)| **on)
-        .map(|(p, _)| {
+    let mut patches = Vec::new();
+    let push = |w: &mut WearPatch, face: u32, wear: FaceWear, area: f64| {
+        w.faces.push(face);
+        w.volume.push(wear.volume);
+        w.depth_rate.push(wear.volume / (area * t));
+        w.impacts.push(wear.impacts);
+        let mean = |x: f64| if wear.mass > 0.0 { x / wear.mass } else { 0.0 };
+        w.angle.push(mean(wear.angle_mass));
+        w.normal_speed.push(mean(wear.normal_mass));
+        w.tangential_speed.push(mean(wear.tangential_mass));
+    };
+    if let Some(state) = world.get_resource::<MeshFlowState>() {
+        let flow = &state.spec.flow;
+        let (mesh, g) = (flow.mesh(), flow.geometry());
+        for (p, _) in mesh.patches.iter().zip(&log.patches).filter(|(_, on)| **on) {
             let mut w = WearPatch {
                 name: p.name.clone(),
                 ..Default::default()
@@ -252,19 +320,39 @@ pub fn wear_map(world: &World, step: u64, time: f64) -> Option<WearMap> {
                     w.triangle_face.push(k as u32);
                 }
                 let wear = log.faces.get(&(f as u32)).copied().unwrap_or_default();
-                let area = g.face_areas[f].length();
-                w.faces.push(f as u32);
-                w.volume.push(wear.volume);
-                w.depth_rate.push(wear.volume / (area * t));
-                w.impacts.push(wear.impacts);
-                let mean = |x: f64| if wear.mass > 0.0 { x / wear.mass } else { 0.0 };
-                w.angle.push(mean(wear.angle_mass));
-                w.normal_speed.push(mean(wear.normal_mass));
-                w.tangential_speed.push(mean(wear.tangential_mass));
+                push(&mut w, f as u32, wear, g.face_areas[f].length());
             }
-            w
-        })
-        .collect();
+            patches.push(w);
+        }
+    }
+    if let Some(walls) = world.get_resource::<ImpulseWalls>() {
+        for (k, iw) in walls.0.iter().enumerate() {
+            let WallShape::Mesh(m) = &iw.wall.shape else {
+                continue;
+            };
+            if !log.wants_wall(k) {
+                continue;
+            }
+            let mut w = WearPatch {
+                name: iw.wall.name.clone(),
+                vertices: m.vertices().iter().map(|v| v.to_array()).collect(),
+                triangles: m.triangles().to_vec(),
+                ..Default::default()
+            };
+            for (j, tri) in m.triangles().iter().enumerate() {
+                let [a, b, c] = tri.map(|i| m.vertices()[i as usize]);
+                let wear = log.wall_faces.get(&(k as u32, j as u32)).copied();
+                w.triangle_face.push(j as u32);
+                push(
+                    &mut w,
+                    j as u32,
+                    wear.unwrap_or_default(),
+                    0.5 * (b - a).cross(c - a).length(),
+                );
+            }
+            patches.push(w);
+        }
+    }
     Some(WearMap {
         model: log.model.name().to_string(),
         step,
@@ -273,7 +361,7 @@ pub fn wear_map(world: &World, step: u64, time: f64) -> Option<WearMap> {
     })
 }
 
-/// Add the erosion log (the mesh integration fills it).
+/// Add the erosion log (the mesh integration and the impulse walls fill it).
 pub fn plugin(world: &mut World, log: ErosionLog) {
     world.insert_resource(log);
     Persistence::register(world, ErosionPart);

@@ -4,13 +4,16 @@
 //! integration, a particle whose sphere touches such a wall rebounds (its centre pushed
 //! back to touching distance, its velocity by [`coulomb_rebound`]), sticks (removed,
 //! counted as stuck on the wall) or escapes (removed, counted as escaped through it).
-//! No contact time is resolved, so the time step follows the drag.
+//! No contact time is resolved, so the time step follows the drag. With `[erosion]` the
+//! rebounds and sticks on logged walls wear them ([`ErosionLog::add_walls`]).
 
 use bevy_ecs::prelude::*;
 
 use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
 use crate::components::*;
 use crate::physics::patch_interaction::{PatchInteraction, coulomb_rebound};
+use crate::physics::wall_shape::WallTouch;
+use crate::stages::erosion::{ErosionLog, WallHit, represented_mass};
 use crate::stages::walls::Wall;
 use crate::step::{StepBuilder, StepSet, StepSystem};
 
@@ -80,21 +83,25 @@ pub fn plugin(world: &mut World, b: &mut StepBuilder, walls: Vec<ImpulseWall>, g
     );
 }
 
+/// What touching a wall does: the rebound's new position and velocity, or the model
+/// (stick, escape) that removes the particle.
+pub type Outcome = Result<(glam::DVec3, glam::DVec3), PatchInteraction>;
+
 /// What touching wall `w` does to a sphere of radius `r` at `x` moving at `v`: `None` when
-/// it does not touch; `Some(Ok((x', v')))` after a rebound; `Some(Err(model))` when it
-/// sticks or escapes.
+/// it does not touch; else the touch (normal, triangle) and `Ok((x', v'))` after a
+/// rebound or `Err(model)` when it sticks or escapes.
 #[inline]
 pub fn impulse(
     w: &ImpulseWall,
     x: glam::DVec3,
     v: glam::DVec3,
     r: f64,
-) -> Option<Result<(glam::DVec3, glam::DVec3), PatchInteraction>> {
+) -> Option<(WallTouch, Outcome)> {
     if w.wall.shape.surely_clear(x, r) {
         return None;
     }
     let t = w.wall.shape.touch(x, r)?;
-    Some(match w.model {
+    let outcome = match w.model {
         // t.normal points from the wall to the centre: the wall's outward normal, as
         // coulomb_rebound takes it, is −t.normal
         PatchInteraction::Rebound { e, mu } => Ok((
@@ -102,15 +109,18 @@ pub fn impulse(
             coulomb_rebound(v, -t.normal, e, mu),
         )),
         m => Err(m),
-    })
+    };
+    Some((t, outcome))
 }
 
 /// Apply the impulse walls to every particle, in wall order; remove the ones that stick or
-/// escape in id order, counting them per wall and group.
+/// escape in id order, counting them per wall and group. With `[erosion]`, every rebound
+/// and stick on a logged wall wears the triangle it touched.
 pub fn impulse_walls(
     mut commands: Commands,
     walls: Res<ImpulseWalls>,
     mut log: ResMut<WallLog>,
+    erosion: Option<ResMut<ErosionLog>>,
     mut q: Query<(
         Entity,
         &ParticleId,
@@ -118,24 +128,38 @@ pub fn impulse_walls(
         &mut Position,
         &mut Velocity,
         &Diameter,
+        &CoarseGrain,
     )>,
 ) {
     let mut gone: Vec<(u32, u32, Entity, usize, PatchInteraction)> = Vec::new();
-    for (e, id, g, mut x, mut v, d) in q.iter_mut() {
+    let mut hits: Vec<WallHit> = Vec::new();
+    for (e, id, g, mut x, mut v, d, cg) in q.iter_mut() {
         let r = 0.5 * d.0;
         for (k, w) in walls.0.iter().enumerate() {
-            match impulse(w, x.0, v.0, r) {
-                None => {}
-                Some(Ok((x1, v1))) => {
+            let Some((t, outcome)) = impulse(w, x.0, v.0, r) else {
+                continue;
+            };
+            let wears = !matches!(outcome, Err(PatchInteraction::Escape));
+            if wears && erosion.as_ref().is_some_and(|l| l.wants_wall(k)) {
+                let key = (k as u32, t.element);
+                hits.push((key, v.0, t.normal, represented_mass(cg), id.0));
+            }
+            match outcome {
+                Ok((x1, v1)) => {
                     x.0 = x1;
                     v.0 = v1;
                 }
-                Some(Err(m)) => {
+                Err(m) => {
                     gone.push((id.0, g.0, e, k, m));
                     break;
                 }
             }
         }
+    }
+    if let Some(mut l) = erosion
+        && !hits.is_empty()
+    {
+        l.add_walls(hits);
     }
     gone.sort_unstable_by_key(|g| g.0);
     for (_, g, e, k, m) in gone {
@@ -178,14 +202,18 @@ mod tests {
     fn a_touching_sphere_rebounds_to_touching_distance() {
         let w = floor(PatchInteraction::Rebound { e: 0.5, mu: 0.2 });
         let (x, v) = (DVec3::new(1.0, 2.0, 0.7e-3), DVec3::new(3.0, 0.0, -2.0));
-        let Some(Ok((x1, v1))) = impulse(&w, x, v, 1e-3) else {
+        let Some((t, Ok((x1, v1)))) = impulse(&w, x, v, 1e-3) else {
             panic!()
         };
+        assert_eq!((t.normal, t.element), (DVec3::Z, 0));
         assert!((x1 - DVec3::new(1.0, 2.0, 1e-3)).length() < 1e-15);
         assert_eq!(v1, coulomb_rebound(v, -DVec3::Z, 0.5, 0.2));
         assert!((v1.z - 1.0).abs() < 1e-12);
         assert_eq!(impulse(&w, DVec3::new(0.0, 0.0, 2e-3), v, 1e-3), None);
         let s = floor(PatchInteraction::Stick);
-        assert_eq!(impulse(&s, x, v, 1e-3), Some(Err(PatchInteraction::Stick)));
+        assert_eq!(
+            impulse(&s, x, v, 1e-3).map(|o| o.1),
+            Some(Err(PatchInteraction::Stick))
+        );
     }
 }

@@ -45,8 +45,6 @@ pub struct MeshFlowSpec {
     /// Steps between reorderings of the particle table by mesh cell ([`sort_by_cell`]);
     /// 0: never.
     pub sort_every: u64,
-    /// `[erosion]`: the model and, per patch, whether its impacts are logged.
-    pub erosion: Option<(crate::physics::erosion::ErosionModel, Vec<bool>)>,
 }
 
 /// The mesh flow of a simulation (resource).
@@ -98,9 +96,6 @@ impl Persist for PatchesPart {
 /// Add the mesh-flow integration and boundary systems and their resources.
 pub fn plugin(world: &mut World, b: &mut StepBuilder, spec: MeshFlowSpec, groups: usize) {
     add_integration(b);
-    if let Some((model, patches)) = &spec.erosion {
-        super::erosion::plugin(world, ErosionLog::new(*model, patches.clone()));
-    }
     world.insert_resource(PatchLog::new(spec.flow.mesh().patches.len(), groups));
     Persistence::register(world, PatchesPart);
     Persistence::register(world, OutletPart);

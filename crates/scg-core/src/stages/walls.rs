@@ -303,6 +303,7 @@ impl Touches<'_> {
                         WallTouch {
                             overlap: t.overlap,
                             normal,
+                            element: t.element,
                         },
                         key,
                         v,
@@ -319,6 +320,7 @@ impl Touches<'_> {
                         let t = WallTouch {
                             overlap: c.overlap,
                             normal: c.normal,
+                            element: c.triangle,
                         };
                         world(t, key + c.region);
                     }

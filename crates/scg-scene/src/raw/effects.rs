@@ -37,6 +37,8 @@ pub struct RawErosion {
     pub wall_density: Option<f64>,
     /// The patches logged (default: every wall patch).
     pub patches: Option<Vec<String>>,
+    /// The `[[walls]]` logged, by name (default: every wall that rebounds or sticks).
+    pub walls: Option<Vec<String>>,
 }
 
 /// `erosion.model`.

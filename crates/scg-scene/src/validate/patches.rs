@@ -210,24 +210,20 @@ pub(super) fn wall_model(
     })
 }
 
-/// `[erosion]`: the model and the patches it logs (default: every wall patch that
-/// rebounds or sticks). Needs a mesh flow; a listed patch must be a wall whose particles
-/// rebound or stick (a `contact` patch's impacts are resolved by the contact law over
-/// several steps and are not logged).
+/// `[erosion]`: the model, the patches it logs (default: every wall patch of a mesh flow
+/// that rebounds or sticks) and the `[[walls]]` it logs (default: every impulse wall that
+/// rebounds or sticks). A listed patch must be a wall whose particles rebound or stick, a
+/// listed wall a `[[walls]]` entry with `model = "rebound"` or `"stick"` (contact-law
+/// impacts are resolved over several steps and are not logged).
 pub(super) fn erosion(
     e: &crate::raw::RawErosion,
     mf: Option<&SceneMeshFlow>,
     models: &[PatchModel],
+    impulse_walls: &[scg_core::stages::impulse_walls::ImpulseWall],
     cx: &Ctx,
-) -> Result<(scg_core::physics::erosion::ErosionModel, Vec<bool>), SceneError> {
+) -> Result<scg_core::stages::erosion::ErosionSpec, SceneError> {
     use crate::raw::RawErosionModel;
     use scg_core::physics::erosion::ErosionModel;
-    let Some(mf) = mf else {
-        return Err(cx.err(
-            "erosion",
-            "erosion is logged on the wall patches of a mesh flow (flow.kind = \"openfoam\" or \"vtk\")",
-        ));
-    };
     let not = |key: &str, given: bool, model: &str| -> Result<(), SceneError> {
         if given {
             Err(cx.err(
@@ -263,6 +259,27 @@ pub(super) fn erosion(
                 )?,
             }
         }
+    };
+    let walls = erosion_walls(e, impulse_walls, cx)?;
+    let Some(mf) = mf else {
+        if e.patches.is_some() {
+            return Err(cx.err(
+                "erosion.patches",
+                "needs a mesh flow (flow.kind = \"openfoam\" or \"vtk\")",
+            ));
+        }
+        if !walls.contains(&true) {
+            return Err(cx.err(
+                "erosion",
+                "nothing to erode: no mesh flow wall patch and no [[walls]] entry whose \
+                 particles rebound or stick (model = \"rebound\" or \"stick\")",
+            ));
+        }
+        return Ok(scg_core::stages::erosion::ErosionSpec {
+            model,
+            patches: Vec::new(),
+            walls,
+        });
     };
     let mesh = mf.flow.mesh();
     let roles = mf.flow.roles();
@@ -301,11 +318,52 @@ pub(super) fn erosion(
             on
         }
     };
-    if !patches.contains(&true) {
+    if !patches.contains(&true) && !walls.contains(&true) {
         return Err(cx.err(
             "erosion",
-            "no wall patch whose particles rebound or stick: nothing to erode",
+            "no wall patch or [[walls]] entry whose particles rebound or stick: nothing to erode",
         ));
     }
-    Ok((model, patches))
+    Ok(scg_core::stages::erosion::ErosionSpec {
+        model,
+        patches,
+        walls,
+    })
+}
+
+/// `erosion.walls`: per impulse wall, whether its impacts are logged.
+fn erosion_walls(
+    e: &crate::raw::RawErosion,
+    walls: &[scg_core::stages::impulse_walls::ImpulseWall],
+    cx: &Ctx,
+) -> Result<Vec<bool>, SceneError> {
+    let wears = |w: &scg_core::stages::impulse_walls::ImpulseWall| {
+        matches!(
+            w.model,
+            PatchInteraction::Rebound { .. } | PatchInteraction::Stick
+        )
+    };
+    let Some(names) = &e.walls else {
+        return Ok(walls.iter().map(wears).collect());
+    };
+    let mut on = vec![false; walls.len()];
+    for name in names {
+        let Some(k) = walls.iter().position(|w| &w.wall.name == name) else {
+            return Err(cx.err(
+                "erosion.walls",
+                format!(
+                    "`{name}` is not a [[walls]] entry with model = \"rebound\", \"stick\" or \
+                     \"escape\" (contact-law walls are not logged)"
+                ),
+            ));
+        };
+        if !wears(&walls[k]) {
+            return Err(cx.err(
+                "erosion.walls",
+                format!("wall `{name}` lets particles escape: nothing strikes it"),
+            ));
+        }
+        on[k] = true;
+    }
+    Ok(on)
 }
