@@ -220,6 +220,7 @@ buoyancy = true
 pressure_gradient = true
 added_mass = 0.5
 saffman_mei = true
+rubinow_keller = true
 cunningham = { mean_free_path = 6.6e-8 }
 
 [[groups]]
@@ -255,7 +256,11 @@ fn scg_keeps_the_originals_path_with_every_force_on() {
         );
     }
     // each step force changes the path (the test would see one switched off)
-    for off in ["forces.saffman_mei=false", "forces.pressure_gradient=false"] {
+    for off in [
+        "forces.saffman_mei=false",
+        "forces.pressure_gradient=false",
+        "forces.rubinow_keller=false",
+    ] {
         let x = swirl(&[off]);
         assert!(
             (x - x0).length() > 1e-9 * x0.length(),
@@ -272,6 +277,7 @@ fn the_plan_lists_the_step_forces() {
         "added_mass inertia",
         "cunningham_davies",
         "drag:stokes+forces",
+        "rotational_lift",
     ] {
         assert!(plan.contains(want), "{want}: {plan}");
     }
@@ -284,6 +290,31 @@ fn the_plan_lists_the_step_forces() {
         plan.contains("forces:added_mass") && !plan.contains("saffman"),
         "{plan}"
     );
+}
+
+/// Rubinow–Keller: in the forced vortex (vorticity 2Ω everywhere) a particle fed without
+/// spin spins up toward Ω as e^(−t/τ_r), τ_r = ρ_p·d²/(60·μ), exactly (1e-12) whatever
+/// its path, for the original and SCG α = 2, 4 alike (ρ·d² is SCG's invariant).
+#[test]
+fn the_spin_relaxes_toward_the_fluids_rotation() {
+    use scg::core::components::{AngularVelocity, ParticleId};
+    let omega = 3000.0 * std::f64::consts::PI / 30.0;
+    let tau = 2000.0 * 20e-6 * 20e-6 / (60.0 * 1.8e-5);
+    for alpha in ["1", "2", "4"] {
+        let sc = scene(SWIRL, &[&format!("groups.0.alpha={alpha}")]);
+        let mut sim = sc.build(false);
+        let n = 50; // 0.5 ms ≈ 0.67 τ_r
+        sim.run(n, |_| true).unwrap();
+        let mut q = sim.world.query::<(&ParticleId, &AngularVelocity)>();
+        let (_, w) = q.iter(&sim.world).next().unwrap();
+        let want = omega * (1.0 - (-(n as f64) * 1e-5 / tau).exp());
+        assert!(
+            (w.0.z - want).abs() <= 1e-12 * want,
+            "α {alpha}: {} vs {want}",
+            w.0.z
+        );
+        assert!(w.0.x.abs() + w.0.y.abs() == 0.0);
+    }
 }
 
 /// On a mesh the forces take ∇u from the cell field (Gauss): the paper's vortex sampled
@@ -324,7 +355,7 @@ fn on_a_mesh_the_forces_see_the_fields_gradient() {
         let text = format!(
             "duration = 0.05\ndt = 2.0e-5\n[fluid]\ndensity = 1.2\nviscosity = 1.8e-5\n[flow]\n{flow}\n[drag]\nlaw = \"stokes\"\n{}[[groups]]\nname = \"a\"\ndiameter = 10.0e-6\ndensity = 1000.0\npositions = [[2.5e-4, 0.0, 4.1e-4]]\n",
             if forces {
-                "[forces]\npressure_gradient = true\nadded_mass = 0.5\nsaffman_mei = true\n"
+                "[forces]\npressure_gradient = true\nadded_mass = 0.5\nsaffman_mei = true\nrubinow_keller = true\n"
             } else {
                 ""
             }

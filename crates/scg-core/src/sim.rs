@@ -224,7 +224,7 @@ impl Simulation {
         let has_forces = cfg.walls.is_some();
         world.insert_resource(SpawnRules {
             forces: has_forces,
-            spin: has_forces || cfg.contacts.is_some(),
+            spin: has_forces || cfg.contacts.is_some() || cfg.extra_forces.rubinow_keller,
             gravity: cfg.gravity,
             buoyancy: cfg.buoyancy,
             fluid: cfg.fluid,
@@ -253,6 +253,10 @@ impl Simulation {
         }
         if let Some(m) = cfg.carrier {
             carrier::plugin(&mut world, &mut b, m);
+        }
+        if cfg.extra_forces.rubinow_keller && cfg.drag.is_some() && cfg.fluid.is_some() {
+            let ca = cfg.extra_forces.added_mass.unwrap_or(0.0);
+            crate::stages::rotational_lift::plugin(&mut world, &mut b, ca);
         }
         motion::plugin(&mut b, &motion_res, rotation, cfg.mesh_flow.is_some());
         if let Some(e) = io.erosion {
@@ -447,6 +451,14 @@ fn force_notes(f: &ExtraForces, stepped: bool) -> Vec<(StepSet, String)> {
                 "at spawn: added_mass inertia m + {c}·m_f (τ and body acceleration / \
                  (1 + {c}·ρ_f/ρ_p))"
             ),
+        ));
+    }
+    if f.rubinow_keller {
+        v.push((
+            StepSet::Integration,
+            "[forces:rubinow_keller] spin relaxed toward ω/2 (τ_r = ρd²/60μ) and the lift \
+             as a kick before the move, for the original"
+                .to_string(),
         ));
     }
     let names = f.step_names();

@@ -87,6 +87,8 @@ pub enum StepSystem {
     ApplyContactKicks,
     /// Write each particle's carrier offset (carrier modifiers).
     ModifyCarrier,
+    /// Relax the spin and kick by the rotational lift (`[forces] rubinow_keller`).
+    RotationalLift,
     /// No fluid: kick, then the exact drift under gravity.
     IntegrateBallistic,
     /// Stokes drag, exponential scheme, precomputed factors.
@@ -129,6 +131,7 @@ impl StepSystem {
             StepSystem::WallContactForces => "wall_contact_forces",
             StepSystem::ApplyContactKicks => "apply_contact_kicks",
             StepSystem::ModifyCarrier => "modify_carrier",
+            StepSystem::RotationalLift => "rotational_lift",
             StepSystem::IntegrateBallistic => "integrate_ballistic",
             StepSystem::IntegrateStokesExponential => "integrate_stokes_exponential",
             StepSystem::IntegrateDragExponential => "integrate_drag_exponential",
@@ -152,7 +155,7 @@ impl StepSystem {
     /// The step table: every system with its set, in execution order. The builder places
     /// each system by its row here (whatever order the plugins add them in) and refuses a
     /// system added to another set; `scg run --plan` lists a scene's rows in this order.
-    pub const TABLE: [(StepSet, StepSystem); 21] = {
+    pub const TABLE: [(StepSet, StepSystem); 22] = {
         use StepSet::*;
         use StepSystem::*;
         [
@@ -164,6 +167,8 @@ impl StepSystem {
             (Integration, ApplyContactKicks),
             // The carrier offsets the integrator adds to the fluid velocity.
             (Integration, ModifyCarrier),
+            // The rotational lift reads the offsets and kicks before the particles move.
+            (Integration, RotationalLift),
             (Integration, IntegrateBallistic),
             (Integration, IntegrateStokesExponential),
             (Integration, IntegrateDragExponential),

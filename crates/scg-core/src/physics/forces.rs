@@ -19,8 +19,10 @@
 //!   `pressureGradient` (buoyancy stays with `[gravity] buoyancy`).
 //! * Saffman–Mei shear lift ([`saffman_mei`]), Mei's (1992) correction as in OpenFOAM's
 //!   `SaffmanMeiLiftForce`.
-//! * Rubinow–Keller rotational lift ([`rubinow_keller`]): a pure function here; the step
-//!   does not carry a fluid-driven particle spin yet, so scenes cannot switch it on.
+//! * Rubinow–Keller rotational lift ([`rubinow_keller`]) on a particle's spin relative to
+//!   the fluid's rotation, the spin relaxing toward half the vorticity under the Stokes
+//!   torque −π·μ·d³·(ω_p − ω/2) with τ_r = ρ_p·d²/(60·μ) ([`rotational_lift_step`]; its
+//!   own stage, `stages::rotational_lift`, before the integration, applied as a kick).
 //!
 //! Du/Dt is the steady carrier's (u·∇)u = J·u with J = ∇u the carrier's velocity
 //! gradient at the mid-step point ([`crate::physics::carrier::Carrier::gradient`]); the
@@ -43,6 +45,8 @@ pub struct ExtraForces {
     pub pressure_gradient: bool,
     /// Saffman–Mei shear lift.
     pub saffman_mei: bool,
+    /// Rubinow–Keller rotational lift, with the particles' spin driven by the fluid.
+    pub rubinow_keller: bool,
 }
 
 impl ExtraForces {
@@ -167,6 +171,47 @@ pub fn saffman_mei(d: f64, fluid: Fluid, slip: DVec3, omega: DVec3) -> DVec3 {
 pub fn rubinow_keller(d: f64, fluid_density: f64, spin: DVec3, omega: DVec3, slip: DVec3) -> DVec3 {
     let rel = spin - 0.5 * omega;
     std::f64::consts::PI / 8.0 * fluid_density * d * d * d * rel.cross(-slip)
+}
+
+/// Rotational response time of a sphere of diameter `d` (m) and density `rho_p` (kg/m³)
+/// in a fluid of viscosity `mu` (Pa·s): τ_r = ρ_p·d²/(60·μ), s (the Stokes torque
+/// −π·μ·d³·(ω_p − Ω) on the moment of inertia m·d²/10). ρ_p·d² is SCG's invariant: a
+/// coarse particle's spin relaxes as the original's does.
+#[inline]
+pub fn spin_relaxation_time(d: f64, rho_p: f64, mu: f64) -> f64 {
+    rho_p * d * d / (60.0 * mu)
+}
+
+/// One step `dt` (s) of a spinning sphere, the original of coupling `fc` (its
+/// `reynolds_diameter` and `force_density`), in a fluid whose velocity relative to the
+/// particle is `slip` = u − v (m/s) and whose vorticity is `omega` (1/s): the spin relaxes
+/// exactly toward ω/2 over the step (the torque-free state), and the Rubinow–Keller lift
+/// on the step's mean relative spin gives the velocity change F·dt/(k·m_p), k = 1 +
+/// C_A·ρ_f/ρ_p with `added_mass` C_A (0 without). Returns (Δv m/s, the new spin rad/s).
+#[inline]
+pub fn rotational_lift_step(
+    spin: DVec3,
+    omega: DVec3,
+    slip: DVec3,
+    fc: &FluidCoupling,
+    fluid: Fluid,
+    added_mass: f64,
+    dt: f64,
+) -> (DVec3, DVec3) {
+    let (d, rho_p) = (fc.reynolds_diameter, fc.force_density);
+    let k = 1.0 + added_mass * fluid.density / rho_p;
+    let half = 0.5 * omega;
+    let tau = spin_relaxation_time(d, rho_p, fluid.viscosity);
+    let rel0 = spin - half;
+    // the relative spin's mean over the step: rel0·τ_r/dt·(1 − e^(−dt/τ_r))
+    let mean = if dt > 0.0 {
+        rel0 * (-(-dt / tau).exp_m1() * tau / dt)
+    } else {
+        rel0
+    };
+    let m = rho_p * std::f64::consts::PI / 6.0 * d * d * d;
+    let f = rubinow_keller(d, fluid.density, mean + half, omega, slip);
+    (f * (dt / (k * m)), half + rel0 * (-dt / tau).exp())
 }
 
 #[cfg(test)]

@@ -14,5 +14,6 @@ pub mod motion;
 mod move_lanes;
 pub mod outlet;
 pub mod recording;
+pub mod rotational_lift;
 pub mod table;
 pub mod walls;

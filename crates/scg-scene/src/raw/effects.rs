@@ -17,6 +17,8 @@ pub struct RawForces {
     pub pressure_gradient: bool,
     #[serde(default)]
     pub saffman_mei: bool,
+    #[serde(default)]
+    pub rubinow_keller: bool,
 }
 
 /// `[erosion]`: wall wear on the mesh flow's wall patches (docs/scenes.md).

@@ -507,6 +507,7 @@ pub(super) fn forces(
         ("forces.added_mass", f.added_mass.is_some()),
         ("forces.pressure_gradient", f.pressure_gradient),
         ("forces.saffman_mei", f.saffman_mei),
+        ("forces.rubinow_keller", f.rubinow_keller),
     ] {
         if on && drag.is_none() {
             return Err(cx.err(
@@ -520,5 +521,6 @@ pub(super) fn forces(
     }
     out.pressure_gradient = f.pressure_gradient;
     out.saffman_mei = f.saffman_mei;
+    out.rubinow_keller = f.rubinow_keller;
     Ok(out)
 }
