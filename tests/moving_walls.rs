@@ -165,3 +165,61 @@ fn a_turntable_drags_a_resting_sphere_along_its_surface() {
         }
     }
 }
+
+/// A scene's `[[walls]] motion` (rpm about an axis): a 1 mm sphere resting on a horizontal
+/// disc turning about z, 50 mm from the axis and carried at the disc's speed, stays on its
+/// circle while Ω²·r < μ·g (static friction holds it) and slides outward once Ω²·r > μ·g
+/// (μ = 0.3: Ω_c = √(μ·g/r) = 7.67 rad/s; 0.95 and 1.05 Ω_c over 0.4 s). A free sphere
+/// would roll instead (the turntable's rolling orbits); rolling resistance μ_r = 0.5 > μ
+/// (`[contacts] rolling_friction`) holds its spin, so friction alone decides.
+#[test]
+fn a_disc_throws_a_resting_sphere_off_when_its_centripetal_need_beats_friction() {
+    let omega_c = (0.3f64 * 9.81 / 0.05).sqrt();
+    let radius_after = |omega: f64| {
+        let rpm = omega * 60.0 / std::f64::consts::TAU;
+        let text = format!(
+            "duration = 0.4\ndt = 2.0e-6\nrecord_every = 1000\n[gravity]\nacceleration = [0.0, 0.0, -9.81]\n[material]\nyoungs_modulus = 1.0e7\npoisson_ratio = 0.3\nrestitution = 0.3\nfriction = 0.3\n[contacts]\nrolling_friction = 0.5\n[[walls]]\nname = \"disc\"\nkind = \"plane\"\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\nmotion = {{ rpm = {rpm}, axis = [0.0, 0.0, 1.0] }}\n[[groups]]\nname = \"a\"\ndiameter = 1.0e-3\ndensity = 2500.0\npositions = [[0.05, 0.0, 0.4999e-3]]\nvelocities = [[0.0, {}, 0.0]]\n",
+            omega * 0.05
+        );
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("disc.toml");
+        std::fs::write(&path, text).unwrap();
+        let sc = scg::scene::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+        assert!(!sc.walls[0].motion.is_fixed());
+        let mut sim = sc.build(false);
+        sim.run(sc.steps(), |_| true).unwrap();
+        let x = sim.particles()[0].position;
+        (x.x * x.x + x.y * x.y).sqrt()
+    };
+    let held = radius_after(0.95 * omega_c);
+    let thrown = radius_after(1.05 * omega_c);
+    eprintln!("after 0.4 s: r = {held:.6} m at 0.95 Ω_c, {thrown:.6} m at 1.05 Ω_c");
+    assert!((held / 0.05 - 1.0).abs() < 1e-3, "{held}");
+    assert!(thrown > 0.055, "{thrown}");
+}
+
+/// `motion` keys: rpm needs an axis, rpm and angular_velocity exclude each other, a motion
+/// that moves nothing is refused; each error names its key.
+#[test]
+fn bad_wall_motions_are_refused_naming_the_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("m.toml");
+    for (motion, key) in [
+        ("{ rpm = 100.0 }", "walls[0].motion.axis"),
+        ("{ axis = [0.0, 0.0, 1.0] }", "walls[0].motion.axis"),
+        (
+            "{ rpm = 100.0, axis = [0.0, 0.0, 1.0], angular_velocity = [0.0, 0.0, 1.0] }",
+            "walls[0].motion.angular_velocity",
+        ),
+        ("{ velocity = [0.0, 0.0, 0.0] }", "walls[0].motion"),
+        ("{ spin = 3.0 }", "spin"),
+    ] {
+        std::fs::write(
+            &path,
+            format!("duration = 0.01\ndt = 1.0e-4\n[[walls]]\nkind = \"plane\"\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\nmodel = \"rebound\"\nmotion = {motion}\n[[groups]]\nname = \"a\"\ndiameter = 1.0e-3\ndensity = 2500.0\npositions = [[0.0, 0.0, 0.01]]\n"),
+        )
+        .unwrap();
+        let e = scg::scene::load(&path, &[]).unwrap_err().to_string();
+        assert!(e.contains(key), "{motion}: {e}");
+    }
+}

@@ -85,6 +85,11 @@ pub struct Outline {
     pub vertices: Vec<[f64; 3]>,
     /// The surface's triangles, as indices into `vertices`.
     pub triangles: Vec<[u32; 3]>,
+    /// The wall's prescribed motion: the strips and surface are where the wall is at rest
+    /// (t = 0); a recorder moves them by [`WallMotion::pose`](crate::physics::wall_motion::WallMotion::pose)
+    /// at each frame's time. [`WallMotion::FIXED`](crate::physics::wall_motion::WallMotion::FIXED)
+    /// for still geometry.
+    pub motion: crate::physics::wall_motion::WallMotion,
 }
 
 /// A boundary patch of a flow mesh, to draw: its faces as triangles (m).

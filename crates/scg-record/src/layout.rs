@@ -8,6 +8,7 @@ use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use scg_core::frame::{GroupMeta, Outline};
+use scg_core::physics::wall_motion::WallMotion;
 
 // ---------------------------------------------------------------------------------------------
 // Rerun (.rrd)
@@ -20,7 +21,8 @@ pub const TIMELINE_SIM_TIME: &str = "sim_time";
 pub const TIMELINE_STEP: &str = "step";
 /// Parent entity of the particle groups: `particles/<group name>` holds a `Points3D`.
 pub const ENTITY_PARTICLES: &str = "particles";
-/// Parent entity of the static geometry: `geometry/<outline name>` holds a `LineStrips3D`.
+/// Parent entity of the static geometry: `geometry/<outline name>` holds a `LineStrips3D`
+/// (a moving wall's at rest, with a `Transform3D` per frame that puts it where it is).
 pub const ENTITY_GEOMETRY: &str = "geometry";
 /// Parent entity of the scalars: `stats/<name>` holds `Scalars` (a `/` in a name nests).
 pub const ENTITY_STATS: &str = "stats";
@@ -213,15 +215,32 @@ pub(crate) struct OutlineJson {
     pub vertices: Vec<[f64; 3]>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub triangles: Vec<[u32; 3]>,
+    /// A moving wall's motion: `{"velocity", "angular_velocity", "center"}` (m/s, rad/s, m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motion: Option<MotionJson>,
+}
+
+/// A wall's motion in the `outlines` metadata.
+#[derive(Serialize, Deserialize)]
+pub(crate) struct MotionJson {
+    pub velocity: [f64; 3],
+    pub angular_velocity: [f64; 3],
+    pub center: [f64; 3],
 }
 
 impl From<&Outline> for OutlineJson {
     fn from(o: &Outline) -> Self {
+        let m = &o.motion;
         Self {
             name: o.name.clone(),
             strips: o.strips.clone(),
             vertices: o.vertices.clone(),
             triangles: o.triangles.clone(),
+            motion: (!m.is_fixed()).then(|| MotionJson {
+                velocity: m.velocity.to_array(),
+                angular_velocity: m.angular_velocity.to_array(),
+                center: m.centre.to_array(),
+            }),
         }
     }
 }
@@ -233,6 +252,11 @@ impl From<OutlineJson> for Outline {
             strips: o.strips,
             vertices: o.vertices,
             triangles: o.triangles,
+            motion: o.motion.map_or(WallMotion::FIXED, |m| WallMotion {
+                velocity: m.velocity.into(),
+                angular_velocity: m.angular_velocity.into(),
+                centre: m.center.into(),
+            }),
         }
     }
 }

@@ -23,9 +23,10 @@ use rerun::sink::{LogSink, SinkFlushError};
 use rerun::{
     AnyValues, AsComponents, Color, EntityPath, EntityPathPart, LineStrips3D, MediaType, Mesh3D,
     Points3D, RecordingInfo, RecordingStream, Scalars, TextDocument, TextLog, TextLogLevel,
-    ViewCoordinates,
+    Transform3D, ViewCoordinates,
 };
 use scg_core::frame::{Frame, FrameSink, RunMeta, WearMap};
+use scg_core::physics::wall_motion::WallMotion;
 
 use crate::layout::{
     COMPONENT_DEPTH_RATE, COMPONENT_FLUCTUATION, COMPONENT_PARTICLE_ID, COMPONENT_SPEED,
@@ -122,6 +123,8 @@ pub struct RrdSink {
     /// The run description until the blueprint is sent (with the first frame, whose scalars
     /// decide the plots, or when closing a recording without frames).
     pending_blueprint: Option<RunMeta>,
+    /// The moving walls' entities and motions (a transform per frame).
+    moving: Vec<(EntityPath, WallMotion)>,
 }
 
 fn rerun_err(err: impl std::fmt::Display) -> RecordError {
@@ -222,6 +225,12 @@ impl RrdSink {
             groups,
             stats_paths: HashMap::new(),
             pending_blueprint: Some(meta.clone()),
+            moving: meta
+                .outlines
+                .iter()
+                .filter(|o| !o.motion.is_fixed())
+                .map(|o| (child_path(ENTITY_GEOMETRY, &o.name), o.motion))
+                .collect(),
         };
         sink.log_static(meta)?;
         Ok(sink)
@@ -401,6 +410,18 @@ impl RrdSink {
             }
             rec.log(group.path.clone(), &[&points as &dyn AsComponents, &extra])
                 .map_err(rerun_err)?;
+        }
+
+        for (path, motion) in &self.moving {
+            // rest frame → world: x ↦ R·(x − c₀) + c(t)
+            let p = motion.pose(frame.time);
+            let translation = p.centre - p.rotation * p.rest_centre;
+            let m = p.rotation.to_cols_array_2d().map(|c| c.map(|x| x as f32));
+            rec.log(
+                path.clone(),
+                &Transform3D::from_translation_mat3x3(translation.as_vec3().to_array(), m),
+            )
+            .map_err(rerun_err)?;
         }
 
         for (name, value) in &frame.stats {

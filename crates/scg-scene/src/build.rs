@@ -261,6 +261,7 @@ impl Scene {
                         strips: w.shape.outline(size),
                         vertices,
                         triangles,
+                        motion: w.motion,
                     }
                 })
                 .collect(),

@@ -359,6 +359,23 @@ pub struct RawWall {
     pub restitution: Option<f64>,
     /// Coulomb μ of a `rebound` wall.
     pub friction: Option<f64>,
+    /// A prescribed rigid motion.
+    pub motion: Option<RawWallMotion>,
+}
+
+/// `walls[i].motion`: translation and rotation at constant rates from t = 0.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawWallMotion {
+    /// Velocity of the wall (of its rotation centre), m/s.
+    pub velocity: Option<[f64; 3]>,
+    /// Rotation rate, rev/min, about `axis` (right-handed) through `center`.
+    pub rpm: Option<f64>,
+    pub axis: Option<[f64; 3]>,
+    /// The angular velocity vector, rad/s (instead of `rpm` and `axis`).
+    pub angular_velocity: Option<[f64; 3]>,
+    /// The rotation centre at t = 0, m (default the origin).
+    pub center: Option<[f64; 3]>,
 }
 
 #[derive(Deserialize, Debug, Clone)]

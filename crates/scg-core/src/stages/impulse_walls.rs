@@ -15,6 +15,7 @@ use crate::physics::patch_interaction::{PatchInteraction, coulomb_rebound};
 use crate::physics::wall_shape::WallTouch;
 use crate::stages::erosion::{ErosionLog, WallHit, represented_mass};
 use crate::stages::walls::Wall;
+use crate::state::SimClock;
 use crate::step::{StepBuilder, StepSet, StepSystem};
 
 /// A wall and what a particle touching it does.
@@ -87,30 +88,43 @@ pub fn plugin(world: &mut World, b: &mut StepBuilder, walls: Vec<ImpulseWall>, g
 /// (stick, escape) that removes the particle.
 pub type Outcome = Result<(glam::DVec3, glam::DVec3), PatchInteraction>;
 
-/// What touching wall `w` does to a sphere of radius `r` at `x` moving at `v`: `None` when
-/// it does not touch; else the touch (normal, triangle) and `Ok((x', v'))` after a
-/// rebound or `Err(model)` when it sticks or escapes.
+/// What touching wall `w` at time `time` (s) does to a sphere of radius `r` at `x` moving
+/// at `v`: `None` when it does not touch; else the touch (its normal in the world, the
+/// triangle), the wall's surface velocity at the contact point (m/s; zero for a wall at
+/// rest), and `Ok((x', v'))` after a rebound or `Err(model)` when it sticks or escapes.
+/// A moving wall is touched in its rest frame ([`crate::physics::wall_motion`]) and
+/// rebounds the velocity relative to its surface: v' = V + rebound(v − V).
 #[inline]
 pub fn impulse(
     w: &ImpulseWall,
     x: glam::DVec3,
     v: glam::DVec3,
     r: f64,
-) -> Option<(WallTouch, Outcome)> {
-    if w.wall.shape.surely_clear(x, r) {
+    time: f64,
+) -> Option<(WallTouch, glam::DVec3, Outcome)> {
+    let pose = (!w.wall.motion.is_fixed()).then(|| w.wall.motion.pose(time));
+    let xr = pose.map_or(x, |p| p.to_rest(x));
+    if w.wall.shape.surely_clear(xr, r) {
         return None;
     }
-    let t = w.wall.shape.touch(x, r)?;
+    let mut t = w.wall.shape.touch(xr, r)?;
+    let surface = match pose {
+        None => glam::DVec3::ZERO,
+        Some(p) => {
+            t.normal = p.to_world_direction(t.normal);
+            p.velocity_at(x - r * t.normal)
+        }
+    };
     let outcome = match w.model {
         // t.normal points from the wall to the centre: the wall's outward normal, as
         // coulomb_rebound takes it, is −t.normal
         PatchInteraction::Rebound { e, mu } => Ok((
             x + t.overlap * t.normal,
-            coulomb_rebound(v, -t.normal, e, mu),
+            surface + coulomb_rebound(v - surface, -t.normal, e, mu),
         )),
         m => Err(m),
     };
-    Some((t, outcome))
+    Some((t, surface, outcome))
 }
 
 /// Apply the impulse walls to every particle, in wall order; remove the ones that stick or
@@ -120,6 +134,7 @@ pub fn impulse_walls(
     mut commands: Commands,
     walls: Res<ImpulseWalls>,
     mut log: ResMut<WallLog>,
+    clock: Res<SimClock>,
     erosion: Option<ResMut<ErosionLog>>,
     mut q: Query<(
         Entity,
@@ -133,16 +148,18 @@ pub fn impulse_walls(
 ) {
     let mut gone: Vec<(u32, u32, Entity, usize, PatchInteraction)> = Vec::new();
     let mut hits: Vec<WallHit> = Vec::new();
+    // the walls where they are at the end of the step (this stage follows the move)
+    let time = clock.time();
     for (e, id, g, mut x, mut v, d, cg) in q.iter_mut() {
         let r = 0.5 * d.0;
         for (k, w) in walls.0.iter().enumerate() {
-            let Some((t, outcome)) = impulse(w, x.0, v.0, r) else {
+            let Some((t, surface, outcome)) = impulse(w, x.0, v.0, r, time) else {
                 continue;
             };
             let wears = !matches!(outcome, Err(PatchInteraction::Escape));
             if wears && erosion.as_ref().is_some_and(|l| l.wants_wall(k)) {
                 let key = (k as u32, t.element);
-                hits.push((key, v.0, t.normal, represented_mass(cg), id.0));
+                hits.push((key, v.0 - surface, t.normal, represented_mass(cg), id.0));
             }
             match outcome {
                 Ok((x1, v1)) => {
@@ -202,18 +219,51 @@ mod tests {
     fn a_touching_sphere_rebounds_to_touching_distance() {
         let w = floor(PatchInteraction::Rebound { e: 0.5, mu: 0.2 });
         let (x, v) = (DVec3::new(1.0, 2.0, 0.7e-3), DVec3::new(3.0, 0.0, -2.0));
-        let Some((t, Ok((x1, v1)))) = impulse(&w, x, v, 1e-3) else {
+        let Some((t, surface, Ok((x1, v1)))) = impulse(&w, x, v, 1e-3, 0.0) else {
             panic!()
         };
+        assert_eq!(surface, DVec3::ZERO);
         assert_eq!((t.normal, t.element), (DVec3::Z, 0));
         assert!((x1 - DVec3::new(1.0, 2.0, 1e-3)).length() < 1e-15);
         assert_eq!(v1, coulomb_rebound(v, -DVec3::Z, 0.5, 0.2));
         assert!((v1.z - 1.0).abs() < 1e-12);
-        assert_eq!(impulse(&w, DVec3::new(0.0, 0.0, 2e-3), v, 1e-3), None);
+        assert_eq!(impulse(&w, DVec3::new(0.0, 0.0, 2e-3), v, 1e-3, 0.0), None);
         let s = floor(PatchInteraction::Stick);
         assert_eq!(
-            impulse(&s, x, v, 1e-3).map(|o| o.1),
+            impulse(&s, x, v, 1e-3, 0.0).map(|o| o.2),
             Some(Err(PatchInteraction::Stick))
         );
+    }
+
+    /// A floor rising at 2 m/s and turning about z at 50 rad/s through the origin: a sphere
+    /// touching it at t = 10 ms (the floor at z = 20 mm) rebounds the velocity relative to
+    /// the surface at the contact point, V = (0, 5, 2) m/s: (v' − V)·n = −e·(v − V)·n, the
+    /// relative tangential velocity kept (μ = 0), and leaves at touching distance.
+    #[test]
+    fn a_moving_wall_rebounds_the_relative_velocity() {
+        use crate::physics::wall_motion::WallMotion;
+        let mut w = floor(PatchInteraction::Rebound { e: 0.6, mu: 0.0 });
+        w.wall.motion = WallMotion {
+            velocity: DVec3::new(0.0, 0.0, 2.0),
+            angular_velocity: DVec3::new(0.0, 0.0, 50.0),
+            centre: DVec3::ZERO,
+        };
+        let (x, v) = (
+            DVec3::new(0.1, 0.0, 0.02 + 0.7e-3),
+            DVec3::new(1.0, 0.0, -3.0),
+        );
+        let Some((t, surface, Ok((x1, v1)))) = impulse(&w, x, v, 1e-3, 0.01) else {
+            panic!()
+        };
+        assert!((t.normal - DVec3::Z).length() < 1e-15);
+        assert!(
+            (surface - DVec3::new(0.0, 5.0, 2.0)).length() < 1e-12,
+            "{surface}"
+        );
+        assert!(((v1 - surface).z + 0.6 * (v - surface).z).abs() < 1e-12);
+        assert!((v1 - DVec3::new(1.0, 0.0, 5.0)).length() < 1e-12, "{v1}");
+        assert!((x1 - DVec3::new(0.1, 0.0, 0.021)).length() < 1e-15);
+        // at t = 0 the same sphere is 20 mm above the floor
+        assert_eq!(impulse(&w, x, v, 1e-3, 0.0), None);
     }
 }

@@ -86,6 +86,25 @@ pub fn render(scene: &Scene, r: &Report) -> String {
             s.push_str(&mesh_line(&w.name, m));
         }
     }
+    for w in scene
+        .walls
+        .iter()
+        .chain(scene.impulse_walls.iter().map(|w| &w.wall))
+    {
+        let m = &w.motion;
+        if !m.is_fixed() {
+            let rate = m.angular_velocity.length();
+            s.push_str(&format!(
+                "wall `{}` moves: velocity {:?} m/s, angular velocity {:?} rad/s ({:.4} rpm) \
+                 about {:?} m at t = 0\n",
+                w.name,
+                m.velocity.to_array(),
+                m.angular_velocity.to_array(),
+                rate * 60.0 / std::f64::consts::TAU,
+                m.centre.to_array()
+            ));
+        }
+    }
     if let Some(m) = &scene.mesh_flow {
         s.push_str(&mesh_flow_lines(
             m,

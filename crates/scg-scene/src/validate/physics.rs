@@ -429,8 +429,51 @@ pub(super) fn wall(w: &RawWall, i: usize, cx: &Ctx) -> Result<Wall, SceneError> 
     Ok(Wall {
         name: w.name.clone().unwrap_or_else(|| format!("wall{i}")),
         shape,
-        motion: Default::default(),
+        motion: wall_motion(w.motion.as_ref(), i, cx)?,
     })
+}
+
+/// `walls[i].motion`: velocity and angular velocity (from `rpm` about a unit `axis`, or
+/// `angular_velocity` itself) about `center`; a motion that moves nothing is refused.
+fn wall_motion(
+    m: Option<&crate::raw::RawWallMotion>,
+    i: usize,
+    cx: &Ctx,
+) -> Result<scg_core::physics::wall_motion::WallMotion, SceneError> {
+    use scg_core::physics::wall_motion::WallMotion;
+    let Some(m) = m else {
+        return Ok(WallMotion::FIXED);
+    };
+    let k = |s: &str| format!("walls[{i}].motion.{s}");
+    let velocity = cx.vec3(&k("velocity"), m.velocity.unwrap_or([0.0; 3]))?;
+    let angular_velocity = match (m.rpm, m.axis, m.angular_velocity) {
+        (Some(_), _, Some(_)) | (None, Some(_), Some(_)) => {
+            return Err(cx.err(
+                &k("angular_velocity"),
+                "give either `rpm` with `axis` or `angular_velocity`, not both",
+            ));
+        }
+        (Some(rpm), axis, None) => {
+            let axis = cx.unit(&k("axis"), cx.need(&k("axis"), &axis)?)?;
+            axis * (cx.finite(&k("rpm"), rpm)? * std::f64::consts::TAU / 60.0)
+        }
+        (None, Some(_), None) => return Err(cx.err(&k("axis"), "needs `rpm`")),
+        (None, None, Some(w)) => cx.vec3(&k("angular_velocity"), w)?,
+        (None, None, None) => glam::DVec3::ZERO,
+    };
+    let centre = cx.vec3(&k("center"), m.center.unwrap_or([0.0; 3]))?;
+    let motion = WallMotion {
+        velocity,
+        angular_velocity,
+        centre,
+    };
+    if motion.is_fixed() {
+        return Err(cx.err(
+            &format!("walls[{i}].motion"),
+            "moves nothing: give `velocity`, `rpm` with `axis`, or `angular_velocity`",
+        ));
+    }
+    Ok(motion)
 }
 
 /// `walls[i]` of kind `mesh`: the STL file (relative to the scene file's folder), scaled,
