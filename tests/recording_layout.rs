@@ -326,14 +326,43 @@ fn a_moving_wall_is_drawn_where_it_is() {
     let motion = meta.outlines[0].motion;
     assert!(!motion.is_fixed());
     let (rrd, mcap) = (dir.path().join("l.rrd"), dir.path().join("l.mcap"));
+    let vtk = dir.path().join("vtk");
     let mut sim = scene.build(true);
     sim.add_recorder(Box::new(RrdSink::create(&rrd, &meta).unwrap()));
     sim.add_recorder(Box::new(McapSink::create(&mcap, &meta).unwrap()));
+    sim.add_recorder(Box::new(scg::record::VtkSink::create(&vtk, &meta).unwrap()));
     sim.record_now().unwrap();
     sim.run(scene.steps(), |_| true).unwrap();
     sim.finish_recorders().unwrap();
     let rec = read_mcap(&mcap).unwrap();
     assert_eq!(rec.meta.outlines[0].motion, motion);
+    // MCAP: a SceneUpdate per frame on /geometry/walls posing the floor (Foxglove)
+    {
+        use foxglove::Decode;
+        let bytes = std::fs::read(&mcap).unwrap();
+        let mut poses = Vec::new();
+        for m in mcap::MessageStream::new(&bytes).unwrap() {
+            let m = m.unwrap();
+            if m.channel.topic == "/geometry/walls" {
+                let u = foxglove::messages::SceneUpdate::decode(&m.data[..]).unwrap();
+                let pos = u.entities[0].lines[0]
+                    .pose
+                    .clone()
+                    .unwrap()
+                    .position
+                    .unwrap();
+                poses.push((m.log_time, pos.z));
+            }
+        }
+        assert_eq!(poses.len(), 5);
+        for (ns, z) in poses {
+            assert!((z - 0.1 * ns as f64 * 1e-9).abs() < 1e-12, "{ns} {z}");
+        }
+    }
+    // VTK: the floor per frame where it is (<case>_walls_<step>.vtu in <case>_walls.pvd)
+    let pvd = std::fs::read_to_string(vtk.join(format!("{}_walls.pvd", meta.case))).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 5);
+    assert!(!vtk.join(format!("{}_geometry.vtu", meta.case)).exists());
     let rebuilt = dir.path().join("r.rrd");
     scg::record::write_rrd(&rec, &rebuilt).unwrap();
     for file in [&rrd, &rebuilt] {

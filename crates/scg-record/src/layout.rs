@@ -66,6 +66,11 @@ pub const TOPIC_STATS: &str = "/stats";
 /// `TriangleListPrimitive` (points in m, indexed, coloured by role). Absent without a
 /// mesh flow.
 pub const TOPIC_PATCHES: &str = "/flow/patches";
+/// Topic of the moving walls (`[[walls]] motion`): one `foxglove.SceneUpdate` per frame,
+/// one `SceneEntity` per moving wall (id = its name) holding its outline's strips at rest
+/// as `LinePrimitive`s (LINE_STRIP) with the pose that puts them where the wall is at the
+/// frame's time. Absent without moving walls.
+pub const TOPIC_WALLS: &str = "/geometry/walls";
 /// `frame_id` of the point clouds.
 pub const FRAME_ID: &str = "world";
 /// Name of the MCAP metadata record holding the run description (see `META_*` keys).

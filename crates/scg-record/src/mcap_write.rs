@@ -12,12 +12,12 @@ use foxglove::Encode;
 use foxglove::bytes::Bytes;
 use foxglove::messages::packed_element_field::NumericType;
 use foxglove::messages::{
-    Color, KeyValuePair, PackedElementField, Point3, PointCloud, Pose, Quaternion, SceneEntity,
-    SceneUpdate, Timestamp, TriangleListPrimitive, Vector3,
+    Color, KeyValuePair, LinePrimitive, PackedElementField, Point3, PointCloud, Pose, Quaternion,
+    SceneEntity, SceneUpdate, Timestamp, TriangleListPrimitive, Vector3,
 };
 use mcap::records::{MessageHeader, Metadata};
 use mcap::{Attachment, Compression, WriteOptions, Writer};
-use scg_core::frame::{Frame, FrameSink, RunMeta, WearMap};
+use scg_core::frame::{Frame, FrameSink, Outline, RunMeta, WearMap};
 
 use crate::layout::{
     EROSION_ATTACHMENT, FORMAT_VERSION, FRAME_ID, FieldType, GroupJson, META_CASE, META_DT,
@@ -25,7 +25,7 @@ use crate::layout::{
     META_SEED, META_WARNINGS, METADATA_NAME, OrderedValues, OutlineJson, POINT_FIELD_FLUCTUATION,
     POINT_FIELDS, POINT_STRIDE, POINT_STRIDE_FLUCTUATION, SCENE_ATTACHMENT, SCENE_MEDIA_TYPE,
     STATS_JSON_SCHEMA, STATS_SCHEMA_NAME, StatsOut, TOPIC_PARTICLES, TOPIC_PATCHES, TOPIC_STATS,
-    patch_color,
+    TOPIC_WALLS, patch_color,
 };
 use crate::{RecordError, check_frame, commit_partial, partial_path};
 
@@ -71,6 +71,8 @@ impl Default for McapOptions {
 ///   file, both written first so that a truncated file keeps them;
 /// * with a mesh flow, `/flow/patches`: one `foxglove.SceneUpdate` at time 0 with every
 ///   boundary patch as a triangle list ([`TOPIC_PATCHES`]), in the first chunk;
+/// * with moving walls, `/geometry/walls`: one `foxglove.SceneUpdate` per frame posing
+///   each moving wall's outline ([`TOPIC_WALLS`]);
 /// * with `[erosion]`, attachment `erosion.json` ([`EROSION_ATTACHMENT`]): the wear of
 ///   the walls per face, written when the run finishes;
 /// * zstd-compressed chunks (see [`McapOptions`]), message and chunk indexes, statistics,
@@ -88,6 +90,9 @@ pub struct McapSink {
     n_groups: usize,
     particles_channel: u16,
     stats_channel: u16,
+    /// The moving walls' channel and outlines (`None`, empty: no wall moves).
+    walls_channel: Option<u16>,
+    moving: Vec<Outline>,
     /// Sequence number of the next frame.
     sequence: u32,
     /// Uncompressed bytes written since the last chunk was closed.
@@ -217,6 +222,70 @@ fn patches_update(meta: &RunMeta) -> SceneUpdate {
     }
 }
 
+/// The [`TOPIC_WALLS`] message of a frame at time `t` (s): every moving wall's strips at
+/// rest with the pose that moves them where the wall is then.
+fn walls_update(moving: &[Outline], t: f64) -> SceneUpdate {
+    let entities = moving
+        .iter()
+        .map(|o| {
+            let p = o.motion.pose(t);
+            let d = p.centre - p.rotation * p.rest_centre;
+            let q = glam::DQuat::from_mat3(&p.rotation);
+            let pose = Pose {
+                position: Some(Vector3 {
+                    x: d.x,
+                    y: d.y,
+                    z: d.z,
+                }),
+                orientation: Some(Quaternion {
+                    x: q.x,
+                    y: q.y,
+                    z: q.z,
+                    w: q.w,
+                }),
+            };
+            SceneEntity {
+                timestamp: Some(Timestamp::new(
+                    t.floor() as u32,
+                    ((t - t.floor()) * 1e9) as u32,
+                )),
+                frame_id: FRAME_ID.to_owned(),
+                id: o.name.clone(),
+                lines: o
+                    .strips
+                    .iter()
+                    .map(|strip| LinePrimitive {
+                        r#type: 0, // LINE_STRIP
+                        pose: Some(pose.clone()),
+                        thickness: 2.0,
+                        scale_invariant: true,
+                        points: strip
+                            .iter()
+                            .map(|v| Point3 {
+                                x: v[0],
+                                y: v[1],
+                                z: v[2],
+                            })
+                            .collect(),
+                        color: Some(Color {
+                            r: 0.63,
+                            g: 0.63,
+                            b: 0.63,
+                            a: 1.0,
+                        }),
+                        ..Default::default()
+                    })
+                    .collect(),
+                ..Default::default()
+            }
+        })
+        .collect();
+    SceneUpdate {
+        deletions: Vec::new(),
+        entities,
+    }
+}
+
 /// Simulation time in ns, as MCAP log/publish time.
 fn time_ns(frame: &Frame) -> Result<u64, RecordError> {
     let ns = (frame.time * 1e9).round();
@@ -323,6 +392,20 @@ impl McapSink {
                 )
                 .map_err(mcap_err)?;
         }
+        let moving: Vec<Outline> = meta
+            .outlines
+            .iter()
+            .filter(|o| !o.motion.is_fixed())
+            .cloned()
+            .collect();
+        let walls_channel = if moving.is_empty() {
+            None
+        } else {
+            Some(foxglove_channel::<SceneUpdate, _>(
+                &mut writer,
+                TOPIC_WALLS,
+            )?)
+        };
         // Close the chunk holding the schemas and channels, and write everything so far.
         writer.flush().map_err(mcap_err)?;
 
@@ -334,6 +417,8 @@ impl McapSink {
             n_groups: meta.groups.len(),
             particles_channel,
             stats_channel,
+            walls_channel,
+            moving,
             sequence: 0,
             pending_bytes: 0,
             last_close: Instant::now(),
@@ -446,6 +531,16 @@ impl McapSink {
             .write_to_known_channel(&header(self.stats_channel), &stats)
             .map_err(mcap_err)?;
         bytes += stats.len();
+        if let Some(channel) = self.walls_channel {
+            let mut data = Vec::new();
+            walls_update(&self.moving, frame.time)
+                .encode(&mut data)
+                .map_err(|e| RecordError::Encode(e.to_string()))?;
+            writer
+                .write_to_known_channel(&header(channel), &data)
+                .map_err(mcap_err)?;
+            bytes += data.len();
+        }
 
         self.sequence = self
             .sequence

@@ -3,7 +3,8 @@
 //! group (and, with dispersion, the fluctuation |u′|) as point data; a ParaView
 //! collection (`<case>.pvd`) that puts the frames on the simulation time; the scene
 //! geometry as line cells in `<case>_geometry.vtu`; and a mesh flow's boundary patches as
-//! triangles in `<case>_patches.vtu` (cell data `patch`, `role`); with `[erosion]`, the
+//! triangles in `<case>_patches.vtu` (cell data `patch`, `role`); moving walls per frame
+//! where they are, `<case>_walls_<step>.vtu` indexed by `<case>_walls.pvd`; with `[erosion]`, the
 //! wear of the walls per face in `<case>_erosion.vtu`, written when the run finishes.
 //!
 //! A frame without particles is a grid of no points and no cells, which VTK's reader and
@@ -26,6 +27,10 @@ pub struct VtkSink {
     case: String,
     /// (file name, time in s) of every frame written.
     written: Vec<(String, f64)>,
+    /// The moving walls' outlines (drawn per frame where they are).
+    moving: Vec<Outline>,
+    /// (file name, time in s) of every moving-wall geometry file written.
+    moved: Vec<(String, f64)>,
 }
 
 impl VtkSink {
@@ -36,14 +41,21 @@ impl VtkSink {
             path: dir.to_path_buf(),
             source,
         })?;
+        let (moving, still): (Vec<Outline>, Vec<Outline>) = meta
+            .outlines
+            .iter()
+            .cloned()
+            .partition(|o| !o.motion.is_fixed());
         let sink = VtkSink {
             dir: dir.to_path_buf(),
             case: meta.case.clone(),
             written: Vec::new(),
+            moving,
+            moved: Vec::new(),
         };
-        if !meta.outlines.is_empty() {
+        if !still.is_empty() {
             let path = dir.join(format!("{}_geometry.vtu", meta.case));
-            write_file(&path, &geometry_vtu(&meta.outlines))?;
+            write_file(&path, &geometry_vtu(&still))?;
         }
         if !meta.patches.is_empty() {
             let path = dir.join(format!("{}_patches.vtu", meta.case));
@@ -70,6 +82,31 @@ impl FrameSink for VtkSink {
         let name = format!("{}_{:09}.vtu", self.case, frame.step);
         write_file(&self.dir.join(&name), &frame_vtu(frame)).map_err(|e| e.to_string())?;
         self.written.push((name, frame.time));
+        if !self.moving.is_empty() {
+            // the moving walls where they are at this frame's time
+            let posed: Vec<Outline> = self
+                .moving
+                .iter()
+                .map(|o| {
+                    let p = o.motion.pose(frame.time);
+                    let at = |v: [f64; 3]| {
+                        let x = glam::DVec3::from_array(v);
+                        (p.rotation * (x - p.rest_centre) + p.centre).to_array()
+                    };
+                    Outline {
+                        strips: o
+                            .strips
+                            .iter()
+                            .map(|s| s.iter().map(|&v| at(v)).collect())
+                            .collect(),
+                        ..Default::default()
+                    }
+                })
+                .collect();
+            let name = format!("{}_walls_{:09}.vtu", self.case, frame.step);
+            write_file(&self.dir.join(&name), &geometry_vtu(&posed)).map_err(|e| e.to_string())?;
+            self.moved.push((name, frame.time));
+        }
         Ok(())
     }
 
@@ -89,7 +126,22 @@ impl FrameSink for VtkSink {
             );
         }
         pvd.push_str("</Collection>\n</VTKFile>\n");
-        write_file(&self.pvd_path(), &pvd).map_err(|e| e.to_string())
+        write_file(&self.pvd_path(), &pvd).map_err(|e| e.to_string())?;
+        if !self.moved.is_empty() {
+            let mut pvd = String::from(
+                "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
+            );
+            for (name, t) in &self.moved {
+                let _ = writeln!(
+                    pvd,
+                    "<DataSet timestep=\"{t}\" part=\"0\" file=\"{name}\"/>"
+                );
+            }
+            pvd.push_str("</Collection>\n</VTKFile>\n");
+            let path = self.dir.join(format!("{}_walls.pvd", self.case));
+            write_file(&path, &pvd).map_err(|e| e.to_string())?;
+        }
+        Ok(())
     }
 }
 
