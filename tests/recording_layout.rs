@@ -345,12 +345,7 @@ fn a_moving_wall_is_drawn_where_it_is() {
             let m = m.unwrap();
             if m.channel.topic == "/geometry/walls" {
                 let u = foxglove::messages::SceneUpdate::decode(&m.data[..]).unwrap();
-                let pos = u.entities[0].lines[0]
-                    .pose
-                    .clone()
-                    .unwrap()
-                    .position
-                    .unwrap();
+                let pos = u.entities[0].lines[0].pose.unwrap().position.unwrap();
                 poses.push((m.log_time, pos.z));
             }
         }

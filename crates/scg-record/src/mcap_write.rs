@@ -256,7 +256,7 @@ fn walls_update(moving: &[Outline], t: f64) -> SceneUpdate {
                     .iter()
                     .map(|strip| LinePrimitive {
                         r#type: 0, // LINE_STRIP
-                        pose: Some(pose.clone()),
+                        pose: Some(pose),
                         thickness: 2.0,
                         scale_invariant: true,
                         points: strip
