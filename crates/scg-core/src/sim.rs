@@ -364,7 +364,7 @@ impl Simulation {
     }
 
     /// Flush and close every recorder, handing each the wear of the walls first when the
-    /// run logs erosion ([`FrameSink::write_wear`](crate::frame::FrameSink::write_wear)).
+    /// run logs erosion ([`FrameSink::write_wear`]).
     pub fn finish_recorders(&mut self) -> Result<(), SimError> {
         let wear = crate::stages::erosion::wear_map(&self.world, self.step_count(), self.time());
         let mut rec = self.world.resource_mut::<Recorders>();

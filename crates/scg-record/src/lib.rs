@@ -25,6 +25,7 @@ mod blueprint;
 pub mod checkpoint;
 pub mod layout;
 mod mcap_read;
+mod mcap_scene;
 mod mcap_write;
 mod rrd_write;
 pub mod vtk;

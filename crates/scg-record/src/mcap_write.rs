@@ -11,13 +11,12 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use foxglove::Encode;
 use foxglove::bytes::Bytes;
 use foxglove::messages::packed_element_field::NumericType;
-use foxglove::messages::{
-    Color, KeyValuePair, LinePrimitive, PackedElementField, Point3, PointCloud, Pose, Quaternion,
-    SceneEntity, SceneUpdate, Timestamp, TriangleListPrimitive, Vector3,
-};
+use foxglove::messages::{PackedElementField, PointCloud, SceneUpdate, Timestamp};
 use mcap::records::{MessageHeader, Metadata};
 use mcap::{Attachment, Compression, WriteOptions, Writer};
 use scg_core::frame::{Frame, FrameSink, Outline, RunMeta, WearMap};
+
+use crate::mcap_scene::{identity, patches_update, walls_update};
 
 use crate::layout::{
     EROSION_ATTACHMENT, FORMAT_VERSION, FRAME_ID, FieldType, GroupJson, META_CASE, META_DT,
@@ -25,7 +24,7 @@ use crate::layout::{
     META_SEED, META_WARNINGS, METADATA_NAME, OrderedValues, OutlineJson, POINT_FIELD_FLUCTUATION,
     POINT_FIELDS, POINT_STRIDE, POINT_STRIDE_FLUCTUATION, SCENE_ATTACHMENT, SCENE_MEDIA_TYPE,
     STATS_JSON_SCHEMA, STATS_SCHEMA_NAME, StatsOut, TOPIC_PARTICLES, TOPIC_PATCHES, TOPIC_STATS,
-    TOPIC_WALLS, patch_color,
+    TOPIC_WALLS,
 };
 use crate::{RecordError, check_frame, commit_partial, partial_path};
 
@@ -160,130 +159,6 @@ fn field((name, offset, ty): (&str, u32, FieldType)) -> PackedElementField {
 
 fn point_fields() -> Vec<PackedElementField> {
     POINT_FIELDS.iter().map(|&f| field(f)).collect()
-}
-
-/// The identity pose.
-fn identity() -> Pose {
-    Pose {
-        position: Some(Vector3 {
-            x: 0.0,
-            y: 0.0,
-            z: 0.0,
-        }),
-        orientation: Some(Quaternion {
-            x: 0.0,
-            y: 0.0,
-            z: 0.0,
-            w: 1.0,
-        }),
-    }
-}
-
-/// The [`TOPIC_PATCHES`] message: one entity per boundary patch (id = its name, metadata
-/// `role`), one indexed triangle list each, coloured by role, in frame `world`, forever.
-fn patches_update(meta: &RunMeta) -> SceneUpdate {
-    let entities = meta
-        .patches
-        .iter()
-        .map(|p| {
-            let [r, g, b, a] = patch_color(&p.role).map(|c| f64::from(c) / 255.0);
-            SceneEntity {
-                timestamp: Some(Timestamp::new(0, 0)),
-                frame_id: FRAME_ID.to_owned(),
-                id: p.name.clone(),
-                lifetime: None,
-                frame_locked: false,
-                metadata: vec![KeyValuePair {
-                    key: "role".to_owned(),
-                    value: p.role.clone(),
-                }],
-                triangles: vec![TriangleListPrimitive {
-                    pose: Some(identity()),
-                    points: p
-                        .vertices
-                        .iter()
-                        .map(|v| Point3 {
-                            x: v[0],
-                            y: v[1],
-                            z: v[2],
-                        })
-                        .collect(),
-                    color: Some(Color { r, g, b, a }),
-                    colors: Vec::new(),
-                    indices: p.triangles.iter().flatten().copied().collect(),
-                }],
-                ..Default::default()
-            }
-        })
-        .collect();
-    SceneUpdate {
-        deletions: Vec::new(),
-        entities,
-    }
-}
-
-/// The [`TOPIC_WALLS`] message of a frame at time `t` (s): every moving wall's strips at
-/// rest with the pose that moves them where the wall is then.
-fn walls_update(moving: &[Outline], t: f64) -> SceneUpdate {
-    let entities = moving
-        .iter()
-        .map(|o| {
-            let p = o.motion.pose(t);
-            let d = p.centre - p.rotation * p.rest_centre;
-            let q = glam::DQuat::from_mat3(&p.rotation);
-            let pose = Pose {
-                position: Some(Vector3 {
-                    x: d.x,
-                    y: d.y,
-                    z: d.z,
-                }),
-                orientation: Some(Quaternion {
-                    x: q.x,
-                    y: q.y,
-                    z: q.z,
-                    w: q.w,
-                }),
-            };
-            SceneEntity {
-                timestamp: Some(Timestamp::new(
-                    t.floor() as u32,
-                    ((t - t.floor()) * 1e9) as u32,
-                )),
-                frame_id: FRAME_ID.to_owned(),
-                id: o.name.clone(),
-                lines: o
-                    .strips
-                    .iter()
-                    .map(|strip| LinePrimitive {
-                        r#type: 0, // LINE_STRIP
-                        pose: Some(pose),
-                        thickness: 2.0,
-                        scale_invariant: true,
-                        points: strip
-                            .iter()
-                            .map(|v| Point3 {
-                                x: v[0],
-                                y: v[1],
-                                z: v[2],
-                            })
-                            .collect(),
-                        color: Some(Color {
-                            r: 0.63,
-                            g: 0.63,
-                            b: 0.63,
-                            a: 1.0,
-                        }),
-                        ..Default::default()
-                    })
-                    .collect(),
-                ..Default::default()
-            }
-        })
-        .collect();
-    SceneUpdate {
-        deletions: Vec::new(),
-        entities,
-    }
 }
 
 /// Simulation time in ns, as MCAP log/publish time.
@@ -481,19 +356,7 @@ impl McapSink {
         let cloud = PointCloud {
             timestamp: Some(timestamp),
             frame_id: FRAME_ID.to_owned(),
-            pose: Some(Pose {
-                position: Some(Vector3 {
-                    x: 0.0,
-                    y: 0.0,
-                    z: 0.0,
-                }),
-                orientation: Some(Quaternion {
-                    x: 0.0,
-                    y: 0.0,
-                    z: 0.0,
-                    w: 1.0,
-                }),
-            }),
+            pose: Some(identity()),
             point_stride: if turbulent {
                 POINT_STRIDE_FLUCTUATION
             } else {
