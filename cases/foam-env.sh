@@ -39,3 +39,118 @@ foam_step() {
     local t1; t1=$(date +%s.%N)
     printf '   %-16s %7.1f s\n' "$name" "$(echo "$t1 - $t0" | bc)" | tee -a timings
 }
+
+# The steady simpleFoam set-up the squareBend-based builds share (cases/squarebend,
+# cases/elbow):
+#   foam_squarebend_system TUTORIAL WORK TITLE ITERATIONS
+#                                    the tutorial's fvSchemes, its fvSolution with a
+#                                    residualControl (p 1e-4, U, k, epsilon 1e-5), and a
+#                                    controlDict: binary output written once at the end,
+#                                    the inlet and outlet sum(phi) function objects
+#   foam_check_mesh SCRIPT           checkMesh's summary lines (in the current folder);
+#                                    fails unless "Mesh OK."; sets `cells`
+#   foam_residuals LOG FIELD…        per field the first and last initial residuals
+#   foam_export OUT FINAL FIELDS DICTS…  the case scg reads: polyMesh and FIELDS of time
+#                                    FINAL gzipped (v1912 ignores writeCompression for
+#                                    binary files), transport and turbulence properties,
+#                                    system/DICTS, summary.txt
+foam_squarebend_system() {
+    local tutorial=$1 work=$2 title=$3 iterations=$4
+    cp "$tutorial/system/fvSchemes" "$work/system/"
+    sed 's/^\( *\)consistent yes;/\1consistent yes;\n\1residualControl\n\1{\n\1    p               1e-4;\n\1    U               1e-5;\n\1    "(k|epsilon)"   1e-5;\n\1}/' \
+        "$tutorial/system/fvSolution" > "$work/system/fvSolution"
+    grep -q residualControl "$work/system/fvSolution" || { echo "build.sh: fvSolution: no 'consistent yes;' to add residualControl to" >&2; exit 1; }
+    cat > "$work/system/controlDict" <<DICT
+/*--------------------------------*- C++ -*----------------------------------*\\
+  $title
+\\*---------------------------------------------------------------------------*/
+FoamFile
+{
+    version     2.0;
+    format      ascii;
+    class       dictionary;
+    object      controlDict;
+}
+application     simpleFoam;
+startFrom       startTime;
+startTime       0;
+stopAt          endTime;
+endTime         $iterations;    // at most; residualControl (fvSolution) ends it earlier
+deltaT          1;
+writeControl    timeStep;
+writeInterval   $iterations;    // only the final field is written (also on convergence)
+purgeWrite      0;
+writeFormat     binary;
+writePrecision  8;
+writeCompression off;           // v1912 ignores it for binary files: gzipped by build.sh
+timeFormat      general;
+timePrecision   6;
+runTimeModifiable false;
+
+functions
+{
+    // Volume flow through the inlet and the outlet (postProcessing/): continuity check
+    inletFlow
+    {
+        type            surfaceFieldValue;
+        libs            ("libfieldFunctionObjects.so");
+        writeControl    timeStep;
+        writeInterval   1;
+        log             false;
+        writeFields     false;
+        regionType      patch;
+        name            inlet;
+        operation       sum;
+        fields          (phi);
+    }
+    outletFlow
+    {
+        \$inletFlow;
+        name            outlet;
+    }
+}
+DICT
+}
+
+foam_check_mesh() {
+    local script=$1
+    grep -q "Mesh OK." log.checkMesh || { echo "$script: checkMesh failed:" >&2; grep -i -B2 -A2 "\*\*\*" log.checkMesh >&2; trap - EXIT; exit 1; }
+    cells=$(awk '/^ *cells:/ {print $2; exit}' log.checkMesh)
+    grep -E "^ *(points|faces|cells):|non-orthogonality Max|Max skewness|Max aspect ratio" log.checkMesh | sed 's/^ */   /'
+    awk '/Checking patch topology/ {on = 1} on && /^ *(inlet|outlet|walls) / {print "   patch " $0} /Checking faceZone/ {on = 0}' log.checkMesh | sed 's/  */ /g'
+}
+
+foam_residuals() {
+    local log=$1 f; shift
+    if grep -q "reached convergence" "$log"; then
+        grep "reached convergence" "$log" | sed 's/^/   /'
+    else
+        echo "   residualControl targets not met: stopped at the iteration count"
+    fi
+    echo "initial residuals (first solve of each iteration): first; last"
+    for f in "$@"; do
+        awk -v f="$f" '
+            /^Time = / { seen = 0 }
+            $0 ~ ("Solving for " f ",") && !seen {
+                seen = 1; r = $0; sub(/.*Initial residual = /, "", r); sub(/,.*/, "", r); r += 0
+                if (n++ == 0) first = r; last = r
+            }
+            END { printf "   %-8s %.2e; %.2e\n", f, first, last }' "$log"
+    done
+    echo "continuity (last): $(grep 'continuity errors' "$log" | tail -1 | sed 's/^ *//')"
+}
+
+foam_export() {
+    local out=$1 final=$2 fields=$3 f; shift 3
+    rm -rf "$out"
+    mkdir -p "$out/constant/polyMesh" "$out/$final" "$out/system"
+    for f in points faces owner neighbour boundary; do
+        gzip -9 -n -c "constant/polyMesh/$f" > "$out/constant/polyMesh/$f.gz"
+    done
+    for f in $fields; do
+        if [ -f "$final/$f" ]; then gzip -9 -n -c "$final/$f" > "$out/$final/$f.gz"; fi
+    done
+    cp constant/transportProperties constant/turbulenceProperties "$out/constant/"
+    for f in "$@"; do cp "system/$f" "$out/system/"; done
+    cp "$summary" "$out/summary.txt"
+}

@@ -179,19 +179,8 @@ summary="$work/summary.txt"
 cat "$summary"
 
 # --- the case scg reads ---------------------------------------------------------------
-rm -rf "$out"
-mkdir -p "$out/constant/polyMesh" "$out/$final" "$out/system"
-# OpenFOAM v1912 ignores writeCompression for binary files ("Disabled binary format
-# compression"): gzip them here (scg reads gzipped binary files)
-for f in points faces owner neighbour boundary; do
-    gzip -9 -n -c "constant/polyMesh/$f" > "$out/constant/polyMesh/$f.gz"
-done
-for f in U UMean k omega nut kMean omegaMean; do
-    gzip -9 -n -c "$final/$f" > "$out/$final/$f.gz"
-done
-cp constant/transportProperties constant/turbulenceProperties "$out/constant/"
+foam_export "$out" "$final" "U UMean k omega nut kMean omegaMean" \
+    controlDict fvSchemes fvSolution blockMeshDict snappyHexMeshDict
 mkdir -p "$out/constant/triSurface"
 cp "$stl" "$out/constant/triSurface/"   # for [[walls]] kind = "mesh" (scg reads .stl.gz)
-cp system/controlDict system/fvSchemes system/fvSolution system/blockMeshDict system/snappyHexMeshDict "$out/system/"
-cp "$summary" "$out/summary.txt"
 echo "== wrote $out ($(du -sh "$out" | cut -f1))"

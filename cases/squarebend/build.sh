@@ -71,7 +71,6 @@ echo "== $variant (cell counts x $factor): working in $work"
 mkdir -p "$work/system"
 cp -r "$tutorial/0" "$tutorial/constant" "$work/"
 rm -rf "$work/constant/triSurface"        # the tutorial's sampling planes only
-cp "$tutorial/system/fvSchemes" "$work/system/"
 # the tutorial's blockMeshDict, every block's cell counts times the factor
 python3 - "$tutorial/system/blockMeshDict" "$factor" > "$work/system/blockMeshDict" <<'PY'
 import re, sys
@@ -84,60 +83,7 @@ if k != 4:
     sys.exit(f"build.sh: expected 4 hex blocks in the tutorial's blockMeshDict, found {k}")
 sys.stdout.write(new)
 PY
-# the tutorial's fvSolution with a residualControl (the tutorial runs 500 iterations)
-sed 's/^\( *\)consistent yes;/\1consistent yes;\n\1residualControl\n\1{\n\1    p               1e-4;\n\1    U               1e-5;\n\1    "(k|epsilon)"   1e-5;\n\1}/' \
-    "$tutorial/system/fvSolution" > "$work/system/fvSolution"
-grep -q residualControl "$work/system/fvSolution" || { echo "build.sh: fvSolution: no 'consistent yes;' to add residualControl to" >&2; exit 1; }
-cat > "$work/system/controlDict" <<DICT
-/*--------------------------------*- C++ -*----------------------------------*\\
-  scg cases/squarebend: steady air flow in OpenFOAM's squareBend tutorial duct
-\\*---------------------------------------------------------------------------*/
-FoamFile
-{
-    version     2.0;
-    format      ascii;
-    class       dictionary;
-    object      controlDict;
-}
-application     simpleFoam;
-startFrom       startTime;
-startTime       0;
-stopAt          endTime;
-endTime         $iterations;    // at most; residualControl (fvSolution) ends it earlier
-deltaT          1;
-writeControl    timeStep;
-writeInterval   $iterations;    // only the final field is written (also on convergence)
-purgeWrite      0;
-writeFormat     binary;
-writePrecision  8;
-writeCompression off;           // v1912 ignores it for binary files: gzipped by build.sh
-timeFormat      general;
-timePrecision   6;
-runTimeModifiable false;
-
-functions
-{
-    // Volume flow through the inlet and the outlet (postProcessing/): continuity check
-    inletFlow
-    {
-        type            surfaceFieldValue;
-        libs            ("libfieldFunctionObjects.so");
-        writeControl    timeStep;
-        writeInterval   1;
-        log             false;
-        writeFields     false;
-        regionType      patch;
-        name            inlet;
-        operation       sum;
-        fields          (phi);
-    }
-    outletFlow
-    {
-        \$inletFlow;
-        name            outlet;
-    }
-}
-DICT
+foam_squarebend_system "$tutorial" "$work" "scg cases/squarebend: steady air flow in OpenFOAM's squareBend tutorial duct" "$iterations"
 
 cd "$work"
 step() { foam_step build.sh "$work" "$@"; }   # step NAME CMD...: cases/foam-env.sh
@@ -145,10 +91,7 @@ echo "== mesh (uptime: $(uptime | sed 's/.*load/load/'))"
 grep -E "^ *hex" system/blockMeshDict | sed 's/^ */   /'
 step blockMesh blockMesh
 step checkMesh checkMesh
-grep -q "Mesh OK." log.checkMesh || { echo "build.sh: checkMesh failed:" >&2; grep -i -B2 -A2 "\*\*\*" log.checkMesh >&2; trap - EXIT; exit 1; }
-cells=$(awk '/^ *cells:/ {print $2; exit}' log.checkMesh)
-grep -E "^ *(points|faces|cells):|non-orthogonality Max|Max skewness|Max aspect ratio" log.checkMesh | sed 's/^ */   /'
-awk '/Checking patch topology/ {on = 1} on && /^ *(inlet|outlet|walls) / {print "   patch " $0} /Checking faceZone/ {on = 0}' log.checkMesh | sed 's/  */ /g'
+foam_check_mesh build.sh
 
 echo "== simpleFoam, k-epsilon, $iterations iterations at most (1 process)"
 step simpleFoam simpleFoam
@@ -163,22 +106,7 @@ summary="$work/summary.txt"
     echo "tutorial: $tutorial (OpenFOAM $(dpkg-query -W -f='${Version}' openfoam 2>/dev/null || echo '?'))"
     echo "turbulence: RAS kEpsilon, steady (simpleFoam, SIMPLEC), nu = 1.5e-5 m^2/s, inlet U = (10 0 0) m/s; walls noSlip"
     echo "final iteration: $final (of $iterations max)"
-    if grep -q "reached convergence" log.simpleFoam; then
-        grep "reached convergence" log.simpleFoam | sed 's/^/   /'
-    else
-        echo "   residualControl targets not met: stopped at the iteration count"
-    fi
-    echo "initial residuals (first solve of each iteration): first; last"
-    for f in Ux Uy Uz p k epsilon; do
-        awk -v f="$f" '
-            /^Time = / { seen = 0 }
-            $0 ~ ("Solving for " f ",") && !seen {
-                seen = 1; r = $0; sub(/.*Initial residual = /, "", r); sub(/,.*/, "", r); r += 0
-                if (n++ == 0) first = r; last = r
-            }
-            END { printf "   %-8s %.2e; %.2e\n", f, first, last }' log.simpleFoam
-    done
-    echo "continuity (last): $(grep 'continuity errors' log.simpleFoam | tail -1 | sed 's/^ *//')"
+    foam_residuals log.simpleFoam Ux Uy Uz p k epsilon
     echo "volume flow at the last iteration, sum(phi), m^3/s: inlet $(tail -1 postProcessing/inletFlow/0/surfaceFieldValue.dat | awk '{print $2}')," \
          "outlet $(tail -1 postProcessing/outletFlow/0/surfaceFieldValue.dat | awk '{print $2}')" \
          "(0.05 x 0.05 m x 10 m/s = 0.025)"
@@ -190,17 +118,5 @@ summary="$work/summary.txt"
 cat "$summary"
 
 # --- the case scg reads ---------------------------------------------------------------
-rm -rf "$out"
-mkdir -p "$out/constant/polyMesh" "$out/$final" "$out/system"
-# OpenFOAM v1912 ignores writeCompression for binary files ("Disabled binary format
-# compression"): gzip them here (scg reads gzipped binary files)
-for f in points faces owner neighbour boundary; do
-    gzip -9 -n -c "constant/polyMesh/$f" > "$out/constant/polyMesh/$f.gz"
-done
-for f in U k epsilon nut p; do
-    [ -f "$final/$f" ] && gzip -9 -n -c "$final/$f" > "$out/$final/$f.gz"
-done
-cp constant/transportProperties constant/turbulenceProperties "$out/constant/"
-cp system/controlDict system/fvSchemes system/fvSolution system/blockMeshDict "$out/system/"
-cp "$summary" "$out/summary.txt"
+foam_export "$out" "$final" "U k epsilon nut p" controlDict fvSchemes fvSolution blockMeshDict
 echo "== wrote $out ($(du -sh "$out" | cut -f1))"

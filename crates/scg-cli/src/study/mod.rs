@@ -162,6 +162,46 @@ pub fn case_scene(text: &str, case: &str) -> Result<String, String> {
     Ok(text.replacen(&key, &format!("case = {:?}", dir.display().to_string()), 1))
 }
 
+/// What [`run_variants`] gives the process that called it.
+pub enum Variants<T> {
+    /// Every variant's result, in order (the process that gathers them).
+    Done(Vec<T>),
+    /// Another process gathers the results: nothing to write here.
+    Elsewhere,
+    /// A variant failed (its error printed): the study stops, exit status 1.
+    Failed,
+}
+
+/// Run `cost.len()` independent variants through `points` (`cost`: each one's estimated
+/// cost, to spread them over processes), `job(i)` running variant `i` and printing its
+/// own progress; a variant that fails prints its error and stops this process's share
+/// (the rest is not run).
+pub fn run_variants<T: serde::Serialize + serde::de::DeserializeOwned>(
+    points: &dyn Points,
+    cost: &[f64],
+    mut job: impl FnMut(usize) -> Result<T, String>,
+) -> Variants<T> {
+    let mut failed = false;
+    let results = map(points, cost.len(), cost, |i| {
+        if failed {
+            return Err(String::new());
+        }
+        let r = job(i);
+        if let Err(e) = &r {
+            failed = true;
+            eprintln!("error: {e}");
+        }
+        r
+    });
+    match results {
+        None => Variants::Elsewhere,
+        Some(r) => match r.into_iter().collect::<Result<Vec<T>, String>>() {
+            Ok(v) => Variants::Done(v),
+            Err(_) => Variants::Failed,
+        },
+    }
+}
+
 /// Write every table and plot of a study into `out`; returns the text report.
 pub fn write_outputs(runs: &[VariantRun], nozzle: f64, out: &Path) -> Result<String, String> {
     let text = write_tables(runs, out)?;
@@ -231,13 +271,8 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
                 .map_or(1.0, |a| a.powi(-3))
         })
         .collect();
-    let mut failed = false;
-    let results = map(points, VARIANTS.len(), &cost, |i| {
+    let runs = match run_variants(points, &cost, |i| {
         let (name, sets) = VARIANTS[i];
-        if failed {
-            // A variant of this process failed: the study stops (the rest is not run).
-            return Err(String::new());
-        }
         let mut overrides: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
         overrides.push(format!("name=\"{}-{name}\"", spec.name));
         if a.quick {
@@ -246,29 +281,18 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
         overrides.extend(a.set.iter().cloned());
         let mcap = (!a.no_record).then(|| out.join(format!("{}-{name}.mcap", spec.name)));
         eprintln!("study {}: running variant `{name}`…", spec.name);
-        let r = run_variant(name, spec.scene, &overrides, spec.window, mcap.as_deref());
-        match &r {
-            Ok(v) => eprintln!(
-                "  {name} done in {:.1} s ({} resident, 0.1 s took {:.2} s)",
-                v.total_s, v.resident, v.time_s
-            ),
-            Err(e) => {
-                failed = true;
-                eprintln!("error: variant `{name}`: {e}");
-            }
-        }
-        r
-    });
-    let Some(results) = results else {
-        return 0;
+        let v = run_variant(name, spec.scene, &overrides, spec.window, mcap.as_deref())
+            .map_err(|e| format!("variant `{name}`: {e}"))?;
+        eprintln!(
+            "  {name} done in {:.1} s ({} resident, 0.1 s took {:.2} s)",
+            v.total_s, v.resident, v.time_s
+        );
+        Ok(v)
+    }) {
+        Variants::Done(runs) => runs,
+        Variants::Elsewhere => return 0,
+        Variants::Failed => return 1,
     };
-    let mut runs = Vec::new();
-    for r in results {
-        match r {
-            Ok(v) => runs.push(v),
-            Err(_) => return 1,
-        }
-    }
     match write_outputs(&runs, nozzle, &out) {
         Ok(text) => print!("{text}"),
         Err(e) => {

@@ -30,9 +30,9 @@ pub use run::{CycloneRun, Tracker, run_variant};
 pub use theory::Cyclone;
 pub use tracers::{TracerCheck, run_tracers};
 
-use super::StudyArgs;
+use super::{StudyArgs, Variants, run_variants};
 use crate::EXIT_BAD_INPUT;
-use crate::points::{Points, map};
+use crate::points::Points;
 
 /// The cyclone scene (embedded so the study runs from any directory; its `flow.case` is
 /// resolved against `cases/`, see [`scene_text`]).
@@ -269,45 +269,31 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
     // The variants are independent: spread over processes by `points` (estimated cost
     // 1/α³ of the original's, the same mass fed), the results in `to_run` order.
     let cost: Vec<f64> = to_run.iter().map(|v| v.1.powi(-3)).collect();
-    let mut failed = false;
-    let results = map(points, to_run.len(), &cost, |i| {
+    let done = match run_variants(points, &cost, |i| {
         let (name, alpha, law) = to_run[i];
-        if failed {
-            // A variant of this process failed: the study stops (the rest is not run).
-            return Err(String::new());
-        }
         let overrides = overrides_of(name, alpha, law);
         let mcap = (!a.no_record).then(|| out.join(format!("cyclone-{name}.mcap")));
         eprintln!("study cyclone: running variant `{name}` (α = {alpha}, law {law})…");
-        let r = run_variant(name, &text, &overrides, SNAPSHOT_AT, mcap.as_deref());
-        match &r {
-            Ok(v) => eprintln!(
-                "  {name} done in {:.1} s ({} particle-steps, fed {}, escaped {}, held {}, lost {})",
-                v.total_s,
-                v.particle_steps,
-                v.classes.iter().map(|c| c.fed).sum::<u64>(),
-                v.classes.iter().map(|c| c.escaped).sum::<u64>(),
-                v.classes.iter().map(|c| c.held).sum::<u64>(),
-                v.classes.iter().map(|c| c.lost).sum::<u64>(),
-            ),
-            Err(e) => {
-                failed = true;
-                eprintln!("error: variant `{name}`: {e}");
-            }
-        }
-        r
-    });
-    let Some(results) = results else {
-        return 0;
+        let v = run_variant(name, &text, &overrides, SNAPSHOT_AT, mcap.as_deref())
+            .map_err(|e| format!("variant `{name}`: {e}"))?;
+        eprintln!(
+            "  {name} done in {:.1} s ({} particle-steps, fed {}, escaped {}, held {}, lost {})",
+            v.total_s,
+            v.particle_steps,
+            v.classes.iter().map(|c| c.fed).sum::<u64>(),
+            v.classes.iter().map(|c| c.escaped).sum::<u64>(),
+            v.classes.iter().map(|c| c.held).sum::<u64>(),
+            v.classes.iter().map(|c| c.lost).sum::<u64>(),
+        );
+        Ok(v)
+    }) {
+        Variants::Done(v) => v,
+        Variants::Elsewhere => return 0,
+        Variants::Failed => return 1,
     };
-    for r in results {
-        match r {
-            Ok(v) => {
-                runs.retain(|r: &CycloneRun| r.name != v.name);
-                runs.push(v);
-            }
-            Err(_) => return 1,
-        }
+    for v in done {
+        runs.retain(|r: &CycloneRun| r.name != v.name);
+        runs.push(v);
     }
     // In the order of VARIANTS (the original first).
     runs.sort_by_key(|r| VARIANTS.iter().position(|v| v.0 == r.name));

@@ -20,10 +20,10 @@ use std::path::PathBuf;
 use scg_core::stages::erosion::ErosionLog;
 use serde::{Deserialize, Serialize};
 
-use super::StudyArgs;
+use super::{StudyArgs, Variants, run_variants};
 use super::cyclone::{CycloneRun, TracerCheck, run_tracers};
 use crate::EXIT_BAD_INPUT;
-use crate::points::{Points, map};
+use crate::points::Points;
 
 pub use report::{markdown, report, summary};
 pub use wear::Wear;
@@ -32,17 +32,9 @@ pub use wear::Wear;
 /// see [`super::case_scene`]).
 pub const ELBOW: &str = include_str!("../../../../../cases/elbow.toml");
 
-/// The variants: name, α, law (`sample`: originals standing for α³ each, fed 1/α³ as
-/// many, as every variant).
-pub const VARIANTS: [(&str, f64, &str); 7] = [
-    ("original", 1.0, "scg"),
-    ("scg2", 2.0, "scg"),
-    ("scg4", 4.0, "scg"),
-    ("none2", 2.0, "none"),
-    ("parcel2", 2.0, "parcel"),
-    ("sample2", 2.0, "sample"),
-    ("sample4", 4.0, "sample"),
-];
+/// The variants: the cyclone study's (name, α, law); here `sample` is the law itself:
+/// originals standing for α³ each, fed 1/α³ as many, as every variant.
+pub const VARIANTS: [(&str, f64, &str); 7] = super::cyclone::VARIANTS;
 
 /// Feed scale of the full study (on the scene's 2000 particles per class) and the
 /// simulated time, s: 10 000 originals per class.
@@ -184,42 +176,23 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
         return EXIT_BAD_INPUT;
     }
     let cost: Vec<f64> = VARIANTS.iter().map(|v| v.1.powi(-3)).collect();
-    let mut failed = false;
-    let results = map(points, VARIANTS.len(), &cost, |i| {
+    let runs = match run_variants(points, &cost, |i| {
         let (name, alpha, law) = VARIANTS[i];
-        if failed {
-            return Err(String::new());
-        }
         let mcap = (!a.no_record).then(|| out.join(format!("elbow-{name}.mcap")));
         eprintln!("study elbow: running variant `{name}` (α = {alpha}, law {law})…");
-        let r = run_variant(
-            name,
-            &text,
-            &overrides_of(name, alpha, law),
-            mcap.as_deref(),
+        let overrides = overrides_of(name, alpha, law);
+        let v = run_variant(name, &text, &overrides, mcap.as_deref())
+            .map_err(|e| format!("variant `{name}`: {e}"))?;
+        eprintln!(
+            "  {name} done in {:.1} s ({} particle-steps, {} impacts)",
+            v.run.total_s, v.run.particle_steps, v.wear.impacts
         );
-        match &r {
-            Ok(v) => eprintln!(
-                "  {name} done in {:.1} s ({} particle-steps, {} impacts)",
-                v.run.total_s, v.run.particle_steps, v.wear.impacts
-            ),
-            Err(e) => {
-                failed = true;
-                eprintln!("error: variant `{name}`: {e}");
-            }
-        }
-        r
-    });
-    let Some(results) = results else {
-        return 0;
+        Ok(v)
+    }) {
+        Variants::Done(runs) => runs,
+        Variants::Elsewhere => return 0,
+        Variants::Failed => return 1,
     };
-    let mut runs = Vec::new();
-    for r in results {
-        match r {
-            Ok(v) => runs.push(v),
-            Err(_) => return 1,
-        }
-    }
     eprintln!("study elbow: the tracer check…");
     let rate = if a.quick { TRACERS.1 } else { TRACERS.0 };
     let tracers = match run_tracers(&text, &a.set, rate) {
