@@ -195,6 +195,26 @@ fn cyclone_shared_by_id_is_bit_identical_on_2_and_4_ranks() {
     same_bits("cyclone", "ids", &["duration=0.2"], &[2, 4]);
 }
 
+/// Moving walls over ranks (tests/fixtures/moving-floor.toml): a rising, turning floor and
+/// a turning drum, both impulse walls whose pose follows the step counter on every rank,
+/// fling beads across the x slabs; 2 and 3 ranks record 1 rank's bits.
+#[test]
+fn moving_walls_are_bit_identical_on_2_and_3_ranks() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = "tests/fixtures/moving-floor.toml";
+    let one = dir.path().join("1");
+    run_file(1, "x", file, &[], &one);
+    let reference = read_frames(&one, "moving-floor");
+    assert!(reference.len() > 2);
+    for n in [2, 3] {
+        let out = dir.path().join(n.to_string());
+        let report = run_file(n, "x", file, &[], &out);
+        assert!(migrated(&report) > 0, "{n} ranks: nothing migrated: {report}");
+        let frames = read_frames(&out, "moving-floor");
+        assert_eq!(digest(&frames), digest(&reference), "{n} ranks");
+    }
+}
+
 #[test]
 fn replay_verifies_a_2_rank_recording() {
     let dir = tempfile::tempdir().unwrap();
