@@ -209,7 +209,10 @@ fn moving_walls_are_bit_identical_on_2_and_3_ranks() {
     for n in [2, 3] {
         let out = dir.path().join(n.to_string());
         let report = run_file(n, "x", file, &[], &out);
-        assert!(migrated(&report) > 0, "{n} ranks: nothing migrated: {report}");
+        assert!(
+            migrated(&report) > 0,
+            "{n} ranks: nothing migrated: {report}"
+        );
         let frames = read_frames(&out, "moving-floor");
         assert_eq!(digest(&frames), digest(&reference), "{n} ranks");
     }

@@ -20,8 +20,8 @@ use std::path::PathBuf;
 use scg_core::stages::erosion::ErosionLog;
 use serde::{Deserialize, Serialize};
 
-use super::{StudyArgs, Variants, run_variants};
 use super::cyclone::{CycloneRun, TracerCheck, run_tracers};
+use super::{StudyArgs, Variants, run_variants};
 use crate::EXIT_BAD_INPUT;
 use crate::points::Points;
 
