@@ -453,6 +453,18 @@ fn force_notes(f: &ExtraForces, stepped: bool) -> Vec<(StepSet, String)> {
             ),
         ));
     }
+    if let Some(fr) = &f.frame {
+        v.push((
+            StepSet::Integration,
+            format!(
+                "[frame] rotating at {:.6} rpm about {:?} through {:?}: centrifugal and \
+                 Coriolis accelerations at mid-step (positions and velocities relative to it)",
+                fr.omega.length() * 60.0 / std::f64::consts::TAU,
+                fr.omega.normalize_or_zero().to_array(),
+                fr.centre.to_array()
+            ),
+        ));
+    }
     if f.rubinow_keller {
         v.push((
             StepSet::Integration,

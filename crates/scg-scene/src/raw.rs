@@ -28,6 +28,7 @@ pub struct RawScene {
     pub flow: Option<RawFlow>,
     pub drag: Option<RawDrag>,
     pub forces: Option<RawForces>,
+    pub frame: Option<RawFrame>,
     pub erosion: Option<RawErosion>,
     pub gravity: Option<RawGravity>,
     pub material: Option<RawMaterial>,
@@ -313,6 +314,17 @@ pub enum RawInterpolation {
 pub struct RawDrag {
     #[serde(deserialize_with = "name")]
     pub law: RawDragLaw,
+}
+
+/// `[frame]`: the rotating frame the flow and the walls are given in (OpenFOAM's SRF).
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RawFrame {
+    /// Rotation rate, rev/min, right-handed about `axis`.
+    pub rpm: f64,
+    pub axis: [f64; 3],
+    /// A point on the axis, m (default the origin).
+    pub center: Option<[f64; 3]>,
 }
 
 #[derive(Deserialize, Debug, Clone)]

@@ -181,7 +181,7 @@ pub fn advance<C: Carrier>(
                 let tau = effective_tau(law, fc, &s.fluid, (u - vi).length());
                 let a = match &s.forces {
                     None => acc,
-                    Some(f) => acc + f.acceleration(fc, u, carrier.gradient(h, xi), vi),
+                    Some(f) => acc + f.acceleration(fc, xi, u, carrier.gradient(h, xi), vi),
                 };
                 (xi, vi) = explicit_euler(xi, vi, u, a, tau, step);
             }
@@ -194,13 +194,19 @@ pub fn advance<C: Carrier>(
             };
             let xm = x0 + vk * (0.5 * dt);
             let (u, hm) = carrier.at(cell, xm);
-            // the opt-in forces at the mid-step point, with the velocity relaxed halfway
-            // there (the exponential step's own mid-step velocity)
+            // the opt-in forces at the mid-step point, with the velocity there: relaxed
+            // halfway toward u under the body acceleration and, in a second pass, the
+            // forces themselves (Coriolis and lift depend on it: with the relaxed
+            // velocity alone the step would be first order in them)
             let a = match &s.forces {
                 None => b.a,
                 Some(f) => {
-                    let vm = u + (vk - u) * (-0.5 * dt / fc.tau).exp();
-                    b.a + f.acceleration(fc, u, carrier.gradient(hm, xm), vm)
+                    let relax = (-0.5 * dt / fc.tau).exp();
+                    let gain = -fc.tau * (-0.5 * dt / fc.tau).exp_m1();
+                    let j = carrier.gradient(hm, xm);
+                    let vm = u + (vk - u) * relax + b.a * gain;
+                    let first = f.acceleration(fc, xm, u, j, vm);
+                    b.a + f.acceleration(fc, xm, u, j, vm + first * gain)
                 }
             };
             let (x1, v1) = match s.law {

@@ -47,20 +47,43 @@ pub struct ExtraForces {
     pub saffman_mei: bool,
     /// Rubinow–Keller rotational lift, with the particles' spin driven by the fluid.
     pub rubinow_keller: bool,
+    /// A rotating frame the flow and the walls are given in (OpenFOAM's SRF), if any: the
+    /// particles are tracked in it with the centrifugal and Coriolis accelerations.
+    pub frame: Option<RotatingFrame>,
+}
+
+/// A frame rotating at a constant angular velocity about a centre (OpenFOAM's
+/// `SRFProperties`: origin, axis, rpm).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RotatingFrame {
+    /// Angular velocity Ω (axis times rate, right-handed), rad/s.
+    pub omega: DVec3,
+    /// A point on the axis, m.
+    pub centre: DVec3,
+}
+
+impl RotatingFrame {
+    /// The fictitious acceleration (m/s²) on a particle at `x` (m) moving at `v` (m/s)
+    /// relative to the frame: −2·Ω × v (Coriolis) − Ω × (Ω × (x − c)) (centrifugal).
+    #[inline]
+    pub fn acceleration(&self, x: DVec3, v: DVec3) -> DVec3 {
+        let w = self.omega;
+        -2.0 * w.cross(v) - w.cross(w.cross(x - self.centre))
+    }
 }
 
 impl ExtraForces {
     /// The forces evaluated every step, if any (added mass enters the step through the
     /// fluid's acceleration only with the pressure gradient or on its own).
     pub fn step(&self, fluid: Fluid) -> Option<StepForces> {
-        (self.added_mass.is_some() || self.pressure_gradient || self.saffman_mei).then_some(
-            StepForces {
-                fluid,
-                added_mass: self.added_mass.unwrap_or(0.0),
-                pressure_gradient: self.pressure_gradient,
-                saffman_mei: self.saffman_mei,
-            },
-        )
+        let any = self.added_mass.is_some() || self.pressure_gradient || self.saffman_mei;
+        (any || self.frame.is_some()).then_some(StepForces {
+            fluid,
+            added_mass: self.added_mass.unwrap_or(0.0),
+            pressure_gradient: self.pressure_gradient,
+            saffman_mei: self.saffman_mei,
+            frame: self.frame,
+        })
     }
 
     /// The inertia factor k = 1 + C_A·ρ_f/ρ_p of a particle of density `density`
@@ -96,15 +119,26 @@ pub struct StepForces {
     pub pressure_gradient: bool,
     /// Saffman–Mei lift.
     pub saffman_mei: bool,
+    /// The rotating frame's centrifugal and Coriolis accelerations, if any.
+    pub frame: Option<RotatingFrame>,
 }
 
 impl StepForces {
-    /// The acceleration (m/s²) these forces give a particle with coupling `fc` moving at
-    /// `v` (m/s) where the carrier's velocity is `u` (m/s) and its gradient `j`
+    /// The acceleration (m/s²) these forces give a particle with coupling `fc` at `x` (m)
+    /// moving at `v` (m/s) where the carrier's velocity is `u` (m/s) and its gradient `j`
     /// (J_ik = ∂u_i/∂x_k, 1/s): (C_P + C_A)·(ρ_f/ρ_p)·J·u + F_lift/m_p, divided by the
-    /// inertia factor k.
+    /// inertia factor k, plus a rotating frame's fictitious acceleration (the scene allows
+    /// a frame only without added mass, so k = 1 with it).
     #[inline]
-    pub fn acceleration(&self, fc: &FluidCoupling, u: DVec3, j: DMat3, v: DVec3) -> DVec3 {
+    pub fn acceleration(
+        &self,
+        fc: &FluidCoupling,
+        x: DVec3,
+        u: DVec3,
+        j: DMat3,
+        v: DVec3,
+    ) -> DVec3 {
+        let fictitious = self.frame.map_or(DVec3::ZERO, |f| f.acceleration(x, v));
         let (d, rho_p) = (fc.reynolds_diameter, fc.force_density);
         let ratio = self.fluid.density / rho_p;
         let k = 1.0 + self.added_mass * ratio;
@@ -117,7 +151,7 @@ impl StepForces {
             let f = saffman_mei(d, self.fluid, u - v, vorticity(j));
             a += f / (rho_p * std::f64::consts::PI / 6.0 * d * d * d);
         }
-        a / k
+        a / k + fictitious
     }
 }
 

@@ -526,6 +526,41 @@ pub(super) fn outlet(o: &RawOutlet, cx: &Ctx) -> Result<Outlet, SceneError> {
     })
 }
 
+/// `[frame]`: Ω = axis·rpm·2π/60 about `center`; the particles move through the fluid, so
+/// it needs `[drag]`, and gravity (constant in the absolute frame) must lie along the
+/// axis to stay constant in the rotating one.
+fn frame(
+    raw: &crate::raw::RawScene,
+    drag: Option<DragLaw>,
+    cx: &Ctx,
+) -> Result<Option<scg_core::physics::forces::RotatingFrame>, SceneError> {
+    let Some(f) = &raw.frame else {
+        return Ok(None);
+    };
+    if drag.is_none() {
+        return Err(cx.err(
+            "frame",
+            "tracks particles through a rotating flow: the scene needs [fluid] and [drag]",
+        ));
+    }
+    let axis = cx.unit("frame.axis", f.axis)?;
+    let omega = axis * (cx.finite("frame.rpm", f.rpm)? * std::f64::consts::TAU / 60.0);
+    if let Some(g) = &raw.gravity {
+        let g = glam::DVec3::from_array(g.acceleration);
+        if g.cross(axis).length() > 1e-12 * g.length() {
+            return Err(cx.err(
+                "frame.axis",
+                "gravity must lie along the frame's axis (in a frame turning about another \
+                 axis it would turn too)",
+            ));
+        }
+    }
+    Ok(Some(scg_core::physics::forces::RotatingFrame {
+        omega,
+        centre: cx.vec3("frame.center", f.center.unwrap_or([0.0; 3]))?,
+    }))
+}
+
 /// `[forces]`: each force is opt-in; every one acts through the fluid, so it needs
 /// `[drag]` (with `[fluid]`).
 pub(super) fn forces(
@@ -533,10 +568,29 @@ pub(super) fn forces(
     drag: Option<DragLaw>,
     cx: &Ctx,
 ) -> Result<scg_core::physics::forces::ExtraForces, SceneError> {
-    let mut out = scg_core::physics::forces::ExtraForces::default();
+    let mut out = scg_core::physics::forces::ExtraForces {
+        frame: frame(raw, drag, cx)?,
+        ..Default::default()
+    };
     let Some(f) = &raw.forces else {
         return Ok(out);
     };
+    if out.frame.is_some() {
+        for (key, on) in [
+            ("forces.added_mass", f.added_mass.is_some()),
+            ("forces.pressure_gradient", f.pressure_gradient),
+            ("forces.saffman_mei", f.saffman_mei),
+            ("forces.rubinow_keller", f.rubinow_keller),
+        ] {
+            if on {
+                return Err(cx.err(
+                    key,
+                    "not in a rotating [frame]: its fluid acceleration and vorticity would \
+                     need the frame's terms (only cunningham goes with a frame)",
+                ));
+            }
+        }
+    }
     if let Some(c) = &f.cunningham {
         if drag.is_none() {
             return Err(cx.err(

@@ -124,11 +124,11 @@ fn pressure_gradient_and_added_mass_make_a_neutral_particle_move_with_the_fluid(
         saffman_mei: false,
     };
     // ρ_p = ρ_f: (1 + 0.5)·1·Du/Dt / (1 + 0.5) = Du/Dt, the fluid's own acceleration
-    let a = f.acceleration(&coupling(1e-3, 1000.0), u, j, u);
+    let a = f.acceleration(&coupling(1e-3, 1000.0), DVec3::ZERO, u, j, u);
     let want = -w * w * DVec3::new(x.x, x.y, 0.0);
     assert!(rel(a, want) < 1e-15, "{a} vs {want}");
     // a heavy particle (ρ_p = 2500 in water) gets (1 + C_A)·(ρ_f/ρ_p)/k of it
-    let heavy = f.acceleration(&coupling(1e-3, 2500.0), u, j, u);
+    let heavy = f.acceleration(&coupling(1e-3, 2500.0), DVec3::ZERO, u, j, u);
     let r = 1000.0 / 2500.0;
     assert!(rel(heavy, want * (1.5 * r / (1.0 + 0.5 * r))) < 1e-15);
     // pressure gradient alone: (ρ_f/ρ_p)·Du/Dt
@@ -136,7 +136,12 @@ fn pressure_gradient_and_added_mass_make_a_neutral_particle_move_with_the_fluid(
         added_mass: 0.0,
         ..f
     };
-    assert!(rel(pg.acceleration(&coupling(1e-3, 2500.0), u, j, u), want * r) < 1e-15);
+    assert!(
+        rel(
+            pg.acceleration(&coupling(1e-3, 2500.0), DVec3::ZERO, u, j, u),
+            want * r
+        ) < 1e-15
+    );
     // k for the spawn
     let forces = ExtraForces {
         added_mass: Some(0.5),
