@@ -122,6 +122,7 @@ fn pressure_gradient_and_added_mass_make_a_neutral_particle_move_with_the_fluid(
         added_mass: 0.5,
         pressure_gradient: true,
         saffman_mei: false,
+        frame: None,
     };
     // ρ_p = ρ_f: (1 + 0.5)·1·Du/Dt / (1 + 0.5) = Du/Dt, the fluid's own acceleration
     let a = f.acceleration(&coupling(1e-3, 1000.0), DVec3::ZERO, u, j, u);
@@ -183,4 +184,18 @@ fn rotational_lift_step_relaxes_the_spin_and_kicks_by_the_lift() {
     let (dv, s1) = rotational_lift_step(half, omega, slip, &fc, fluid, 0.5, dt);
     assert_eq!(dv, DVec3::ZERO);
     assert!((s1 - half).length() <= 1e-15 * half.length());
+}
+
+/// The rotating frame's fictitious acceleration: Coriolis −2·Ω × v and centrifugal
+/// −Ω × (Ω × (x − c)) = Ω²·r outward for Ω along z.
+#[test]
+fn a_rotating_frames_centrifugal_and_coriolis() {
+    let f = RotatingFrame {
+        omega: DVec3::new(0.0, 0.0, 3.0),
+        centre: DVec3::new(1.0, 0.0, 0.0),
+    };
+    let a = f.acceleration(DVec3::new(1.5, 0.0, 7.0), DVec3::ZERO);
+    assert!((a - DVec3::new(4.5, 0.0, 0.0)).length() < 1e-15, "{a}");
+    let c = f.acceleration(DVec3::new(1.0, 0.0, 0.0), DVec3::new(2.0, 0.0, 0.0));
+    assert!((c - DVec3::new(0.0, -12.0, 0.0)).length() < 1e-15, "{c}");
 }
