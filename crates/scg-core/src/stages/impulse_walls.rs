@@ -117,11 +117,17 @@ pub fn impulse(
     };
     let outcome = match w.model {
         // t.normal points from the wall to the centre: the wall's outward normal, as
-        // coulomb_rebound takes it, is −t.normal
-        PatchInteraction::Rebound { e, mu } => Ok((
-            x + t.overlap * t.normal,
-            surface + coulomb_rebound(v - surface, -t.normal, e, mu),
-        )),
+        // coulomb_rebound takes it, is −t.normal. The push back to touching distance is
+        // made in the wall's frame: a turning wall carries the particle's velocity along
+        // (+ ω × δ), so the motion relative to the wall is the same seen from either frame.
+        PatchInteraction::Rebound { e, mu } => {
+            let push = t.overlap * t.normal;
+            let carried = pose.map_or(glam::DVec3::ZERO, |p| p.angular_velocity.cross(push));
+            Ok((
+                x + push,
+                surface + coulomb_rebound(v - surface, -t.normal, e, mu) + carried,
+            ))
+        }
         m => Err(m),
     };
     Some((t, surface, outcome))
