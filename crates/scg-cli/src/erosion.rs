@@ -1,7 +1,6 @@
 //! The erosion log of a run (`[erosion]`): per patch or wall and per face, and where the
 //! wear is deepest.
 
-use scg_core::physics::wall_shape::WallShape;
 use scg_core::sim::Simulation;
 use scg_core::stages::erosion::{ErosionLog, FaceWear};
 use scg_scene::Scene;
@@ -50,26 +49,6 @@ fn row(patch: &str, face: u32, centre: [f64; 3], area: f64, w: &FaceWear, t: f64
     }
 }
 
-/// A `[[walls]]` face: an STL wall's triangle (centroid, area), an analytic wall's one
-/// face (no centre, no area: NaN).
-fn wall_face(scene: &Scene, wall: u32, tri: u32) -> (String, [f64; 3], f64) {
-    let Some(w) = scene.impulse_walls.get(wall as usize) else {
-        return (String::new(), [f64::NAN; 3], f64::NAN);
-    };
-    match &w.wall.shape {
-        WallShape::Mesh(m) => {
-            let [a, b, c] = m.triangles()[tri as usize].map(|i| m.vertices()[i as usize]);
-            let centre = ((a + b + c) / 3.0).to_array();
-            (
-                w.wall.name.clone(),
-                centre,
-                0.5 * (b - a).cross(c - a).length(),
-            )
-        }
-        _ => (w.wall.name.clone(), [f64::NAN; 3], f64::NAN),
-    }
-}
-
 /// Every face hit (`None` without `[erosion]`): the mesh flow's faces in face order,
 /// then the `[[walls]]` faces (STL triangles; an analytic wall as one face without centre
 /// or area, NaN) in wall order.
@@ -90,8 +69,16 @@ pub fn rows(scene: &Scene, sim: &Simulation) -> Option<Vec<FaceRow>> {
         }
     }
     for (&(wall, tri), w) in &log.wall_faces {
-        let (name, centre, area) = wall_face(scene, wall, tri);
-        out.push(row(&name, tri, centre, area, w, t));
+        let Some(iw) = scene.impulse_walls.get(wall as usize) else {
+            continue;
+        };
+        // an analytic wall: one face without centre or area
+        let (centre, area) = iw
+            .wall
+            .shape
+            .face(tri)
+            .map_or(([f64::NAN; 3], f64::NAN), |(c, a)| (c.to_array(), a));
+        out.push(row(&iw.wall.name, tri, centre, area, w, t));
     }
     Some(out)
 }
@@ -208,90 +195,67 @@ pub fn csv(rows: &[FaceRow]) -> String {
 /// triangle a triangle) with the wear per face as cell data: `volume_m3`,
 /// `depth_rate_m_per_s`, `impacts`, and the impacts' mass-weighted `angle_deg`,
 /// `normal_speed_m_per_s`, `tangential_speed_m_per_s` (zero on faces not hit), to open
-/// in ParaView (`None` without `[erosion]`). Analytic walls have no faces to draw.
+/// in ParaView (`None` without `[erosion]`). Written from the run's wear map (the one the
+/// recordings get); analytic walls have no faces to draw.
 pub fn vtk(scene: &Scene, sim: &Simulation) -> Option<String> {
-    let log = sim.world.get_resource::<ErosionLog>()?;
-    let t = sim.time().max(f64::MIN_POSITIVE);
-    // every face: its corners, its wear, its area
-    let mut faces: Vec<(Vec<glam::DVec3>, FaceWear, f64)> = Vec::new();
-    if let Some(m) = scene.mesh_flow.as_ref() {
-        let (mesh, g) = (m.flow.mesh(), m.flow.geometry());
-        for (p, _) in mesh.patches.iter().zip(&log.patches).filter(|(_, on)| **on) {
-            for f in p.start..p.start + p.size {
-                let corners = mesh
-                    .face(f)
-                    .iter()
-                    .map(|&q| mesh.points[q as usize])
-                    .collect();
-                let w = log.faces.get(&(f as u32)).copied().unwrap_or_default();
-                faces.push((corners, w, g.face_areas[f].length()));
-            }
-        }
-    }
-    for (k, iw) in scene.impulse_walls.iter().enumerate() {
-        let WallShape::Mesh(m) = &iw.wall.shape else {
-            continue;
-        };
-        if !log.wants_wall(k) {
-            continue;
-        }
-        for (j, tri) in m.triangles().iter().enumerate() {
-            let [a, b, c] = tri.map(|i| m.vertices()[i as usize]);
-            let w = log.wall_faces.get(&(k as u32, j as u32)).copied();
-            faces.push((
-                vec![a, b, c],
-                w.unwrap_or_default(),
-                0.5 * (b - a).cross(c - a).length(),
-            ));
-        }
-    }
-    let n: usize = faces.iter().map(|f| f.0.len()).sum();
+    let map = scg_core::stages::erosion::wear_map(&sim.world, sim.step_count(), sim.time())?;
+    let n_points: usize = map.patches.iter().map(|p| p.vertices.len()).sum();
     let mut s = format!(
-        "# vtk DataFile Version 3.0\nscg erosion ({}) of {} over {t} s\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS {n} double\n",
-        log.model.name(),
+        "# vtk DataFile Version 3.0\nscg erosion ({}) of {} over {} s\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS {n_points} double\n",
+        map.model,
         scene.name,
+        sim.time().max(f64::MIN_POSITIVE),
     );
-    for p in faces.iter().flat_map(|f| &f.0) {
-        s += &format!("{:e} {:e} {:e}\n", p.x, p.y, p.z);
+    for v in map.patches.iter().flat_map(|p| &p.vertices) {
+        s += &format!("{:e} {:e} {:e}\n", v[0], v[1], v[2]);
     }
-    s += &format!("CELLS {} {}\n", faces.len(), n + faces.len());
-    let mut next = 0;
-    for f in &faces {
-        let ids: Vec<String> = (next..next + f.0.len()).map(|i| i.to_string()).collect();
-        next += f.0.len();
+    // every face's polygon, its points numbered over all patches
+    let mut cells: Vec<Vec<usize>> = Vec::new();
+    let mut base = 0;
+    for p in &map.patches {
+        cells.extend(
+            p.polygons()
+                .into_iter()
+                .map(|c| c.iter().map(|&v| base + v as usize).collect()),
+        );
+        base += p.vertices.len();
+    }
+    let size: usize = cells.iter().map(|c| c.len() + 1).sum();
+    s += &format!("CELLS {} {size}\n", cells.len());
+    for c in &cells {
+        let ids: Vec<String> = c.iter().map(|i| i.to_string()).collect();
         s += &format!("{} {}\n", ids.len(), ids.join(" "));
     }
     // VTK_TRIANGLE, VTK_QUAD, else VTK_POLYGON
-    s += &format!("CELL_TYPES {}\n", faces.len());
-    for f in &faces {
-        s += match f.0.len() {
+    s += &format!("CELL_TYPES {}\n", cells.len());
+    for c in &cells {
+        s += match c.len() {
             3 => "5\n",
             4 => "9\n",
             _ => "7\n",
         };
     }
-    // the impacts' mass-weighted means, 0 on faces not hit
-    let mean = |w: &FaceWear, x: f64| if w.mass > 0.0 { x / w.mass } else { 0.0 };
-    type Get = fn(&FaceWear, f64, f64) -> f64;
-    let columns: [(&str, Get); 6] = [
-        ("volume_m3", |w, _, _| w.volume),
-        ("depth_rate_m_per_s", |w, a, t| w.volume / (a * t)),
-        ("impacts", |w, _, _| w.impacts as f64),
-        ("angle_deg", |w, _, _| w.angle_mass.to_degrees()),
-        ("normal_speed_m_per_s", |w, _, _| w.normal_mass),
-        ("tangential_speed_m_per_s", |w, _, _| w.tangential_mass),
+    type Column = fn(&scg_core::frame::WearPatch, usize) -> f64;
+    let columns: [(&str, Column); 6] = [
+        ("volume_m3", |p, f| p.volume[f]),
+        ("depth_rate_m_per_s", |p, f| p.depth_rate[f]),
+        ("impacts", |p, f| p.impacts[f] as f64),
+        ("angle_deg", |p, f| p.angle[f].to_degrees()),
+        ("normal_speed_m_per_s", |p, f| p.normal_speed[f]),
+        ("tangential_speed_m_per_s", |p, f| p.tangential_speed[f]),
     ];
-    s += &format!("CELL_DATA {}\n", faces.len());
-    for (k, (name, get)) in columns.iter().enumerate() {
+    s += &format!("CELL_DATA {}\n", cells.len());
+    for (name, get) in columns {
         s += &format!("SCALARS {name} double 1\nLOOKUP_TABLE default\n");
-        for (_, w, a) in &faces {
-            let x = get(w, *a, t);
-            let x = if k >= 3 { mean(w, x) } else { x };
-            s += &if k == 2 {
-                format!("{x}\n")
-            } else {
-                format!("{x:e}\n")
-            };
+        for p in &map.patches {
+            for f in 0..p.faces.len() {
+                let x = get(p, f);
+                s += &if name == "impacts" {
+                    format!("{x}\n")
+                } else {
+                    format!("{x:e}\n")
+                };
+            }
         }
     }
     Some(s)

@@ -175,6 +175,23 @@ pub struct WearPatch {
     pub tangential_speed: Vec<f64>,
 }
 
+impl WearPatch {
+    /// Each face's polygon (indices into `vertices`), rebuilt from its fan: the first
+    /// triangle's three corners, then each further triangle's last corner.
+    pub fn polygons(&self) -> Vec<Vec<u32>> {
+        let mut out: Vec<Vec<u32>> = vec![Vec::new(); self.faces.len()];
+        for (t, &f) in self.triangles.iter().zip(&self.triangle_face) {
+            let p = &mut out[f as usize];
+            if p.is_empty() {
+                p.extend_from_slice(t);
+            } else {
+                p.push(t[2]);
+            }
+        }
+        out
+    }
+}
+
 impl WearMap {
     /// The deepest face: (patch index, face index in it, depth rate m/s), if any wore.
     pub fn deepest(&self) -> Option<(usize, usize, f64)> {

@@ -459,7 +459,7 @@ fn force_notes(f: &ExtraForces, stepped: bool) -> Vec<(StepSet, String)> {
             format!(
                 "[frame] rotating at {:.6} rpm about {:?} through {:?}: centrifugal and \
                  Coriolis accelerations at mid-step (positions and velocities relative to it)",
-                fr.omega.length() * 60.0 / std::f64::consts::TAU,
+                crate::physics::flow::rad_per_s_to_rpm(fr.omega.length()),
                 fr.omega.normalize_or_zero().to_array(),
                 fr.centre.to_array()
             ),

@@ -47,15 +47,7 @@ pub(crate) fn patches_update(meta: &RunMeta) -> SceneUpdate {
                 }],
                 triangles: vec![TriangleListPrimitive {
                     pose: Some(identity()),
-                    points: p
-                        .vertices
-                        .iter()
-                        .map(|v| Point3 {
-                            x: v[0],
-                            y: v[1],
-                            z: v[2],
-                        })
-                        .collect(),
+                    points: points(&p.vertices),
                     color: Some(Color { r, g, b, a }),
                     colors: Vec::new(),
                     indices: p.triangles.iter().flatten().copied().collect(),
@@ -70,14 +62,26 @@ pub(crate) fn patches_update(meta: &RunMeta) -> SceneUpdate {
     }
 }
 
-/// The [`TOPIC_WALLS`](crate::layout::TOPIC_WALLS) message of a frame at time `t` (s): every moving wall's strips at
-/// rest with the pose that moves them where the wall is then.
-pub(crate) fn walls_update(moving: &[Outline], t: f64) -> SceneUpdate {
+/// Points in m as foxglove's.
+fn points(v: &[[f64; 3]]) -> Vec<Point3> {
+    v.iter()
+        .map(|v| Point3 {
+            x: v[0],
+            y: v[1],
+            z: v[2],
+        })
+        .collect()
+}
+
+/// The [`TOPIC_WALLS`](crate::layout::TOPIC_WALLS) message of a frame at time `t` (s,
+/// stamped `timestamp`): every moving wall's strips at rest with the pose that moves them
+/// where the wall is then.
+pub(crate) fn walls_update(moving: &[Outline], t: f64, timestamp: Timestamp) -> SceneUpdate {
     let entities = moving
         .iter()
         .map(|o| {
             let p = o.motion.pose(t);
-            let d = p.centre - p.rotation * p.rest_centre;
+            let d = p.translation();
             let q = glam::DQuat::from_mat3(&p.rotation);
             let pose = Pose {
                 position: Some(Vector3 {
@@ -93,10 +97,7 @@ pub(crate) fn walls_update(moving: &[Outline], t: f64) -> SceneUpdate {
                 }),
             };
             SceneEntity {
-                timestamp: Some(Timestamp::new(
-                    t.floor() as u32,
-                    ((t - t.floor()) * 1e9) as u32,
-                )),
+                timestamp: Some(timestamp),
                 frame_id: FRAME_ID.to_owned(),
                 id: o.name.clone(),
                 lines: o
@@ -107,14 +108,7 @@ pub(crate) fn walls_update(moving: &[Outline], t: f64) -> SceneUpdate {
                         pose: Some(pose),
                         thickness: 2.0,
                         scale_invariant: true,
-                        points: strip
-                            .iter()
-                            .map(|v| Point3 {
-                                x: v[0],
-                                y: v[1],
-                                z: v[2],
-                            })
-                            .collect(),
+                        points: points(strip),
                         color: Some(Color {
                             r: 0.63,
                             g: 0.63,

@@ -396,7 +396,7 @@ impl McapSink {
         bytes += stats.len();
         if let Some(channel) = self.walls_channel {
             let mut data = Vec::new();
-            walls_update(&self.moving, frame.time)
+            walls_update(&self.moving, frame.time, timestamp)
                 .encode(&mut data)
                 .map_err(|e| RecordError::Encode(e.to_string()))?;
             writer

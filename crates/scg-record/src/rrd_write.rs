@@ -415,11 +415,10 @@ impl RrdSink {
         for (path, motion) in &self.moving {
             // rest frame → world: x ↦ R·(x − c₀) + c(t)
             let p = motion.pose(frame.time);
-            let translation = p.centre - p.rotation * p.rest_centre;
             let m = p.rotation.to_cols_array_2d().map(|c| c.map(|x| x as f32));
             rec.log(
                 path.clone(),
-                &Transform3D::from_translation_mat3x3(translation.as_vec3().to_array(), m),
+                &Transform3D::from_translation_mat3x3(p.translation().as_vec3().to_array(), m),
             )
             .map_err(rerun_err)?;
         }

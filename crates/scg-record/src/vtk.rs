@@ -89,10 +89,7 @@ impl FrameSink for VtkSink {
                 .iter()
                 .map(|o| {
                     let p = o.motion.pose(frame.time);
-                    let at = |v: [f64; 3]| {
-                        let x = glam::DVec3::from_array(v);
-                        (p.rotation * (x - p.rest_centre) + p.centre).to_array()
-                    };
+                    let at = |v: [f64; 3]| p.to_world(glam::DVec3::from_array(v)).to_array();
                     Outline {
                         strips: o
                             .strips
@@ -116,33 +113,28 @@ impl FrameSink for VtkSink {
     }
 
     fn finish(&mut self) -> Result<(), String> {
-        let mut pvd = String::from(
-            "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
-        );
-        for (name, t) in &self.written {
-            let _ = writeln!(
-                pvd,
-                "<DataSet timestep=\"{t}\" part=\"0\" file=\"{name}\"/>"
-            );
-        }
-        pvd.push_str("</Collection>\n</VTKFile>\n");
-        write_file(&self.pvd_path(), &pvd).map_err(|e| e.to_string())?;
+        write_file(&self.pvd_path(), &pvd(&self.written)).map_err(|e| e.to_string())?;
         if !self.moved.is_empty() {
-            let mut pvd = String::from(
-                "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
-            );
-            for (name, t) in &self.moved {
-                let _ = writeln!(
-                    pvd,
-                    "<DataSet timestep=\"{t}\" part=\"0\" file=\"{name}\"/>"
-                );
-            }
-            pvd.push_str("</Collection>\n</VTKFile>\n");
             let path = self.dir.join(format!("{}_walls.pvd", self.case));
-            write_file(&path, &pvd).map_err(|e| e.to_string())?;
+            write_file(&path, &pvd(&self.moved)).map_err(|e| e.to_string())?;
         }
         Ok(())
     }
+}
+
+/// A ParaView collection of the files `written` (name, time in s), one per time step.
+fn pvd(written: &[(String, f64)]) -> String {
+    let mut pvd = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
+    );
+    for (name, t) in written {
+        let _ = writeln!(
+            pvd,
+            "<DataSet timestep=\"{t}\" part=\"0\" file=\"{name}\"/>"
+        );
+    }
+    pvd.push_str("</Collection>\n</VTKFile>\n");
+    pvd
 }
 
 /// VTK cell types used here.

@@ -218,6 +218,11 @@ pub fn rpm_to_rad_per_s(rpm: f64) -> f64 {
     rpm * 2.0 * std::f64::consts::PI / 60.0
 }
 
+/// Convert rad/s to revolutions per minute.
+pub fn rad_per_s_to_rpm(omega: f64) -> f64 {
+    omega * 60.0 / (2.0 * std::f64::consts::PI)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -76,6 +76,19 @@ impl Pose {
         self.rotation.transpose() * (x - self.centre) + self.rest_centre
     }
 
+    /// A rest-frame point in the world: R·(x − c₀) + c(t).
+    #[inline]
+    pub fn to_world(&self, x: DVec3) -> DVec3 {
+        self.rotation * (x - self.rest_centre) + self.centre
+    }
+
+    /// The translation of the rest frame → world map x ↦ R·x + (c(t) − R·c₀), m (what a
+    /// viewer's transform takes with the rotation R).
+    #[inline]
+    pub fn translation(&self) -> DVec3 {
+        self.centre - self.rotation * self.rest_centre
+    }
+
     /// A rest-frame direction in the world.
     #[inline]
     pub fn to_world_direction(&self, n: DVec3) -> DVec3 {
@@ -108,6 +121,8 @@ mod tests {
         let (s, c) = (0.6_f64.sin(), 0.6_f64.cos());
         let world = m.centre + m.velocity * t + DVec3::new(c, s, 0.5);
         assert!((p.to_rest(world) - on_wall).length() < 1e-14);
+        assert!((p.to_world(on_wall) - world).length() < 1e-14);
+        assert!((p.rotation * on_wall + p.translation() - world).length() < 1e-14);
         let v = p.velocity_at(world);
         assert!((v - (m.velocity + 2.0 * DVec3::new(-s, c, 0.0))).length() < 1e-14);
         assert!((p.to_world_direction(DVec3::X) - DVec3::new(c, s, 0.0)).length() < 1e-15);

@@ -176,6 +176,16 @@ impl WallShape {
         })
     }
 
+    /// The centroid (m) and area (m²) of the face a touch's `element` names: a mesh's
+    /// triangle; `None` for an analytic shape (one unbounded face).
+    pub fn face(&self, element: u32) -> Option<(DVec3, f64)> {
+        let WallShape::Mesh(m) = self else {
+            return None;
+        };
+        let [a, b, c] = m.triangles()[element as usize].map(|i| m.vertices()[i as usize]);
+        Some(((a + b + c) / 3.0, 0.5 * (b - a).cross(c - a).length()))
+    }
+
     /// True when a sphere centre `x` is on the domain side (distance ≥ 0).
     pub fn contains(&self, x: DVec3) -> bool {
         self.distance(x).is_none_or(|(d, _)| d >= 0.0)

@@ -42,19 +42,30 @@ pub struct FaceWear {
 }
 
 impl FaceWear {
-    /// Mean impact angle to the wall plane over the powder mass that struck, rad.
+    /// Σ m·x over the powder mass that struck (0 where none did).
+    fn mean(&self, sum: f64) -> f64 {
+        if self.mass > 0.0 {
+            sum / self.mass
+        } else {
+            0.0
+        }
+    }
+
+    /// Mean impact angle to the wall plane over the powder mass that struck, rad (0
+    /// where none did).
     pub fn mean_angle(&self) -> f64 {
-        self.angle_mass / self.mass
+        self.mean(self.angle_mass)
     }
 
-    /// Mean normal impact speed over the powder mass that struck, m/s.
+    /// Mean normal impact speed over the powder mass that struck, m/s (0 where none did).
     pub fn mean_normal_speed(&self) -> f64 {
-        self.normal_mass / self.mass
+        self.mean(self.normal_mass)
     }
 
-    /// Mean tangential impact speed over the powder mass that struck, m/s.
+    /// Mean tangential impact speed over the powder mass that struck, m/s (0 where none
+    /// did).
     pub fn mean_tangential_speed(&self) -> f64 {
-        self.tangential_mass / self.mass
+        self.mean(self.tangential_mass)
     }
 }
 
@@ -290,10 +301,9 @@ pub fn wear_map(world: &World, step: u64, time: f64) -> Option<WearMap> {
         w.volume.push(wear.volume);
         w.depth_rate.push(wear.volume / (area * t));
         w.impacts.push(wear.impacts);
-        let mean = |x: f64| if wear.mass > 0.0 { x / wear.mass } else { 0.0 };
-        w.angle.push(mean(wear.angle_mass));
-        w.normal_speed.push(mean(wear.normal_mass));
-        w.tangential_speed.push(mean(wear.tangential_mass));
+        w.angle.push(wear.mean_angle());
+        w.normal_speed.push(wear.mean_normal_speed());
+        w.tangential_speed.push(wear.mean_tangential_speed());
     };
     if let Some(state) = world.get_resource::<MeshFlowState>() {
         let flow = &state.spec.flow;
@@ -339,16 +349,11 @@ pub fn wear_map(world: &World, step: u64, time: f64) -> Option<WearMap> {
                 triangles: m.triangles().to_vec(),
                 ..Default::default()
             };
-            for (j, tri) in m.triangles().iter().enumerate() {
-                let [a, b, c] = tri.map(|i| m.vertices()[i as usize]);
-                let wear = log.wall_faces.get(&(k as u32, j as u32)).copied();
-                w.triangle_face.push(j as u32);
-                push(
-                    &mut w,
-                    j as u32,
-                    wear.unwrap_or_default(),
-                    0.5 * (b - a).cross(c - a).length(),
-                );
+            for j in 0..m.triangles().len() as u32 {
+                let wear = log.wall_faces.get(&(k as u32, j)).copied();
+                let (_, area) = iw.wall.shape.face(j).expect("a mesh wall's triangle");
+                w.triangle_face.push(j);
+                push(&mut w, j, wear.unwrap_or_default(), area);
             }
             patches.push(w);
         }

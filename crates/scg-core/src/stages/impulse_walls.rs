@@ -12,6 +12,7 @@ use bevy_ecs::prelude::*;
 use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
 use crate::components::*;
 use crate::physics::patch_interaction::{PatchInteraction, coulomb_rebound};
+use crate::physics::wall_motion::Pose;
 use crate::physics::wall_shape::WallTouch;
 use crate::stages::erosion::{ErosionLog, WallHit, represented_mass};
 use crate::stages::walls::Wall;
@@ -25,6 +26,13 @@ pub struct ImpulseWall {
     pub wall: Wall,
     /// Rebound, stick or escape.
     pub model: PatchInteraction,
+}
+
+impl ImpulseWall {
+    /// Where the wall is at time `t` (s): `None` for a wall at rest.
+    pub fn pose(&self, t: f64) -> Option<Pose> {
+        (!self.wall.motion.is_fixed()).then(|| self.wall.motion.pose(t))
+    }
 }
 
 /// The scene's impulse walls (resource).
@@ -88,21 +96,21 @@ pub fn plugin(world: &mut World, b: &mut StepBuilder, walls: Vec<ImpulseWall>, g
 /// (stick, escape) that removes the particle.
 pub type Outcome = Result<(glam::DVec3, glam::DVec3), PatchInteraction>;
 
-/// What touching wall `w` at time `time` (s) does to a sphere of radius `r` at `x` moving
-/// at `v`: `None` when it does not touch; else the touch (its normal in the world, the
-/// triangle), the wall's surface velocity at the contact point (m/s; zero for a wall at
-/// rest), and `Ok((x', v'))` after a rebound or `Err(model)` when it sticks or escapes.
-/// A moving wall is touched in its rest frame ([`crate::physics::wall_motion`]) and
-/// rebounds the velocity relative to its surface: v' = V + rebound(v − V).
+/// What touching wall `w`, at `pose` (`None` for a wall at rest; [`ImpulseWall::pose`]),
+/// does to a sphere of radius `r` at `x` moving at `v`: `None` when it does not touch;
+/// else the touch (its normal in the world, the triangle), the wall's surface velocity at
+/// the contact point (m/s; zero for a wall at rest), and `Ok((x', v'))` after a rebound or
+/// `Err(model)` when it sticks or escapes. A moving wall is touched in its rest frame
+/// ([`crate::physics::wall_motion`]) and rebounds the velocity relative to its surface:
+/// v' = V + rebound(v − V).
 #[inline]
 pub fn impulse(
     w: &ImpulseWall,
+    pose: Option<Pose>,
     x: glam::DVec3,
     v: glam::DVec3,
     r: f64,
-    time: f64,
 ) -> Option<(WallTouch, glam::DVec3, Outcome)> {
-    let pose = (!w.wall.motion.is_fixed()).then(|| w.wall.motion.pose(time));
     let xr = pose.map_or(x, |p| p.to_rest(x));
     if w.wall.shape.surely_clear(xr, r) {
         return None;
@@ -155,11 +163,11 @@ pub fn impulse_walls(
     let mut gone: Vec<(u32, u32, Entity, usize, PatchInteraction)> = Vec::new();
     let mut hits: Vec<WallHit> = Vec::new();
     // the walls where they are at the end of the step (this stage follows the move)
-    let time = clock.time();
+    let poses: Vec<Option<Pose>> = walls.0.iter().map(|w| w.pose(clock.time())).collect();
     for (e, id, g, mut x, mut v, d, cg) in q.iter_mut() {
         let r = 0.5 * d.0;
         for (k, w) in walls.0.iter().enumerate() {
-            let Some((t, surface, outcome)) = impulse(w, x.0, v.0, r, time) else {
+            let Some((t, surface, outcome)) = impulse(w, poses[k], x.0, v.0, r) else {
                 continue;
             };
             let wears = !matches!(outcome, Err(PatchInteraction::Escape));
@@ -225,7 +233,7 @@ mod tests {
     fn a_touching_sphere_rebounds_to_touching_distance() {
         let w = floor(PatchInteraction::Rebound { e: 0.5, mu: 0.2 });
         let (x, v) = (DVec3::new(1.0, 2.0, 0.7e-3), DVec3::new(3.0, 0.0, -2.0));
-        let Some((t, surface, Ok((x1, v1)))) = impulse(&w, x, v, 1e-3, 0.0) else {
+        let Some((t, surface, Ok((x1, v1)))) = impulse(&w, None, x, v, 1e-3) else {
             panic!()
         };
         assert_eq!(surface, DVec3::ZERO);
@@ -233,10 +241,10 @@ mod tests {
         assert!((x1 - DVec3::new(1.0, 2.0, 1e-3)).length() < 1e-15);
         assert_eq!(v1, coulomb_rebound(v, -DVec3::Z, 0.5, 0.2));
         assert!((v1.z - 1.0).abs() < 1e-12);
-        assert_eq!(impulse(&w, DVec3::new(0.0, 0.0, 2e-3), v, 1e-3, 0.0), None);
+        assert_eq!(impulse(&w, None, DVec3::new(0.0, 0.0, 2e-3), v, 1e-3), None);
         let s = floor(PatchInteraction::Stick);
         assert_eq!(
-            impulse(&s, x, v, 1e-3, 0.0).map(|o| o.2),
+            impulse(&s, None, x, v, 1e-3).map(|o| o.2),
             Some(Err(PatchInteraction::Stick))
         );
     }
@@ -258,7 +266,7 @@ mod tests {
             DVec3::new(0.1, 0.0, 0.02 + 0.7e-3),
             DVec3::new(1.0, 0.0, -3.0),
         );
-        let Some((t, surface, Ok((x1, v1)))) = impulse(&w, x, v, 1e-3, 0.01) else {
+        let Some((t, surface, Ok((x1, v1)))) = impulse(&w, w.pose(0.01), x, v, 1e-3) else {
             panic!()
         };
         assert!((t.normal - DVec3::Z).length() < 1e-15);
@@ -270,6 +278,6 @@ mod tests {
         assert!((v1 - DVec3::new(1.0, 0.0, 5.0)).length() < 1e-12, "{v1}");
         assert!((x1 - DVec3::new(0.1, 0.0, 0.021)).length() < 1e-15);
         // at t = 0 the same sphere is 20 mm above the floor
-        assert_eq!(impulse(&w, x, v, 1e-3, 0.0), None);
+        assert_eq!(impulse(&w, w.pose(0.0), x, v, 1e-3), None);
     }
 }

@@ -100,7 +100,7 @@ pub fn render(scene: &Scene, r: &Report) -> String {
                 w.name,
                 m.velocity.to_array(),
                 m.angular_velocity.to_array(),
-                rate * 60.0 / std::f64::consts::TAU,
+                scg_core::physics::flow::rad_per_s_to_rpm(rate),
                 m.centre.to_array()
             ));
         }

@@ -455,7 +455,7 @@ fn wall_motion(
         }
         (Some(rpm), axis, None) => {
             let axis = cx.unit(&k("axis"), cx.need(&k("axis"), &axis)?)?;
-            axis * (cx.finite(&k("rpm"), rpm)? * std::f64::consts::TAU / 60.0)
+            axis * rpm_to_rad_per_s(cx.finite(&k("rpm"), rpm)?)
         }
         (None, Some(_), None) => return Err(cx.err(&k("axis"), "needs `rpm`")),
         (None, None, Some(w)) => cx.vec3(&k("angular_velocity"), w)?,
@@ -544,7 +544,7 @@ fn frame(
         ));
     }
     let axis = cx.unit("frame.axis", f.axis)?;
-    let omega = axis * (cx.finite("frame.rpm", f.rpm)? * std::f64::consts::TAU / 60.0);
+    let omega = axis * rpm_to_rad_per_s(cx.finite("frame.rpm", f.rpm)?);
     if let Some(g) = &raw.gravity {
         let g = glam::DVec3::from_array(g.acceleration);
         if g.cross(axis).length() > 1e-12 * g.length() {
