@@ -47,6 +47,8 @@ foam_step() {
 #                                    residualControl (p 1e-4, U, k, epsilon 1e-5), and a
 #                                    controlDict: binary output written once at the end,
 #                                    the inlet and outlet sum(phi) function objects
+#   foam_flow_functions IN OUT       the controlDict function objects summing phi over the
+#                                    patches IN and OUT (postProcessing/<patch>Flow)
 #   foam_check_mesh SCRIPT           checkMesh's summary lines (in the current folder);
 #                                    fails unless "Mesh OK."; sets `cells`
 #   foam_residuals LOG FIELD…        per field the first and last initial residuals
@@ -90,7 +92,16 @@ runTimeModifiable false;
 functions
 {
     // Volume flow through the inlet and the outlet (postProcessing/): continuity check
-    inletFlow
+$(foam_flow_functions inlet outlet)
+}
+DICT
+}
+
+# The controlDict function objects that sum phi over two patches every step
+# (postProcessing/<patch>Flow/0/surfaceFieldValue.dat): foam_flow_functions IN OUT
+foam_flow_functions() {
+    cat <<DICT
+    $1Flow
     {
         type            surfaceFieldValue;
         libs            ("libfieldFunctionObjects.so");
@@ -99,16 +110,15 @@ functions
         log             false;
         writeFields     false;
         regionType      patch;
-        name            inlet;
+        name            $1;
         operation       sum;
         fields          (phi);
     }
-    outletFlow
+    $2Flow
     {
-        \$inletFlow;
-        name            outlet;
+        \$$1Flow;
+        name            $2;
     }
-}
 DICT
 }
 

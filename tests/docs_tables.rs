@@ -1,5 +1,5 @@
 //! Numbers in docs that cannot drift: every table docs/ marks as generated
-//! (`<!-- generated: scg study cyclone|elbow|loading --from DIR --markdown ... -->` up to
+//! (`<!-- generated: scg study cyclone|elbow|loading|wheel --from DIR --markdown ... -->` up to
 //! `<!-- end of generated -->`) equals what the command prints from the committed summary.
 //!
 //! Run: `cargo test --release --test docs_tables`; after a rerun of the study, copy its
@@ -70,6 +70,20 @@ fn the_elbow_table_is_the_studys_output() {
     }
 }
 
+/// The wheel study's table in cases/wheel/README.md is `scg study wheel --from DIR
+/// --markdown` of the committed summary.
+#[test]
+fn the_wheel_table_is_the_studys_output() {
+    for (dir, body) in generated("cases/wheel/README.md", "wheel") {
+        let s = scg::cli::study::wheel::read_summary(&common::repo(&dir)).expect(&dir);
+        assert_eq!(
+            body,
+            scg::cli::study::wheel::markdown(&s.variants, &s.theory, s.tracers.as_ref()),
+            "cases/wheel/README.md's table from {dir} differs from `scg study wheel --from {dir} --markdown`"
+        );
+    }
+}
+
 /// `--markdown` prints a finished study only: without `--from`, or with `--run`, it is bad
 /// input (exit 2), and other studies refuse it.
 #[test]
@@ -136,6 +150,15 @@ fn markdown_needs_a_finished_study() {
     assert_eq!(scg::cli::study::study(a, &local), 2);
     assert_eq!(
         scg::cli::study::study(args(Some("docs/data/elbow-study"), None, "elbow"), &local),
+        0
+    );
+    // the wheel study likewise
+    assert_eq!(scg::cli::study::study(args(None, None, "wheel"), &local), 2);
+    let mut a = args(Some("docs/data/wheel-study"), None, "wheel");
+    a.markdown = false;
+    assert_eq!(scg::cli::study::study(a, &local), 2);
+    assert_eq!(
+        scg::cli::study::study(args(Some("docs/data/wheel-study"), None, "wheel"), &local),
         0
     );
 }

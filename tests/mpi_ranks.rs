@@ -195,6 +195,18 @@ fn cyclone_shared_by_id_is_bit_identical_on_2_and_4_ranks() {
     same_bits("cyclone", "ids", &["duration=0.2"], &[2, 4]);
 }
 
+#[test]
+fn wheel_rotating_frame_is_bit_identical_on_2_ranks() {
+    // The SRF wheel (cases/wheel.toml): particles spiralling through x slabs in the
+    // rotating frame (centrifugal and Coriolis forces), rebounding on the blades.
+    same_bits(
+        "wheel",
+        "x",
+        &["duration=0.06", "feed_scale=0.2", "record_every=250"],
+        &[2],
+    );
+}
+
 /// Moving walls over ranks (tests/fixtures/moving-floor.toml): a rising, turning floor and
 /// a turning drum, both impulse walls whose pose follows the step counter on every rank,
 /// fling beads across the x slabs; 2 and 3 ranks record 1 rank's bits.

@@ -170,6 +170,7 @@ region = {{ kind = "cylinder", radius_max = {r:e}, height = [{h0:e}, {h1:e}] }}
         field: "U".into(),
         sort_every: scg_core::stages::mesh_flow::SORT_EVERY,
         reader: None,
+        rotors: Vec::new(),
     });
     Ok(scene)
 }

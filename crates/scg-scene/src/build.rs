@@ -271,7 +271,8 @@ impl Scene {
     }
 
     /// Every boundary patch of the mesh flow with its role, as triangles to draw (polygons
-    /// fanned from their first point); empty without a mesh flow.
+    /// fanned from their first point), but the `empty` ones (the unresolved direction of a
+    /// 2-D case: they would cover the slab); empty without a mesh flow.
     pub fn patch_surfaces(&self) -> Vec<PatchSurface> {
         use scg_mesh::surface::{Fan, patch_surface};
         let Some(m) = &self.mesh_flow else {
@@ -279,6 +280,7 @@ impl Scene {
         };
         let mesh = m.flow.mesh();
         (0..mesh.patches.len())
+            .filter(|&i| mesh.patches[i].kind != "empty")
             .map(|i| {
                 let s = patch_surface(mesh, &[i], Fan::FirstPoint);
                 PatchSurface {

@@ -22,8 +22,8 @@ mod validate;
 
 pub use error::SceneError;
 pub use model::{
-    DtChoice, Feeder, Group, Outlet, PatchWalls, Placement, Region, Scene, SceneMeshFlow, SizeBin,
-    Zone,
+    DtChoice, Feeder, FieldReader, Group, Outlet, PatchWalls, Placement, Region, RotorZone, Scene,
+    SceneMeshFlow, SizeBin, Zone,
 };
 pub use overrides::apply_overrides;
 pub use validate::{DEFAULT_SCENE, load, parse, parse_in};

@@ -296,6 +296,25 @@ pub struct SceneMeshFlow {
     /// Where more fields of the same time (turbulence for `[dispersion]`) are read from
     /// (`None`: a generated flow).
     pub reader: Option<FieldReader>,
+    /// The frozen-rotor zones of an MRF case (their moving faces are in `flow`).
+    pub rotors: Vec<RotorZone>,
+}
+
+/// One rotor zone as read (for `scg check`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RotorZone {
+    /// The MRFProperties entry.
+    pub name: String,
+    /// Its cell zone and how many cells it has.
+    pub cell_zone: String,
+    /// Cells in the zone.
+    pub cells: usize,
+    /// Angular velocity, rad/s.
+    pub omega: glam::DVec3,
+    /// A point on the axis, m (placed like the mesh).
+    pub origin: glam::DVec3,
+    /// The moving faces per patch: (patch name, faces).
+    pub faces: Vec<(String, usize)>,
 }
 
 /// Where the fields of a mesh flow come from.

@@ -3,6 +3,8 @@
 //! file, the key and (when the key is in the file) its line.
 
 mod dispersion;
+mod frame;
+mod mrf;
 mod particles;
 mod patches;
 mod physics;
@@ -182,8 +184,9 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
         None => FlowField::Still,
         Some(f) => flow_field(f, cx)?,
     };
+    let rotors = frame::case_frame(&raw, cx)?;
     let mesh_flow = match &raw.flow {
-        Some(f) => mesh_flow(f, fluid.as_ref(), cx)?,
+        Some(f) => mesh_flow(f, fluid.as_ref(), &rotors, cx)?,
         None => None,
     };
     let drag = match &raw.drag {
@@ -231,6 +234,9 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
         (Some(f), Some(m)) => patch_models(f, m, material, cx)?,
         _ => Vec::new(),
     };
+    if let Some(m) = &mesh_flow {
+        mrf::no_contact_on_rotors(m, &patch_models, cx)?;
+    }
     let patch_walls = match &mesh_flow {
         Some(m) => patch_walls(m, &patch_models, cx)?,
         None => None,

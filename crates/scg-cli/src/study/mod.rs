@@ -14,6 +14,7 @@ pub mod loading;
 pub(crate) mod plot;
 mod report;
 mod run;
+pub mod wheel;
 
 use std::path::{Path, PathBuf};
 
@@ -42,8 +43,11 @@ pub struct StudyArgs {
     /// `classifier-cut` (classes at the cut: the steady-state d50), `cyclone` (grade
     /// efficiency of cases/cyclone.toml in seven variants and the tracer check), `elbow`
     /// (pneumatic conveying through cases/elbow.toml: penetration per class and where the
-    /// bend wears, in seven variants, and the tracer check) or `loading` (the classifier
-    /// at several feed rates: SCG against sampling where particles collide).
+    /// bend wears, in seven variants, and the tracer check), `loading` (the classifier
+    /// at several feed rates: SCG against sampling where particles collide) or `wheel`
+    /// (the deflector-wheel classifier cases/wheel.toml in its rotating frame: fines,
+    /// rejected and orbiting per class, the cut size beside the equilibrium cut, seven
+    /// variants, the tracer check).
     pub study: String,
     /// Fewer particles (feed rates scaled down): a few minutes in all.
     #[arg(long)]
@@ -62,8 +66,8 @@ pub struct StudyArgs {
     #[arg(long, value_name = "FILE")]
     pub openfoam: Option<PathBuf>,
     /// `cyclone`: do not run; re-write the tables and plots of the finished study in this
-    /// folder (its summary.json and MCAPs) into `--out`, e.g. with `--openfoam`. `loading`
-    /// and `elbow`: with `--markdown`, print the finished study's table.
+    /// folder (its summary.json and MCAPs) into `--out`, e.g. with `--openfoam`. `loading`,
+    /// `elbow` and `wheel`: with `--markdown`, print the finished study's table.
     #[arg(long, value_name = "DIR")]
     pub from: Option<PathBuf>,
     /// `cyclone` only: run just these variants (comma-separated: original, scg2, scg4,
@@ -74,7 +78,7 @@ pub struct StudyArgs {
     /// count (more particles: less sampling noise, no longer the same cost).
     #[arg(long, value_name = "F", default_value_t = 1.0)]
     pub cg_feed: f64,
-    /// `cyclone`, `elbow` and `loading`, with `--from` (and no `--run`): print the study's tables in
+    /// `cyclone`, `elbow`, `loading` and `wheel`, with `--from` (and no `--run`): print the study's tables in
     /// Markdown (as docs/ quotes them) and write nothing.
     #[arg(long)]
     pub markdown: bool,
@@ -134,6 +138,78 @@ pub const VARIANTS: [(&str, [&str; 2]); 4] = [
         ["coarse_grain.alpha=2", "coarse_grain.law=sample"],
     ),
 ];
+
+/// How a mesh-case study (`elbow`, `wheel`) starts.
+pub enum Start {
+    /// Nothing to run: exit with this status (`--markdown` printed a finished study, or
+    /// the arguments were refused).
+    Exit(i32),
+    /// Run: the embedded scene with its case made absolute, and the output folder (made).
+    Run {
+        /// The scene text.
+        text: String,
+        /// The output folder.
+        out: PathBuf,
+    },
+}
+
+/// The start every mesh-case study shares: `--openfoam`, `--run`, `--cg-feed` and
+/// `--loadings` are refused; `--markdown --from DIR` prints `markdown(DIR)` (a finished
+/// study's tables) and exits, `--markdown` needs `--from` and `--from` needs `--markdown`;
+/// else the embedded `scene` with its mesh `case` ([`case_scene`]) and the output folder
+/// (`--out`, default `recordings/study-<study>[-quick]`), created.
+pub fn start(
+    a: &StudyArgs,
+    study: &str,
+    scene: &str,
+    case: &str,
+    markdown: impl FnOnce(&Path) -> Result<String, String>,
+) -> Start {
+    if a.openfoam.is_some() || a.run.is_some() || a.cg_feed != 1.0 || a.loadings.is_some() {
+        eprintln!(
+            "error: --openfoam, --run, --cg-feed and --loadings are not for `scg study {study}`"
+        );
+        return Start::Exit(EXIT_BAD_INPUT);
+    }
+    if a.markdown {
+        let Some(from) = &a.from else {
+            eprintln!("error: --markdown prints a finished study: give --from DIR");
+            return Start::Exit(EXIT_BAD_INPUT);
+        };
+        return match markdown(from) {
+            Ok(text) => {
+                print!("{text}");
+                Start::Exit(0)
+            }
+            Err(e) => {
+                eprintln!("error: --from {e}");
+                Start::Exit(EXIT_BAD_INPUT)
+            }
+        };
+    }
+    if a.from.is_some() {
+        eprintln!("error: `scg study {study} --from DIR` needs --markdown");
+        return Start::Exit(EXIT_BAD_INPUT);
+    }
+    let text = match case_scene(scene, case) {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return Start::Exit(EXIT_BAD_INPUT);
+        }
+    };
+    let out = a.out.clone().unwrap_or_else(|| {
+        PathBuf::from(format!(
+            "recordings/study-{study}{}",
+            if a.quick { "-quick" } else { "" }
+        ))
+    });
+    if let Err(e) = std::fs::create_dir_all(&out) {
+        eprintln!("error: cannot create {}: {e}", out.display());
+        return Start::Exit(EXIT_BAD_INPUT);
+    }
+    Start::Run { text, out }
+}
 
 /// An embedded scene `text` whose mesh case `case = "<case>"` (relative to `cases/`) is
 /// made an absolute path, found under `SCG_CASES`, else `./cases`, else the `cases/` of
@@ -223,6 +299,9 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
     if a.study == "elbow" {
         return elbow::study(a, points);
     }
+    if a.study == "wheel" {
+        return wheel::study(a, points);
+    }
     if a.study == "loading" {
         if a.openfoam.is_some() || a.run.is_some() {
             eprintln!("error: --openfoam and --run are for `scg study cyclone`");
@@ -233,7 +312,7 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
     let Some(spec) = spec(&a.study) else {
         eprintln!(
             "error: unknown study `{}` (classifier, classifier-psd, classifier-cut, cyclone, \
-             elbow, loading)",
+             elbow, loading, wheel)",
             a.study
         );
         return EXIT_BAD_INPUT;

@@ -16,6 +16,7 @@ use scg_mesh::{
 
 pub use super::patch_interaction::{PatchInteraction, coulomb_rebound, hint, rebound};
 use super::wall_function::{FrictionVelocity, LogLaw, WallCells, slip_wall_values};
+pub use moving::{MovingFaces, Spin};
 
 /// The near-wall velocity of a mesh flow ([`MeshFlow::with_wall_function`]).
 #[derive(Clone, Debug, PartialEq)]
@@ -90,6 +91,8 @@ pub struct MeshFlow {
     wall: Option<WallCells>,
     /// Per-cell velocity gradients, computed at the first request (the opt-in forces).
     gradients: std::sync::OnceLock<Vec<glam::DMat3>>,
+    /// Boundary faces whose surface moves ([`moving`]).
+    moving: Option<MovingFaces>,
 }
 
 impl fmt::Debug for MeshFlow {
@@ -170,51 +173,8 @@ impl MeshFlow {
             field_speed: (lo, hi),
             wall,
             gradients: std::sync::OnceLock::new(),
+            moving: None,
         })
-    }
-
-    /// How far the cell field is from conserving volume: Σ over cells of |Σ_f u_f·A_f|
-    /// (m³/s), with u_f linear between the two cells' values on an internal face
-    /// (weighted by the distances of their centres to the face) and the interpolated
-    /// value at a boundary face's centre. Half of it is the volume flow into the cells
-    /// where the field converges, where fluid tracers collect: to compare with the flow
-    /// through the domain. A CFD solver's cell velocities conserve volume only through
-    /// its face fluxes (Rhie–Chow), so this is never zero, but it should be small.
-    pub fn cell_imbalance(&self) -> f64 {
-        let m = self.mesh();
-        let g = self.geometry();
-        let ni = m.n_internal_faces();
-        let mut net = vec![0.0f64; m.n_cells];
-        for f in 0..m.n_faces() {
-            let o = m.owner[f] as usize;
-            let (a, xf) = (g.face_areas[f], g.face_centres[f]);
-            let q = if f < ni {
-                let uf = self.linear_face_value(f);
-                net[m.neighbour[f] as usize] -= uf.dot(a);
-                uf.dot(a)
-            } else {
-                self.velocity(o as u32, xf).0.dot(a)
-            };
-            net[o] += q;
-        }
-        net.iter().map(|q| q.abs()).sum()
-    }
-
-    /// The cell field at internal face `f`'s centre, linear between its two cells' values
-    /// (weighted by the distances of their centres to the face), m/s.
-    fn linear_face_value(&self, f: usize) -> DVec3 {
-        let (m, g, u) = (self.mesh(), self.geometry(), self.interp.cell_values());
-        let (o, n, xf) = (
-            m.owner[f] as usize,
-            m.neighbour[f] as usize,
-            g.face_centres[f],
-        );
-        let (dof, dnf) = (
-            (xf - g.cell_centres[o]).length(),
-            (g.cell_centres[n] - xf).length(),
-        );
-        let w = dnf / (dof + dnf);
-        u[o] * w + u[n] * (1.0 - w)
     }
 
     /// The wall-adjacent cells of the wall function (`None` without one).
@@ -557,12 +517,20 @@ fn land_boundary(
         let marker = match model {
             PatchInteraction::Rebound { e, mu } => {
                 let (n, p) = flow.face_plane(face);
+                // a moving surface: the rebound relative to it
+                let w = flow.surface_velocity(face, x1 - (x1 - p).dot(n) * n);
                 impact = impact.or(Some(WallImpact {
                     face,
                     normal: -n,
-                    velocity: v1,
+                    velocity: w.map_or(v1, |w| v1 - w),
                 }));
-                (x1, v1) = rebound(x1, v1, p, n, e, mu);
+                (x1, v1) = match w {
+                    None => rebound(x1, v1, p, n, e, mu),
+                    Some(w) => {
+                        let (x, v) = rebound(x1, v1 - w, p, n, e, mu);
+                        (x, v + w)
+                    }
+                };
                 continue;
             }
             PatchInteraction::Stick => {
@@ -592,6 +560,8 @@ fn land_boundary(
     }
 }
 
+mod balance;
 mod gradient;
+pub mod moving;
 #[cfg(test)]
 mod tests;

@@ -58,6 +58,11 @@ pub const TABLE: &[(&str, FaceValue)] = &[
     ("movingWallVelocity", FaceValue::Written),
     ("rotatingWallVelocity", FaceValue::Written),
     ("translatingWallVelocity", FaceValue::Written),
+    // A single rotating frame's Urel (SRFSimpleFoam): the written values are relative to
+    // the frame (`relative no` inlets and walls at rest in the absolute frame included).
+    ("SRFVelocity", FaceValue::Written),
+    ("SRFFreestreamVelocity", FaceValue::Written),
+    ("SRFWallVelocity", FaceValue::Written),
     ("inletOutlet", FaceValue::Written),
     ("outletInlet", FaceValue::Written),
     ("uniformInletOutlet", FaceValue::Written),

@@ -266,3 +266,70 @@ fn parse_boundary(file: &Path, bytes: &[u8]) -> Result<Vec<Patch>, MeshError> {
     end(&mut p, "boundary")?;
     Ok(patches)
 }
+
+/// The cell zones of a case (`constant/polyMesh/cellZones`, plain or `.gz`): per zone its
+/// name and cell labels; empty when the file does not exist. Every label must be a cell
+/// of a mesh of `cells` cells.
+pub fn read_cell_zones(
+    case_dir: impl AsRef<Path>,
+    cells: usize,
+) -> Result<Vec<(String, Vec<u32>)>, MeshError> {
+    let base = case_dir.as_ref().join("constant/polyMesh/cellZones");
+    let mut gz = base.as_os_str().to_owned();
+    gz.push(".gz");
+    if !base.exists() && !Path::new(&gz).exists() {
+        return Ok(Vec::new());
+    }
+    let (file, bytes) = read_maybe_gz(&base)?;
+    parse_cell_zones(&file, &bytes, cells)
+}
+
+/// The zones of a `cellZones` file's bytes.
+pub(crate) fn parse_cell_zones(
+    file: &Path,
+    bytes: &[u8],
+    cells: usize,
+) -> Result<Vec<(String, Vec<u32>)>, MeshError> {
+    use super::parse::{ListData, Token, Value};
+    let mut p = Parser::new(file, bytes);
+    header_class(&mut p, &["regIOobject", "cellZoneMesh"])?;
+    let n = p.label("cellZones")?;
+    if n < 0 {
+        return Err(p.err("cellZones", format!("invalid number of zones {n}")));
+    }
+    p.expect(b'(', "cellZones")?;
+    let mut zones = Vec::new();
+    for i in 0..n {
+        let (name, dict) = p.named_dict(&format!("cellZones[{i}]"))?;
+        let entry = format!("cellZones/{name}/cellLabels");
+        let labels = match dict.get("cellLabels") {
+            Some(Value::Tokens(t)) => match t.as_slice() {
+                [Token::List(ListData::Labels(l))] => l.clone(),
+                [Token::Word(w), Token::Num(x)] if w == "uniform" && *x == 0.0 => Vec::new(),
+                _ => {
+                    return Err(MeshError::invalid(
+                        file,
+                        entry,
+                        "must be a List<label> of cell labels",
+                    ));
+                }
+            },
+            _ => return Err(MeshError::invalid(file, entry, "missing")),
+        };
+        let mut out = Vec::with_capacity(labels.len());
+        for (k, l) in labels.into_iter().enumerate() {
+            if l < 0 || l as usize >= cells {
+                return Err(MeshError::invalid(
+                    file,
+                    format!("{entry}[{k}]"),
+                    format!("{l} is not a cell of the mesh ({cells} cells)"),
+                ));
+            }
+            out.push(l as u32);
+        }
+        zones.push((name, out));
+    }
+    p.expect(b')', "cellZones")?;
+    end(&mut p, "cellZones")?;
+    Ok(zones)
+}

@@ -1,6 +1,7 @@
 //! OpenFOAM cases: the mesh (`constant/polyMesh`), volVectorFields ([`read_vector_field`])
 //! and volScalarFields ([`read_scalar_field`]: turbulence `k`, `epsilon`, `omega`, `nut`) in
-//! time directories, and writers for all three.
+//! time directories, rotating-frame properties ([`read_srf`], [`read_mrf`]), and writers
+//! for the first three.
 //!
 //! Reads what OpenFOAM writes: the `FoamFile` header (`format ascii|binary`, `arch
 //! "LSB;label=32;scalar=64"`, also `label=64`, `scalar=32` and `MSB`), `//` and `/* */`
@@ -10,6 +11,7 @@
 
 pub mod boundary;
 mod field;
+mod frame;
 #[cfg(test)]
 mod fuzz_tests;
 mod mesh;
@@ -23,7 +25,8 @@ use std::path::{Path, PathBuf};
 use crate::MeshError;
 
 pub use field::read_vector_field;
-pub use mesh::read_mesh;
+pub use frame::{MrfZone, Srf, read_mrf, read_srf};
+pub use mesh::{read_cell_zones, read_mesh};
 pub use scalar::read_scalar_field;
 pub use write::{Format, write_case, write_scalar_field, write_vector_field};
 

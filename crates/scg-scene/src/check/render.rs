@@ -210,6 +210,31 @@ fn mesh_flow_lines(
             p.name, p.kind, p.size,
         ));
     }
+    for z in &m.rotors {
+        let w = z.omega.length();
+        let faces: Vec<String> = z
+            .faces
+            .iter()
+            .map(|(p, n)| format!("{n} of `{p}`"))
+            .collect();
+        s.push_str(&format!(
+            "  frozen-rotor (MRF) zone `{}`: cellZone `{}` ({} cells) turns at {w:.6e} rad/s \
+             ({:.4} rpm) about {:?} through {:?}; its boundary faces ({}) move at Ω×r (their \
+             field values set so, as OpenFOAM's MRF does; particles rebound relative to \
+             them); the geometry stays (the frozen rotor's assumption)\n",
+            z.name,
+            z.cell_zone,
+            z.cells,
+            w * 60.0 / std::f64::consts::TAU,
+            (z.omega / w).to_array(),
+            z.origin.to_array(),
+            if faces.is_empty() {
+                "none".to_string()
+            } else {
+                faces.join(", ")
+            }
+        ));
+    }
     if let Some(w) = walls
         && let scg_core::physics::wall_shape::WallShape::Mesh(t) = &w.wall.shape
     {

@@ -183,6 +183,7 @@ pub(super) fn flow_field(f: &RawFlow, cx: &Ctx) -> Result<FlowField, SceneError>
 pub(super) fn mesh_flow(
     f: &RawFlow,
     fluid: Option<&Fluid>,
+    rotors: &[scg_mesh::foam::MrfZone],
     cx: &Ctx,
 ) -> Result<Option<SceneMeshFlow>, SceneError> {
     let base = cx.base;
@@ -204,7 +205,7 @@ pub(super) fn mesh_flow(
         Some(n) => return Err(cx.err("flow.sort_every", format!("must be ≥ 0, got {n}"))),
     };
     let translate = cx.vec3("flow.translate", f.translate.unwrap_or([0.0; 3]))?;
-    let (mut mesh, cells, source, reader) = match f.kind {
+    let (mut mesh, mut cells, source, reader) = match f.kind {
         RawFlowKind::Openfoam => {
             let case = base.join(cx.need("flow.case", &f.case)?);
             let shown = case.display().to_string();
@@ -293,14 +294,24 @@ pub(super) fn mesh_flow(
         None => None,
         Some(w) => wall_function(w, fluid, &mesh, &reader, cx)?,
     };
-    let flow = MeshFlow::with_wall_function(mesh, &cells, scheme, roles, wall.as_ref())
+    let (moving, rotors) = match &reader {
+        FieldReader::Foam { case, .. } => {
+            super::mrf::rotor_faces(case, &mesh, &mut cells, rotors, cx)?
+        }
+        _ => (None, Vec::new()),
+    };
+    let mut flow = MeshFlow::with_wall_function(mesh, &cells, scheme, roles, wall.as_ref())
         .map_err(|e| cx.err(key, format!("{source}: {e}")))?;
+    if let Some(m) = moving {
+        flow.set_moving_faces(m);
+    }
     Ok(Some(SceneMeshFlow {
         flow: std::sync::Arc::new(flow),
         source,
         field,
         sort_every,
         reader: Some(reader),
+        rotors,
     }))
 }
 
@@ -526,41 +537,6 @@ pub(super) fn outlet(o: &RawOutlet, cx: &Ctx) -> Result<Outlet, SceneError> {
     })
 }
 
-/// `[frame]`: Ω = axis·rpm·2π/60 about `center`; the particles move through the fluid, so
-/// it needs `[drag]`, and gravity (constant in the absolute frame) must lie along the
-/// axis to stay constant in the rotating one.
-fn frame(
-    raw: &crate::raw::RawScene,
-    drag: Option<DragLaw>,
-    cx: &Ctx,
-) -> Result<Option<scg_core::physics::forces::RotatingFrame>, SceneError> {
-    let Some(f) = &raw.frame else {
-        return Ok(None);
-    };
-    if drag.is_none() {
-        return Err(cx.err(
-            "frame",
-            "tracks particles through a rotating flow: the scene needs [fluid] and [drag]",
-        ));
-    }
-    let axis = cx.unit("frame.axis", f.axis)?;
-    let omega = axis * rpm_to_rad_per_s(cx.finite("frame.rpm", f.rpm)?);
-    if let Some(g) = &raw.gravity {
-        let g = glam::DVec3::from_array(g.acceleration);
-        if g.cross(axis).length() > 1e-12 * g.length() {
-            return Err(cx.err(
-                "frame.axis",
-                "gravity must lie along the frame's axis (in a frame turning about another \
-                 axis it would turn too)",
-            ));
-        }
-    }
-    Ok(Some(scg_core::physics::forces::RotatingFrame {
-        omega,
-        centre: cx.vec3("frame.center", f.center.unwrap_or([0.0; 3]))?,
-    }))
-}
-
 /// `[forces]`: each force is opt-in; every one acts through the fluid, so it needs
 /// `[drag]` (with `[fluid]`).
 pub(super) fn forces(
@@ -569,7 +545,7 @@ pub(super) fn forces(
     cx: &Ctx,
 ) -> Result<scg_core::physics::forces::ExtraForces, SceneError> {
     let mut out = scg_core::physics::forces::ExtraForces {
-        frame: frame(raw, drag, cx)?,
+        frame: super::frame::frame(raw, drag, cx)?,
         ..Default::default()
     };
     let Some(f) = &raw.forces else {

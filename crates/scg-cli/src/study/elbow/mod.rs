@@ -15,8 +15,6 @@
 pub mod report;
 pub mod wear;
 
-use std::path::PathBuf;
-
 use scg_core::stages::erosion::ErosionLog;
 use serde::{Deserialize, Serialize};
 
@@ -117,49 +115,12 @@ pub fn run_variant(
 
 /// Run `scg study elbow` with its variants run through `points`; returns the exit status.
 pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
-    if a.openfoam.is_some() || a.run.is_some() || a.cg_feed != 1.0 || a.loadings.is_some() {
-        eprintln!(
-            "error: --openfoam, --run, --cg-feed and --loadings are not for `scg study elbow`"
-        );
-        return EXIT_BAD_INPUT;
-    }
-    if a.markdown {
-        let Some(from) = &a.from else {
-            eprintln!("error: --markdown prints a finished study: give --from DIR");
-            return EXIT_BAD_INPUT;
-        };
-        return match read_summary(from) {
-            Ok((runs, tracers)) => {
-                print!("{}", markdown(&runs, tracers.as_ref()));
-                0
-            }
-            Err(e) => {
-                eprintln!("error: --from {e}");
-                EXIT_BAD_INPUT
-            }
-        };
-    }
-    if a.from.is_some() {
-        eprintln!("error: `scg study elbow --from DIR` needs --markdown");
-        return EXIT_BAD_INPUT;
-    }
-    let text = match super::case_scene(ELBOW, "elbow/coarse") {
-        Ok(t) => t,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return EXIT_BAD_INPUT;
-        }
+    let (text, out) = match super::start(&a, "elbow", ELBOW, "elbow/coarse", |from| {
+        read_summary(from).map(|(runs, tracers)| markdown(&runs, tracers.as_ref()))
+    }) {
+        super::Start::Exit(code) => return code,
+        super::Start::Run { text, out } => (text, out),
     };
-    let out = a.out.clone().unwrap_or_else(|| {
-        PathBuf::from(format!(
-            "recordings/study-elbow{}",
-            if a.quick { "-quick" } else { "" }
-        ))
-    });
-    if let Err(e) = std::fs::create_dir_all(&out) {
-        eprintln!("error: cannot create {}: {e}", out.display());
-        return EXIT_BAD_INPUT;
-    }
     let (feed, duration) = if a.quick { QUICK } else { FULL };
     let overrides_of = |name: &str, alpha: f64, law: &str| {
         let mut o = variant_overrides(name, alpha, law, feed, duration);

@@ -189,6 +189,68 @@ fn landing_by_role() {
     assert!(MeshFlow::new(m, &field, Interpolation::CellValue, vec![]).is_err());
 }
 
+/// A wall face moving at V (a frozen rotor's blade): the particle leaves it with the
+/// normal velocity relative to the surface −e·(v − V)·n exactly and, without friction, its
+/// tangential velocity kept; the impact is recorded relative to the surface; faces that do
+/// not move rebound as before.
+#[test]
+fn a_moving_wall_face_rebounds_relative_to_its_surface() {
+    let u = DVec3::ZERO;
+    let mut f = box_flow(u, &[("walls", PatchRole::Wall)]);
+    let m = f.mesh();
+    let wp = &m.patches[patch(&f, "walls") as usize];
+    // the faces of the y max side of `walls`, turning about the x axis through the box's
+    // centre at 3 rad/s: their surface moves along ±z
+    let spin = Spin {
+        omega: DVec3::new(3.0, 0.0, 0.0),
+        origin: DVec3::splat(0.5),
+    };
+    let g = f.geometry();
+    let top: Vec<(u32, usize)> = (wp.start..wp.start + wp.size)
+        .filter(|&k| (g.face_centres[k].y - 1.0).abs() < 1e-12)
+        .map(|k| (k as u32, 0))
+        .collect();
+    assert!(!top.is_empty());
+    let ni = m.n_internal_faces();
+    let nb = m.n_faces() - ni;
+    f.set_moving_faces(MovingFaces::new(ni, nb, vec![spin], &top).unwrap());
+    let x0 = DVec3::splat(0.5);
+    let h0 = f.find_cell(x0).unwrap();
+    let (e, v) = (0.5, DVec3::new(0.3, 2.0, 1.0));
+    let l = land(
+        &f,
+        x0,
+        h0,
+        h0,
+        DVec3::new(0.5, 1.25, 0.5),
+        v,
+        &models(&f, e),
+    );
+    let hit = DVec3::new(0.5, 1.0, 0.5);
+    let w = spin.velocity(hit);
+    assert!((w - DVec3::new(0.0, 0.0, 1.5)).length() < 1e-12, "{w}");
+    let rel = l.v - w;
+    assert!((rel.y - (-e * (v - w).y)).abs() < 1e-12, "{l:?}");
+    assert!((rel.x - (v - w).x).abs() < 1e-12 && (rel.z - (v - w).z).abs() < 1e-12);
+    let imp = l.impact.unwrap();
+    assert!((imp.velocity - (v - w)).length() < 1e-12);
+    // a face at rest (the y min side): the plain rebound
+    let l = land(
+        &f,
+        x0,
+        h0,
+        h0,
+        DVec3::new(0.5, -0.25, 0.5),
+        -v,
+        &models(&f, e),
+    );
+    assert!(
+        (l.v - DVec3::new(-0.3, 1.0, -1.0)).length() < 1e-12,
+        "{l:?}"
+    );
+    assert_eq!(f.surface_velocity(0, hit), None);
+}
+
 /// A channel whose first cell layer (y_c = 15 mm, y⁺_c = 500 at u_τ = 0.5 m/s, ν =
 /// 1.5e-5 m²/s) and the layers above carry the log law at their centres: with the wall
 /// function, the velocity at y⁺ = 30 and 100 inside the first cell is the log law's within
