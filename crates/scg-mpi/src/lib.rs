@@ -12,7 +12,10 @@
 //! contact reach plus the Verlet skin; such runs agree with one rank statistically, not
 //! bit for bit (the force sums run in row order, see [`ghosts`]). In a periodic box the
 //! slabs wrap round it along their axis. Contacts are refused with `SCG_MPI_DECOMP=ids`.
+//! A decomposed run writes one checkpoint in the single-rank format ([`checkpoint`]) and
+//! restarts from one on any number of ranks.
 
+pub mod checkpoint;
 pub mod decomp;
 pub mod ghosts;
 

@@ -154,6 +154,24 @@ impl Ranked<'_> {
         self.migrate()
     }
 
+    /// Gather every rank's checkpoint on rank 0, merge them ([`crate::checkpoint::merge`])
+    /// and write the one file there (a collective; `Err` only on rank 0).
+    fn write_checkpoint(
+        &mut self,
+        path: &std::path::Path,
+        scene: &scg_scene::Scene,
+    ) -> Result<(), String> {
+        let parts = self.comm.gather_bytes(&encode(&self.sim.checkpoint()));
+        let Some(parts) = parts else {
+            return Ok(());
+        };
+        let mut c = crate::checkpoint::merge(parts.iter().map(|b| decode(b)).collect())
+            .ok_or("no checkpoint to merge")?;
+        c.scene.clone_from(&scene.source);
+        c.scene_file = scene.absolute_file();
+        scg_record::checkpoint::write_checkpoint(path, &c)
+    }
+
     /// Gather the particles on rank 0; the frame there (`None` on the other ranks).
     fn gather_frame(&mut self, params: &RecordingParams) -> Option<scg_core::frame::Frame> {
         let tally = self.sim.world.resource::<Tally>().clone();
@@ -206,15 +224,6 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         }
         return 0;
     }
-    if args.restart.is_some() || args.checkpoint_every.is_some() || args.checkpoint.is_some() {
-        if root {
-            eprintln!(
-                "error: checkpoints are not yet written or read by a run over MPI ranks ({} here): run with one rank",
-                comm.size()
-            );
-        }
-        return EXIT_BAD_INPUT;
-    }
     // What the one-rank run reports at its end from logs a rank holds only its share of:
     // refused rather than reported from rank 0's share.
     let per_rank = [
@@ -237,6 +246,69 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
     }
     // The recording stage is the driver's (gathered on rank 0), not the schedule's.
     let mut sim = scene.build(false);
+    let checkpoints =
+        args.restart.is_some() || args.checkpoint_every.is_some() || args.checkpoint.is_some();
+    if checkpoints
+        && comm.size() > 1
+        && let Some(why) =
+            crate::checkpoint::refusal(&scene, sim.world.get_resource::<ContactState>().is_some())
+    {
+        if root {
+            eprintln!(
+                "error: checkpoints over MPI ranks ({} here) do not cover {why}: run with one rank",
+                comm.size()
+            );
+        }
+        return EXIT_BAD_INPUT;
+    }
+    let every = match args.checkpoint_every {
+        None => None,
+        Some(t) if t.is_finite() && t > 0.0 => Some(((t / scene.dt).round() as u64).max(1)),
+        Some(t) => {
+            if root {
+                eprintln!("error: --checkpoint-every must be a positive time in seconds, not {t}");
+            }
+            return EXIT_BAD_INPUT;
+        }
+    };
+    // A restart: every rank restores the whole checkpoint (rank 0 with the logs so far,
+    // the others from zero) and keeps its slab's particles below.
+    if let Some(path) = &args.restart {
+        let restored = scg_record::checkpoint::read_checkpoint(path).and_then(|mut c| {
+            if !root {
+                crate::checkpoint::strip_logs(&mut c);
+            }
+            sim.restore(&c)
+                .map_err(|e| format!("{}: {e}", path.display()))
+        });
+        if let Err(e) = &restored
+            && root
+        {
+            eprintln!("error: {e}");
+        }
+        if !all_ok(comm, restored.is_ok()) {
+            return EXIT_BAD_INPUT;
+        }
+        if root {
+            eprintln!(
+                "restarting `{}` from {} at step {} (t = {:.6} s) on {} MPI ranks",
+                scene.name,
+                path.display(),
+                sim.step_count(),
+                sim.time(),
+                comm.size()
+            );
+        }
+    }
+    let base = format!("{}{}", recording_stem(&scene), set_suffix(&args.set));
+    let checkpoint_path = args
+        .checkpoint
+        .clone()
+        .unwrap_or_else(|| args.out.join(format!("{base}.ckpt")));
+    let stem = match args.restart {
+        Some(_) => format!("{base}-from{}", sim.step_count()),
+        None => base,
+    };
     let by_id = std::env::var("SCG_MPI_DECOMP").as_deref() == Ok("ids");
     if by_id && sim.world.get_resource::<ContactState>().is_some() {
         if root {
@@ -253,7 +325,7 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
     let mut paths = Vec::new();
     let mut made = Ok(());
     if root && record {
-        made = make_sinks(&scene, &args, &report, &mut paths).map(|s| sinks = Some(s));
+        made = make_sinks(&scene, &args, &report, &stem, &mut paths).map(|s| sinks = Some(s));
         if let Err((e, _)) = &made {
             eprintln!("error: {e}");
         }
@@ -359,6 +431,7 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
     let mut interrupted = false;
     let mut last_rebalance = 0;
     let mut sink_failed = false;
+    let mut checkpointed: Option<u64> = None;
     while r.sim.step_count() < steps {
         let first_new = r.sim.world.resource::<NextParticleId>().0;
         let t = Instant::now();
@@ -408,6 +481,24 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         }
         if any & 0b011 != 0 {
             break;
+        }
+        // A checkpoint at every multiple of the interval, at the end and when interrupted
+        // (a collective: every rank's share gathered and merged on rank 0).
+        if let Some(e) = every {
+            let n = r.sim.step_count();
+            if n.is_multiple_of(e) || n >= steps || any & 0b100 != 0 {
+                let t = Instant::now();
+                let saved = r.write_checkpoint(&checkpoint_path, &scene);
+                times.record += t.elapsed();
+                if let Err(e) = &saved {
+                    failure = Some(e.clone());
+                }
+                if !all_ok(comm, saved.is_ok()) {
+                    failure.get_or_insert_with(|| "a checkpoint failed on rank 0".into());
+                    break;
+                }
+                checkpointed = Some(n);
+            }
         }
         if any & 0b100 != 0 {
             interrupted = true;
@@ -520,6 +611,9 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         for p in &paths {
             eprintln!("wrote {}", p.display());
         }
+        if let Some(n) = checkpointed {
+            eprintln!("checkpoint {} at step {n}", checkpoint_path.display());
+        }
         if let Some(e) = &sink_err {
             eprintln!("error: recorder failed: {e}");
         }
@@ -543,10 +637,11 @@ fn make_sinks(
     scene: &scg_scene::Scene,
     args: &RunArgs,
     report: &scg_scene::check::Report,
+    stem: &str,
     paths: &mut Vec<std::path::PathBuf>,
 ) -> Result<Box<dyn FrameSink>, (String, i32)> {
     ensure_writable(&args.out).map_err(|e| (e, EXIT_BAD_INPUT))?;
-    let stem = format!("{}{}", recording_stem(scene), set_suffix(&args.set));
+    let stem = stem.to_string();
     let meta = scene.run_meta(report.messages());
     let rrd = args.out.join(format!("{stem}.rrd"));
     let mcap = args.out.join(format!("{stem}.mcap"));

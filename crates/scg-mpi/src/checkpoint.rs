@@ -1,0 +1,166 @@
+//! Checkpoints over ranks: every rank's [`Checkpoint`] (its own particles and logs, the
+//! clock, feeders and streams every rank shares) merged into one, in the single-rank
+//! format ([`merge`]): a decomposed run writes one file that restarts on any number of
+//! ranks, one included. On a restart every rank restores the whole checkpoint and keeps
+//! the particles of its slab; rank 0 keeps the logs and counts, the others start theirs
+//! from zero ([`strip_logs`]), so that the sums over the ranks stay the run's.
+//!
+//! What a rank holds only its share of: the particles (concatenated, in id order),
+//! particle-steps, drained and collision counts, the outlet's, patches', impulse walls'
+//! and collecting zones' logs (summed, or concatenated and sorted). The largest
+//! displacement is the largest over the ranks. Particle contacts (their pair histories)
+//! and collecting zones that wait are not merged yet: [`refusal`] names them.
+
+use scg_core::checkpoint::Checkpoint;
+
+/// Why a scene's checkpoints cannot yet be written or read over ranks, if they cannot.
+pub fn refusal(scene: &scg_scene::Scene, contacts: bool) -> Option<&'static str> {
+    if contacts {
+        return Some("particle contacts (their pair histories are not merged over ranks yet)");
+    }
+    if scene.zones.iter().any(|z| z.collects_after > 0.0) {
+        return Some(
+            "collecting zones that wait (`collects_after`: who waits where is not merged over ranks yet)",
+        );
+    }
+    None
+}
+
+/// Sum `b` into `a` element by element (shapes as the scene makes them on every rank).
+fn add(a: &mut [Vec<u64>], b: &[Vec<u64>]) {
+    for (x, y) in a.iter_mut().zip(b) {
+        for (p, q) in x.iter_mut().zip(y) {
+            *p += q;
+        }
+    }
+}
+
+/// Append `b`'s lists to `a`'s, list by list.
+fn append(a: &mut [Vec<f64>], b: &[Vec<f64>]) {
+    for (x, y) in a.iter_mut().zip(b) {
+        x.extend_from_slice(y);
+    }
+}
+
+/// One checkpoint from the ranks' own (rank 0 first): the shared state from rank 0, the
+/// particles of all in id order, the counts and logs summed or concatenated (time lists
+/// sorted), as a single-rank run's checkpoint holds them.
+pub fn merge(mut parts: Vec<Checkpoint>) -> Option<Checkpoint> {
+    if parts.is_empty() {
+        return None;
+    }
+    let rest = parts.split_off(1);
+    let mut out = parts.pop()?;
+    let mut largest = f64::from_bits(out.displacement.0);
+    for c in rest {
+        out.particle_steps += c.particle_steps;
+        out.particles.extend(c.particles);
+        for k in [0, 2] {
+            // drained and collisions; fed counts the feeders every rank runs
+            for (a, b) in out.tally[k].iter_mut().zip(&c.tally[k]) {
+                *a += b;
+            }
+        }
+        let d = f64::from_bits(c.displacement.0);
+        if d > largest {
+            largest = d;
+        }
+        out.displacement.1 |= c.displacement.1;
+        if let (Some(a), Some(b)) = (out.outlet.as_mut(), c.outlet.as_ref()) {
+            append(&mut a[0], &b[0]);
+            append(&mut a[1], &b[1]);
+        }
+        if let (Some(a), Some(b)) = (out.patches.as_mut(), c.patches.as_ref()) {
+            add(&mut a[0], &b[0]);
+            add(&mut a[1], &b[1]);
+        }
+        if let (Some(a), Some(b)) = (out.impulse_walls.as_mut(), c.impulse_walls.as_ref()) {
+            add(&mut a[0], &b[0]);
+            add(&mut a[1], &b[1]);
+        }
+        if let (Some(a), Some(b)) = (out.collected.as_mut(), c.collected.as_ref()) {
+            for (x, y) in a.iter_mut().zip(b) {
+                append(x, y);
+            }
+        }
+        out.collect_inside.extend(c.collect_inside);
+    }
+    out.displacement.0 = largest.to_bits();
+    out.particles.sort_by_key(|p| p.id);
+    let sort = |v: &mut Vec<f64>| v.sort_by(f64::total_cmp);
+    if let Some(o) = out.outlet.as_mut() {
+        o.iter_mut().flatten().for_each(sort);
+    }
+    if let Some(z) = out.collected.as_mut() {
+        z.iter_mut().flatten().for_each(sort);
+    }
+    out.collect_inside.sort_unstable();
+    Some(out)
+}
+
+/// `c` as a rank other than 0 restores it: the counts and logs that are summed over the
+/// ranks start from zero there (rank 0 carries the run's so far).
+pub fn strip_logs(c: &mut Checkpoint) {
+    c.particle_steps = 0;
+    for k in [0, 2] {
+        c.tally[k].iter_mut().for_each(|n| *n = 0);
+    }
+    if let Some(o) = c.outlet.as_mut() {
+        o.iter_mut().flatten().for_each(Vec::clear);
+    }
+    for log in [c.patches.as_mut(), c.impulse_walls.as_mut()]
+        .into_iter()
+        .flatten()
+    {
+        log.iter_mut()
+            .flatten()
+            .for_each(|v| v.iter_mut().for_each(|n| *n = 0));
+    }
+    if let Some(z) = c.collected.as_mut() {
+        z.iter_mut().flatten().for_each(Vec::clear);
+    }
+    c.collect_inside.clear();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn part(ids: &[u32], drained: u64, steps: u64, disp: f64) -> Checkpoint {
+        let text = "duration = 1e-3\ndt = 1e-4\n[[groups]]\nname = \"a\"\ndiameter = 1e-3\ndensity = 1000.0\npositions = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]]\n";
+        let sc = scg_scene::parse(text, "<t>", "t", &[]).unwrap();
+        let mut sim = sc.build(false);
+        let mut c = sim.checkpoint();
+        let all = c.particles.clone();
+        c.particles = ids.iter().map(|&i| all[i as usize].clone()).collect();
+        c.tally[0] = vec![drained];
+        c.tally[1] = vec![3];
+        c.particle_steps = steps;
+        c.displacement = (disp.to_bits(), false);
+        c.outlet = Some([vec![vec![drained as f64]], vec![vec![]]]);
+        c.patches = Some([vec![vec![drained]], vec![vec![1]]]);
+        c
+    }
+
+    #[test]
+    fn ranks_merge_into_one_checkpoint() {
+        let m = merge(vec![part(&[2], 1, 10, 0.5), part(&[0, 1], 2, 20, 0.7)]).unwrap();
+        let ids: Vec<u32> = m.particles.iter().map(|p| p.id).collect();
+        assert_eq!(ids, [0, 1, 2]);
+        assert_eq!(m.tally[0], [3]);
+        assert_eq!(m.tally[1], [3], "fed: every rank runs the feeders");
+        assert_eq!(m.particle_steps, 30);
+        assert_eq!(f64::from_bits(m.displacement.0), 0.7);
+        assert_eq!(m.outlet.as_ref().unwrap()[0], [vec![1.0, 2.0]]);
+        assert_eq!(m.patches.as_ref().unwrap(), &[vec![vec![3]], vec![vec![2]]]);
+        let mut s = m.clone();
+        strip_logs(&mut s);
+        assert_eq!(s.tally[0], [0]);
+        assert_eq!(s.tally[1], [3]);
+        assert_eq!(s.particle_steps, 0);
+        assert!(s.outlet.as_ref().unwrap()[0][0].is_empty());
+        assert_eq!(s.patches.as_ref().unwrap(), &[vec![vec![0]], vec![vec![0]]]);
+        assert_eq!(s.particles.len(), 3, "every rank restores every particle");
+        assert!(merge(Vec::new()).is_none());
+    }
+}
