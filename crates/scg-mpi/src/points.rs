@@ -9,7 +9,7 @@ use scg_cli::points::{Points, shares};
 #[cfg(feature = "mpi")]
 use crate::comm::Comm;
 
-/// [`Points`](scg_cli::points::Points) over the ranks of `comm`.
+/// [`scg_cli::points::Points`] over the ranks of `comm`.
 #[cfg(feature = "mpi")]
 pub struct RankPoints<'a> {
     /// The ranks.
