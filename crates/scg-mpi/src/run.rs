@@ -24,7 +24,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use scg_cli::EXIT_BAD_INPUT;
-use scg_cli::run::{RunArgs, ensure_writable, extra_sinks, recording_stem, set_suffix};
+use scg_cli::run::{RunArgs, ensure_writable, extra_sinks};
 use std::io::Write;
 
 use scg_core::checkpoint::ParticleRecord;
@@ -38,6 +38,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::comm::{Comm, decode, encode};
 use crate::decomp::{Owners, Slabs, longest_axis, merge_tally, needs_rebalance};
+
+mod checkpoints;
+use checkpoints::Ckpt;
 
 /// The slabs are cut again when the fullest rank holds more than this many times the
 /// mean count.
@@ -154,24 +157,6 @@ impl Ranked<'_> {
         self.migrate()
     }
 
-    /// Gather every rank's checkpoint on rank 0, merge them ([`crate::checkpoint::merge`])
-    /// and write the one file there (a collective; `Err` only on rank 0).
-    fn write_checkpoint(
-        &mut self,
-        path: &std::path::Path,
-        scene: &scg_scene::Scene,
-    ) -> Result<(), String> {
-        let parts = self.comm.gather_bytes(&encode(&self.sim.checkpoint()));
-        let Some(parts) = parts else {
-            return Ok(());
-        };
-        let mut c = crate::checkpoint::merge(parts.iter().map(|b| decode(b)).collect())
-            .ok_or("no checkpoint to merge")?;
-        c.scene.clone_from(&scene.source);
-        c.scene_file = scene.absolute_file();
-        scg_record::checkpoint::write_checkpoint(path, &c)
-    }
-
     /// Gather the particles on rank 0; the frame there (`None` on the other ranks).
     fn gather_frame(&mut self, params: &RecordingParams) -> Option<scg_core::frame::Frame> {
         let tally = self.sim.world.resource::<Tally>().clone();
@@ -246,68 +231,13 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
     }
     // The recording stage is the driver's (gathered on rank 0), not the schedule's.
     let mut sim = scene.build(false);
-    let checkpoints =
-        args.restart.is_some() || args.checkpoint_every.is_some() || args.checkpoint.is_some();
-    if checkpoints
-        && comm.size() > 1
-        && let Some(why) =
-            crate::checkpoint::refusal(&scene, sim.world.get_resource::<ContactState>().is_some())
-    {
-        if root {
-            eprintln!(
-                "error: checkpoints over MPI ranks ({} here) do not cover {why}: run with one rank",
-                comm.size()
-            );
-        }
-        return EXIT_BAD_INPUT;
-    }
-    let every = match args.checkpoint_every {
-        None => None,
-        Some(t) if t.is_finite() && t > 0.0 => Some(((t / scene.dt).round() as u64).max(1)),
-        Some(t) => {
-            if root {
-                eprintln!("error: --checkpoint-every must be a positive time in seconds, not {t}");
-            }
-            return EXIT_BAD_INPUT;
-        }
-    };
-    // A restart: every rank restores the whole checkpoint (rank 0 with the logs so far,
-    // the others from zero) and keeps its slab's particles below.
-    if let Some(path) = &args.restart {
-        let restored = scg_record::checkpoint::read_checkpoint(path).and_then(|mut c| {
-            if !root {
-                crate::checkpoint::strip_logs(&mut c);
-            }
-            sim.restore(&c)
-                .map_err(|e| format!("{}: {e}", path.display()))
-        });
-        if let Err(e) = &restored
-            && root
-        {
-            eprintln!("error: {e}");
-        }
-        if !all_ok(comm, restored.is_ok()) {
-            return EXIT_BAD_INPUT;
-        }
-        if root {
-            eprintln!(
-                "restarting `{}` from {} at step {} (t = {:.6} s) on {} MPI ranks",
-                scene.name,
-                path.display(),
-                sim.step_count(),
-                sim.time(),
-                comm.size()
-            );
-        }
-    }
-    let base = format!("{}{}", recording_stem(&scene), set_suffix(&args.set));
-    let checkpoint_path = args
-        .checkpoint
-        .clone()
-        .unwrap_or_else(|| args.out.join(format!("{base}.ckpt")));
-    let stem = match args.restart {
-        Some(_) => format!("{base}-from{}", sim.step_count()),
-        None => base,
+    let Ckpt {
+        every,
+        path: checkpoint_path,
+        stem,
+    } = match checkpoints::prepare(comm, &args, &scene, &mut sim) {
+        Ok(c) => c,
+        Err(code) => return code,
     };
     let by_id = std::env::var("SCG_MPI_DECOMP").as_deref() == Ok("ids");
     if by_id && sim.world.get_resource::<ContactState>().is_some() {
