@@ -123,6 +123,18 @@ pub fn load(args: &RunArgs) -> Result<Scene, i32> {
     })
 }
 
+/// `--checkpoint-every T` in steps of `dt` (at least one), `None` without it; `Err` for a
+/// time that is not positive and finite.
+pub fn checkpoint_interval(every: Option<f64>, dt: f64) -> Result<Option<u64>, String> {
+    match every {
+        None => Ok(None),
+        Some(t) if t.is_finite() && t > 0.0 => Ok(Some(((t / dt).round() as u64).max(1))),
+        Some(t) => Err(format!(
+            "--checkpoint-every must be a positive time in seconds, not {t}"
+        )),
+    }
+}
+
 /// Fail early when `dir` cannot take files.
 pub fn ensure_writable(dir: &Path) -> Result<(), String> {
     std::fs::create_dir_all(dir)
@@ -201,11 +213,10 @@ pub fn run(args: RunArgs) -> i32 {
         .checkpoint
         .clone()
         .unwrap_or_else(|| args.out.join(format!("{base}.ckpt")));
-    let checkpoint_every = match args.checkpoint_every {
-        None => None,
-        Some(t) if t.is_finite() && t > 0.0 => Some(((t / scene.dt).round() as u64).max(1)),
-        Some(t) => {
-            eprintln!("error: --checkpoint-every must be a positive time in seconds, not {t}");
+    let checkpoint_every = match checkpoint_interval(args.checkpoint_every, scene.dt) {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("error: {e}");
             return EXIT_BAD_INPUT;
         }
     };

@@ -33,6 +33,12 @@ pub fn wilson95(k: u64, n: u64) -> (f64, f64) {
     ((c - h).max(0.0), (c + h).min(1.0))
 }
 
+/// The share k/n with its Wilson 95 % interval: (k/n, lo, hi).
+pub fn share95(k: u64, n: u64) -> (f64, f64, f64) {
+    let (lo, hi) = wilson95(k, n);
+    (k as f64 / n.max(1) as f64, lo, hi)
+}
+
 /// The samples of one particle (a cluster): its radial distances over the window.
 pub type Cluster = Vec<f64>;
 

@@ -47,12 +47,11 @@ pub(super) fn prepare(
         }
         return Err(EXIT_BAD_INPUT);
     }
-    let every = match args.checkpoint_every {
-        None => None,
-        Some(t) if t.is_finite() && t > 0.0 => Some(((t / scene.dt).round() as u64).max(1)),
-        Some(t) => {
+    let every = match scg_cli::run::checkpoint_interval(args.checkpoint_every, scene.dt) {
+        Ok(e) => e,
+        Err(e) => {
             if root {
-                eprintln!("error: --checkpoint-every must be a positive time in seconds, not {t}");
+                eprintln!("error: {e}");
             }
             return Err(EXIT_BAD_INPUT);
         }

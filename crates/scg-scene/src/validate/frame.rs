@@ -29,8 +29,7 @@ pub(super) fn frame(
             "tracks particles through a rotating flow: the scene needs [fluid] and [drag]",
         ));
     }
-    let axis = cx.unit("frame.axis", f.axis)?;
-    let omega = axis * rpm_to_rad_per_s(cx.finite("frame.rpm", f.rpm)?);
+    let (axis, omega, centre) = declared(f, cx)?;
     if let Some(g) = &raw.gravity {
         let g = DVec3::from_array(g.acceleration);
         if g.cross(axis).length() > 1e-12 * g.length() {
@@ -43,8 +42,16 @@ pub(super) fn frame(
     }
     Ok(Some(scg_core::physics::forces::RotatingFrame {
         omega,
-        centre: cx.vec3("frame.center", f.center.unwrap_or([0.0; 3]))?,
+        centre,
     }))
+}
+
+/// The unit axis, the angular velocity (rad/s) and the centre (m) `[frame]` declares.
+fn declared(f: &crate::raw::RawFrame, cx: &Ctx) -> Result<(DVec3, DVec3, DVec3), SceneError> {
+    let axis = cx.unit("frame.axis", f.axis)?;
+    let omega = axis * rpm_to_rad_per_s(cx.finite("frame.rpm", f.rpm)?);
+    let centre = cx.vec3("frame.center", f.center.unwrap_or([0.0; 3]))?;
+    Ok((axis, omega, centre))
 }
 
 /// Relative tolerance of the match between `[frame]` and the case's `SRFProperties`.
@@ -139,9 +146,7 @@ pub(super) fn case_frame(raw: &RawScene, cx: &Ctx) -> Result<Vec<foam::MrfZone>,
                     ),
                 ));
             };
-            let axis = cx.unit("frame.axis", f.axis)?;
-            let omega = axis * rpm_to_rad_per_s(cx.finite("frame.rpm", f.rpm)?);
-            let centre = cx.vec3("frame.center", f.center.unwrap_or([0.0; 3]))?;
+            let (axis, omega, centre) = declared(f, cx)?;
             let want = s.omega();
             let off_axis = (centre - origin).cross(s.axis).length();
             if (omega - want).length() > MATCH * want.length().max(f64::MIN_POSITIVE)

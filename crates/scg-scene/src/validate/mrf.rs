@@ -19,12 +19,9 @@ use super::Ctx;
 use crate::error::SceneError;
 use crate::model::RotorZone;
 
-/// Patch kinds whose faces never move with a zone (constraints and coupled patches).
-const FIXED_KINDS: [&str; 9] = [
-    "empty",
-    "symmetry",
-    "symmetryPlane",
-    "wedge",
+/// Coupled patch kinds (refused by the field reader, listed for completeness): with the
+/// constraint kinds ([`super::patches::MIRROR_KINDS`]) their faces never move with a zone.
+const COUPLED_KINDS: [&str; 5] = [
     "cyclic",
     "cyclicAMI",
     "cyclicACMI",
@@ -92,7 +89,10 @@ pub(super) fn rotor_faces(
         };
         let mut faces = Vec::new();
         for (pi, p) in mesh.patches.iter().enumerate() {
-            if FIXED_KINDS.contains(&p.kind.as_str()) || z.non_rotating_patches.contains(&p.name) {
+            if super::patches::MIRROR_KINDS.contains(&p.kind.as_str())
+                || COUPLED_KINDS.contains(&p.kind.as_str())
+                || z.non_rotating_patches.contains(&p.name)
+            {
                 continue;
             }
             let mut n = 0;

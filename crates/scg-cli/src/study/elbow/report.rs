@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::ElbowRun;
 use super::wear::ZoneShare;
-use crate::analysis::interval::wilson95;
+use crate::analysis::interval::share95 as share;
 use crate::study::cyclone::{ClassGrade, TracerCheck};
 
 /// `summary.json`.
@@ -48,12 +48,6 @@ pub fn summary(
 
 fn overlap(a: (f64, f64), b: (f64, f64)) -> bool {
     a.0 <= b.1 && b.0 <= a.1
-}
-
-/// A share k/n with its Wilson interval.
-fn share(k: u64, n: u64) -> (f64, f64, f64) {
-    let (lo, hi) = wilson95(k, n);
-    (k as f64 / n.max(1) as f64, lo, hi)
 }
 
 /// The count of one fate in a class.

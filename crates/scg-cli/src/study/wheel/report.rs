@@ -8,7 +8,7 @@ use std::fmt::Write;
 use serde::{Deserialize, Serialize};
 
 use super::{Theory, WheelRun};
-use crate::analysis::interval::wilson95;
+use crate::analysis::interval::share95 as share;
 use crate::study::cyclone::grade::{cut_size, cut_size95};
 use crate::study::cyclone::{ClassGrade, TracerCheck};
 
@@ -49,12 +49,6 @@ pub fn summary(
             .map(|v| verdict(&runs[0], v).1)
             .collect(),
     }
-}
-
-/// A share k/n with its Wilson interval.
-pub fn share(k: u64, n: u64) -> (f64, f64, f64) {
-    let (lo, hi) = wilson95(k, n);
-    (k as f64 / n.max(1) as f64, lo, hi)
 }
 
 /// The fines share of a class (escaped through the fines outlet) with its interval.
