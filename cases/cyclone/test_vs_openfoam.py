@@ -315,16 +315,28 @@ class LikeForLike(unittest.TestCase):
         # the committed scene as is: refused, naming the key
         with self.assertRaises(vs.SceneError) as e:
             vs.read_scene(src)
-        self.assertIn("flow.wall_function.model", str(e.exception))
+        self.assertIn("flow.interpolation", str(e.exception))
         dest = os.path.join(self.tmp, "scene.toml")
         changes = vs.like(src, dest)
         self.assertEqual(len(changes), 3, changes)
-        self.assertTrue(changes[0].startswith("flow.wall_function") and changes[2].startswith("zones[0]"))
-        self.assertIn("cell_point_idw", changes[1])
+        self.assertTrue(changes[0].startswith("flow.interpolation: conservative -> cell_point_idw"), changes)
+        self.assertTrue(changes[1].startswith("dispersion.model: langevin -> stochastic_ras"), changes)
+        self.assertTrue(changes[2].startswith("zones[0]"), changes)
         with open(dest, "rb") as f:
             got = tomllib.load(f)
         self.assertNotIn("wall_function", got["flow"])
         self.assertEqual(got["flow"]["interpolation"], "cell_point_idw")
+        self.assertEqual(got["dispersion"]["model"], "stochastic_ras")
+        # a wall function goes too
+        wfs = os.path.join(self.tmp, "wf.toml")
+        with open(src, encoding="utf-8") as f:
+            text = f.read().replace('interpolation = "conservative"\n',
+                                    '[flow.wall_function]\nmodel = "log_law"\nk = "kMean"\n', 1)
+        self.assertIn("log_law", text)
+        with open(wfs, "w", encoding="utf-8") as f:
+            f.write(text)
+        wf_changes = vs.like(wfs, os.path.join(self.tmp, "wf-like.toml"))
+        self.assertTrue(wf_changes[0].startswith("flow.wall_function"), wf_changes)
         self.assertEqual([z.get("collects", False) for z in got["zones"]], [False, False])
         # a waiting trap (collects_after) goes with it
         waits = os.path.join(self.tmp, "waits.toml")
@@ -337,8 +349,10 @@ class LikeForLike(unittest.TestCase):
         with open(os.path.join(self.tmp, "waits-like.toml"), "rb") as f:
             self.assertNotIn("collects_after", tomllib.load(f)["zones"][0])
         self.assertTrue(os.path.isabs(got["flow"]["case"]) and os.path.isdir(got["flow"]["case"]))
-        # everything else as it was: dispersion, walls, feeders, groups
-        for k in ("dispersion", "groups", "feeders", "drag", "gravity", "material", "fluid", "dt", "duration"):
+        # everything else as it was: dispersion fields, walls, feeders, groups
+        self.assertEqual({k: v for k, v in got["dispersion"].items() if k != "model"},
+                         {k: v for k, v in orig["dispersion"].items() if k != "model"})
+        for k in ("groups", "feeders", "drag", "gravity", "material", "fluid", "dt", "duration"):
             self.assertEqual(got[k], orig[k], k)
         self.assertEqual(got["flow"]["patches"], orig["flow"]["patches"])
         sc = vs.read_scene(dest)

@@ -15,8 +15,10 @@ bench/foam.py's helpers (dictionary header, timed run, list reader) are imported
       change): what OpenFOAM's tracker has no model for is switched off in scg too — the
       log-law wall function ([flow.wall_function], scg-only: OpenFOAM interpolates to the
       walls' no-slip values) and collecting zones ([[zones]] collects, a trap OpenFOAM's
-      cloud has not: both then count 1 - escaped/fed) —, cell_point interpolation becomes
-      cell_point_idw (OpenFOAM's cellPoint point values), and flow.case is made absolute
+      cloud has not: both then count 1 - escaped/fed) —, cell_point and conservative
+      interpolation become cell_point_idw (OpenFOAM's cellPoint point values), langevin
+      dispersion becomes stochastic_ras (the eddy model OpenFOAM's tracker has), and
+      flow.case is made absolute
   python3 vs_openfoam.py grade DIR OUT.json
       reads each run's log and patchPostProcessing output and writes grade.json
   python3 vs_openfoam.py summary GRADE.json [PARALLEL.json [CONCURRENT.json]]
@@ -298,10 +300,16 @@ def like(path, dest):
         del flow["wall_function"]
         changes.append(f"flow.wall_function: model {wf.get('model')!r} off (OpenFOAM's tracker "
                        "interpolates to the walls' no-slip values; scg does the same)")
-    if flow.get("kind") == "openfoam" and flow.get("interpolation", "cell_point") == "cell_point":
+    interp = flow.get("interpolation", "cell_point")
+    if flow.get("kind") == "openfoam" and interp in ("cell_point", "conservative"):
         flow["interpolation"] = "cell_point_idw"
-        changes.append("flow.interpolation: cell_point -> cell_point_idw (OpenFOAM's cellPoint: "
+        changes.append(f"flow.interpolation: {interp} -> cell_point_idw (OpenFOAM's cellPoint: "
                        "its inverse-distance point values)")
+    d = s.get("dispersion")
+    if isinstance(d, dict) and d.get("model") == "langevin":
+        d["model"] = "stochastic_ras"
+        changes.append("dispersion.model: langevin -> stochastic_ras (OpenFOAM's "
+                       "stochasticDispersionRAS, the eddy model its tracker has)")
     for i, z in enumerate(s.get("zones", [])):
         if z.get("collects"):
             z["collects"] = False

@@ -21,6 +21,11 @@
 //!   on h/2 → h/4).
 //! * [`Interpolation::CellPointLinearExact`]: the former name of `CellPoint`, kept as an
 //!   alias (the same values).
+//! * [`Interpolation::Conservative`]: a constant velocity per tetrahedron of the same
+//!   decomposition that carries the cell field's face fluxes made divergence-free
+//!   ([`crate::conservative`]): no volume is created or lost, so fluid tracers keep a
+//!   uniform concentration (mean residence V/Q). Needs the outflow patches
+//!   ([`Interpolator::with_outflow`]); first order.
 //!
 //! The point and face-centre values are computed once in [`Interpolator::new`]; a query
 //! reads the cell value and three node values and allocates nothing. The hot path of a
@@ -31,6 +36,7 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
+use crate::conservative::Projection;
 use crate::geometry::{MeshGeometry, face_centre_weights};
 use crate::locate::{Hit, Locator, Probe};
 use crate::shared::Shared;
@@ -50,6 +56,10 @@ pub enum Interpolation {
     CellPointIdw,
     /// The former name of `CellPoint` (linear-exact point values): the same values.
     CellPointLinearExact,
+    /// A divergence-free field, constant on each tetrahedron ([`crate::conservative`]);
+    /// its point values (the gradient, the prior of the tetrahedra's fluxes) are
+    /// `CellPoint`'s.
+    Conservative,
 }
 
 impl Interpolation {
@@ -361,22 +371,40 @@ pub struct Interpolator<'a> {
     scheme: Interpolation,
     cells: Vec<DVec3>,
     nodes: Vec<DVec3>,
+    /// `Conservative`: the velocity of every tetrahedron, and the offset of every entry of
+    /// [`MeshGeometry::cell_faces`] into it (plus one).
+    tets: Vec<DVec3>,
+    tet_offsets: Vec<u32>,
+    projection: Option<Projection>,
 }
 
 impl<'a> Interpolator<'a> {
-    /// Prepare `field` on the locator's mesh for `scheme`.
+    /// Prepare `field` on the locator's mesh for `scheme` (not `Conservative`, which
+    /// needs [`Interpolator::with_outflow`]).
     pub fn new(
         loc: &'a Locator<'a>,
         field: &CellField,
         scheme: Interpolation,
     ) -> Result<Self, MeshError> {
-        Self::from_shared(Shared::Borrowed(loc), field, scheme)
+        Self::from_shared(Shared::Borrowed(loc), field, scheme, None)
+    }
+
+    /// [`Interpolator::new`] for any scheme, `outflow[p]` marking the patches whose face
+    /// fluxes the conservative scheme may change (the outlets; ignored by the others).
+    pub fn with_outflow(
+        loc: &'a Locator<'a>,
+        field: &CellField,
+        scheme: Interpolation,
+        outflow: &[bool],
+    ) -> Result<Self, MeshError> {
+        Self::from_shared(Shared::Borrowed(loc), field, scheme, Some(outflow))
     }
 
     fn from_shared(
         loc: Shared<'a, Locator<'a>>,
         field: &CellField,
         scheme: Interpolation,
+        outflow: Option<&[bool]>,
     ) -> Result<Self, MeshError> {
         let mesh = loc.mesh();
         check_field(mesh, field)?;
@@ -384,7 +412,8 @@ impl<'a> Interpolator<'a> {
             Interpolation::CellValue => Vec::new(),
             Interpolation::CellPointIdw
             | Interpolation::CellPoint
-            | Interpolation::CellPointLinearExact => {
+            | Interpolation::CellPointLinearExact
+            | Interpolation::Conservative => {
                 let mut nodes = if scheme == Interpolation::CellPointIdw {
                     point_values(mesh, loc.geometry(), field)?
                 } else {
@@ -395,12 +424,78 @@ impl<'a> Interpolator<'a> {
                 nodes
             }
         };
+        let (mut tets, mut tet_offsets, mut projection) = (Vec::new(), Vec::new(), None);
+        if scheme == Interpolation::Conservative {
+            let Some(outflow) = outflow else {
+                return Err(MeshError::invalid(
+                    "<field>",
+                    "interpolation",
+                    "the conservative scheme needs the outflow patches \
+                     (Interpolator::with_outflow)",
+                ));
+            };
+            let geom = loc.geometry();
+            let (phi, mut p) = crate::conservative::face_fluxes(mesh, geom, field, outflow)?;
+            let (offsets, vel, unbalanced) = crate::conservative::tet_velocities(
+                mesh,
+                geom,
+                &field.cells,
+                |n| nodes[n as usize],
+                &phi,
+            );
+            p.unbalanced_cells = unbalanced;
+            (tets, tet_offsets, projection) = (vel, offsets, Some(p));
+        }
         Ok(Interpolator {
             loc,
             scheme,
             cells: field.cells.clone(),
             nodes,
+            tets,
+            tet_offsets,
+            projection,
         })
+    }
+
+    /// What the conservative scheme's projection changed (`None` for the other schemes).
+    pub fn projection(&self) -> Option<&Projection> {
+        self.projection.as_ref()
+    }
+
+    /// The conservative scheme's velocity of the `i`-th tetrahedron of cell-face entry `k`
+    /// (an index into [`MeshGeometry::cell_faces`]); `None` for the other schemes or out
+    /// of range.
+    #[inline]
+    pub fn tet_velocity(&self, k: usize, i: usize) -> Option<DVec3> {
+        let start = *self.tet_offsets.get(k)? as usize;
+        let end = *self.tet_offsets.get(k + 1)? as usize;
+        if start + i < end {
+            self.tets.get(start + i).copied()
+        } else {
+            None
+        }
+    }
+
+    /// The conservative scheme's value where the locator found a point: its tetrahedron's.
+    fn tet_value(&self, hit: &Hit) -> Option<DVec3> {
+        let geom = self.loc.geometry();
+        let mesh = self.loc.mesh();
+        let c = hit.cell as usize;
+        let start = *geom.cell_face_offsets.get(c)? as usize;
+        let pos = geom.faces_of(c).iter().position(|&f| f == hit.face)?;
+        let pts = mesh.face(hit.face as usize);
+        let i = if pts.len() == 3 {
+            0
+        } else {
+            // the fan triangle (centre, a, b): a = pts[i] for the owner, b for the neighbour
+            let first = if mesh.owner[hit.face as usize] == hit.cell {
+                hit.nodes[1]
+            } else {
+                hit.nodes[2]
+            };
+            pts.iter().position(|&p| p == first)?
+        };
+        self.tet_velocity(start + pos, i)
     }
 
     /// The locator.
@@ -448,6 +543,7 @@ impl<'a> Interpolator<'a> {
         let c = hit.cell as usize;
         match self.scheme {
             Interpolation::CellValue => self.cells.get(c).copied().unwrap_or(DVec3::NAN),
+            Interpolation::Conservative => self.tet_value(hit).unwrap_or(DVec3::NAN),
             _ => {
                 let [w0, w1, w2, w3] = hit.weights;
                 let node = |k: usize| {
@@ -502,7 +598,17 @@ impl Interpolator<'static> {
         field: &CellField,
         scheme: Interpolation,
     ) -> Result<Self, MeshError> {
-        Self::from_shared(Shared::Owned(loc), field, scheme)
+        Self::from_shared(Shared::Owned(loc), field, scheme, None)
+    }
+
+    /// [`Interpolator::with_outflow`], sharing the ownership of the locator.
+    pub fn owned_with_outflow(
+        loc: Arc<Locator<'static>>,
+        field: &CellField,
+        scheme: Interpolation,
+        outflow: &[bool],
+    ) -> Result<Self, MeshError> {
+        Self::from_shared(Shared::Owned(loc), field, scheme, Some(outflow))
     }
 }
 

@@ -12,7 +12,7 @@
 //! * [`locate`]: [`Locator`]: first location through a bin grid, tracking by walking
 //!   across faces, boundary crossings reported with their patch.
 //! * [`interp`]: [`Interpolator`]: cell value and cell-point interpolation of a
-//!   [`CellField`].
+//!   [`CellField`]; [`conservative`]: its volume-conserving scheme.
 //! * [`table`]: [`CellTable`]: per-cell records of what locating a point in a known cell
 //!   and interpolating there reads (the hot path of particle tracking).
 //! * [`shared`]: [`Shared`]: borrowed or `Arc`-owned; [`Locator::owned`] and
@@ -29,6 +29,7 @@
 //!   `.vtk`, XML `.vtu`) and [`vtk::write_legacy`].
 
 pub mod build;
+pub mod conservative;
 pub mod error;
 pub mod foam;
 pub mod geometry;

@@ -100,6 +100,9 @@ pub struct CellTable {
     simple_next: Vec<u32>,
     /// What is across each of `faces`' faces (see [`BOUNDARY`]; [`NO_CELL`] for padding).
     faces_next: Vec<u32>,
+    /// The conservative scheme: each of `tets`' constant velocity (empty otherwise; then
+    /// no cell is simple).
+    tet_values: Vec<DVec3>,
 }
 
 /// Nothing across (padding records).
@@ -179,7 +182,12 @@ impl CellTable {
             simple: Vec::new(),
             simple_next: Vec::new(),
             faces_next: Vec::with_capacity(n_faces),
+            tet_values: Vec::new(),
         };
+        let conservative = it.scheme() == crate::Interpolation::Conservative;
+        if conservative {
+            t.tet_values.reserve_exact(n_tets);
+        }
         // room for the cells that may be simple (all faces triangles), each on a line
         let tri_faced: usize = (0..nc)
             .map(|c| geom.faces_of(c))
@@ -201,8 +209,10 @@ impl CellTable {
             }
             let (f0, t0) = (t.faces.len(), t.tets.len());
             let mut ok = true;
-            for &f in geom.faces_of(c) {
+            let k0 = geom.cell_face_offsets[c] as usize;
+            for (k, &f) in geom.faces_of(c).iter().enumerate() {
                 let fi = f as usize;
+                let mut fan = 0;
                 let a = geom.face_areas[fi];
                 let den = (geom.face_centres[fi] - cc).dot(a);
                 let q = a / den;
@@ -220,6 +230,11 @@ impl CellTable {
                     let m = [n23 * inv, v[2].cross(v[0]) * inv, v[0].cross(v[1]) * inv];
                     let du = nodes.map(|n| nodev.get(n as usize).map_or(DVec3::ZERO, |&u| u - uc));
                     t.tets.push(TetRec { m, du });
+                    if conservative {
+                        t.tet_values
+                            .push(it.tet_velocity(k0 + k, fan).unwrap_or(DVec3::NAN));
+                    }
+                    fan += 1;
                     true
                 };
                 if pts.len() == 3 {
@@ -254,11 +269,13 @@ impl CellTable {
                 t.faces.truncate(f0);
                 t.faces_next.truncate(f0);
                 t.tets.truncate(t0);
+                t.tet_values.truncate(t0.min(t.tet_values.len()));
             }
             // convex with triangular faces: every point of the cell on the inner side of
             // every face plane, one tetrahedron per face
             let faces = &t.faces[f0..];
             let simple = ok
+                && !conservative
                 && faces.iter().all(|f| f.n_tets == 1)
                 && geom.faces_of(c).iter().all(|&f| {
                     mesh.face(f as usize).len() == 3
@@ -307,6 +324,7 @@ impl CellTable {
         t.faces.shrink_to_fit();
         t.faces_next.shrink_to_fit();
         t.tets.shrink_to_fit();
+        t.tet_values.shrink_to_fit();
         Some(t)
     }
 
@@ -324,6 +342,7 @@ impl CellTable {
             + self.faces.len() * (size_of::<FaceRec>() + size_of::<u32>())
             + self.tets.len() * size_of::<TetRec>()
             + self.simple.len() * (size_of::<SimpleFace>() + size_of::<u32>())
+            + self.tet_values.len() * size_of::<DVec3>()
     }
 
     /// The interpolated value at x when x is in cell `c` (in one of its tetrahedra, up to
@@ -413,7 +432,7 @@ impl CellTable {
         else {
             return Query::Unknown;
         };
-        match Self::in_tets(tets, rec.uc, d) {
+        match self.in_tets(bf.tet as usize, tets, rec.uc, d) {
             Some(Some(u)) => return Query::Inside(u),
             // the ray leaves through the outer triangle of one of this face's tetrahedra:
             // the locator crosses this face too
@@ -426,18 +445,18 @@ impl CellTable {
         let Some(all) = self.tets.get(a as usize..(b.tet + b.n_tets) as usize) else {
             return Query::Unknown;
         };
-        match Self::in_tets(all, rec.uc, d) {
+        match self.in_tets(a as usize, all, rec.uc, d) {
             Some(Some(u)) => Query::Inside(u),
             _ => Query::Unknown,
         }
     }
 
-    /// The tetrahedron of `tets` the ray from the centre along d crosses: `Some(Some(u))`
-    /// when d is inside it, `Some(None)` when beyond its outer triangle, `None` when no
-    /// tetrahedron takes the ray.
+    /// The tetrahedron of `tets` (records from `first` on) the ray from the centre along d
+    /// crosses: `Some(Some(u))` when d is inside it, `Some(None)` when beyond its outer
+    /// triangle, `None` when no tetrahedron takes the ray.
     #[inline(always)]
-    fn in_tets(tets: &[TetRec], uc: DVec3, d: DVec3) -> Option<Option<DVec3>> {
-        for t in tets {
+    fn in_tets(&self, first: usize, tets: &[TetRec], uc: DVec3, d: DVec3) -> Option<Option<DVec3>> {
+        for (i, t) in tets.iter().enumerate() {
             // the two coordinates of the face's edge nodes first: they place the ray in a
             // face-centre fan, and most tetrahedra fail one of them
             let b = t.m[1].dot(d);
@@ -455,6 +474,9 @@ impl CellTable {
             let w = DVec3::new(a, b, c);
             if w.element_sum() > 1.0 + TOL {
                 return Some(None);
+            }
+            if !self.tet_values.is_empty() {
+                return self.tet_values.get(first + i).map(|&u| Some(u));
             }
             return Some(Some(uc + w.x * t.du[0] + w.y * t.du[1] + w.z * t.du[2]));
         }

@@ -307,6 +307,7 @@ pub enum RawInterpolation {
     CellPointIdw,
     CellValue,
     CellPointLinearExact,
+    Conservative,
 }
 
 #[derive(Deserialize, Debug, Clone)]

@@ -138,6 +138,14 @@ impl MeshFlow {
                 format!("{} roles for {} patches", roles.len(), mesh.patches.len()),
             ));
         }
+        if wall.is_some() && scheme == Interpolation::Conservative {
+            return Err(scg_mesh::MeshError::invalid(
+                "<field>",
+                "interpolation",
+                "the conservative interpolation keeps the field's face fluxes; a wall \
+                 function would change them (use one or the other)",
+            ));
+        }
         let geom = MeshGeometry::new(&mesh)?;
         scg_mesh::interp::check_field(&mesh, field)?;
         let is_wall: Vec<bool> = roles.iter().map(|r| *r == PatchRole::Wall).collect();
@@ -158,7 +166,9 @@ impl MeshFlow {
         };
         let field = slip.as_ref().unwrap_or(field);
         let loc = Arc::new(Locator::owned(Arc::new(mesh), Arc::new(geom))?);
-        let interp = Interpolator::owned(Arc::clone(&loc), field, scheme)?;
+        // the conservative scheme's projection takes up the balance at the outlets
+        let outflow: Vec<bool> = roles.iter().map(|r| *r == PatchRole::Outlet).collect();
+        let interp = Interpolator::owned_with_outflow(Arc::clone(&loc), field, scheme, &outflow)?;
         let table = CellTable::new(&interp);
         let (lo, hi) = field
             .cells
@@ -217,6 +227,11 @@ impl MeshFlow {
     /// The interpolation scheme.
     pub fn scheme(&self) -> Interpolation {
         self.interp.scheme()
+    }
+
+    /// What the conservative scheme's projection changed (`None` for the other schemes).
+    pub fn projection(&self) -> Option<&scg_mesh::conservative::Projection> {
+        self.interp.projection()
     }
 
     /// Role of every patch (same order as the mesh's patches).

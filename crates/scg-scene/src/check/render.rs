@@ -176,6 +176,27 @@ fn mesh_flow_lines(
         umin,
         umax
     );
+    if let Some(p) = f.projection() {
+        s.push_str(&format!(
+            "  conservative interpolation: the cell field's face fluxes (linear between cells) were out of balance by Σ_cells |Σ_f φ| = {:.4e} m³/s, {:.4e} after the projection ({} conjugate-gradient iterations); it changed the faces' normal velocity by {:.4e} m/s on average (area-weighted), {:.4e} at most; {:.6e} m³/s in through the fixed-flux patches, {:.6e} out through the outlets (before: {:.6e}){}\n",
+            p.imbalance_before,
+            p.imbalance_after,
+            p.iterations,
+            p.mean_change,
+            p.max_change,
+            p.inflow,
+            p.outflow_after,
+            p.outflow_before,
+            if p.unbalanced_cells > 0 {
+                format!(
+                    "; {} cells with degenerate tetrahedra keep their cell value (not conservative there)",
+                    p.unbalanced_cells
+                )
+            } else {
+                String::new()
+            }
+        ));
+    }
     use scg_core::physics::mesh_flow::PatchInteraction;
     for (i, (p, role)) in mesh.patches.iter().zip(f.roles()).enumerate() {
         let model = models.get(i);

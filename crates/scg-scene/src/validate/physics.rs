@@ -197,6 +197,7 @@ pub(super) fn mesh_flow(
         Some(RawInterpolation::CellValue) => Interpolation::CellValue,
         // the former name of the default
         Some(RawInterpolation::CellPointLinearExact) => Interpolation::CellPoint,
+        Some(RawInterpolation::Conservative) => Interpolation::Conservative,
     };
     let scale = cx.positive("flow.scale", f.scale.unwrap_or(1.0))?;
     let sort_every = match f.sort_every {
@@ -294,6 +295,14 @@ pub(super) fn mesh_flow(
         None => None,
         Some(w) => wall_function(w, fluid, &mesh, &reader, cx)?,
     };
+    if wall.is_some() && scheme == Interpolation::Conservative {
+        return Err(cx.err(
+            "flow.wall_function",
+            "cannot be combined with interpolation = \"conservative\": the log law would \
+             change the face fluxes the conservative field keeps (its wall tetrahedra slide \
+             along the wall already); remove one",
+        ));
+    }
     let (moving, rotors) = match &reader {
         FieldReader::Foam { case, .. } => {
             super::mrf::rotor_faces(case, &mesh, &mut cells, rotors, cx)?
