@@ -164,16 +164,22 @@ fn markdown_needs_a_finished_study() {
 }
 
 /// Issue 37: in the committed cyclone study the sampling controls (originals at the
-/// coarse-grained counts) agree with the originals in every class within the intervals,
-/// and without SCG most classes do not (the test can tell them apart).
+/// coarse-grained counts), SCG and the parcel law agree with the originals within the
+/// intervals — at most one class of ten beyond them per variant, as 95 % intervals allow
+/// over 40 comparisons (sample2's 3 µm: 1 of 250 collected against 1.8 % of 2000, a 6 %
+/// tail) — and without SCG most classes do not (the test can tell them apart).
 #[test]
 fn the_cyclone_sampling_controls_agree_within_the_intervals() {
     let runs =
         scg::cli::study::cyclone::read_study(&common::repo("docs/data/cyclone-study")).unwrap();
     let by = |n: &str| runs.iter().find(|r| r.name == n).unwrap();
     let o = by("original");
+    let mut out = 0;
     for v in ["sample2", "sample4", "scg2", "parcel2"] {
-        assert_eq!(scg::cli::study::cyclone::classes_beyond(o, by(v)), 0, "{v}");
+        let k = scg::cli::study::cyclone::classes_beyond(o, by(v));
+        assert!(k <= 1, "{v}: {k} classes beyond");
+        out += k;
     }
+    assert!(out <= 2, "{out} of 40 beyond");
     assert!(scg::cli::study::cyclone::classes_beyond(o, by("none2")) >= 5);
 }

@@ -1,24 +1,27 @@
 #!/usr/bin/env bash
-# The cyclone's grade efficiency with and without what a RANS cyclone needs next to its
-# walls: the wall function (the log law below the wall cells' centres) and turbulent
-# dispersion (OpenFOAM's stochastic eddy model, or the drift-corrected Langevin walk),
-# and the interpolation switch. Writes each variant of cases/cyclone.toml into --out,
-# runs it for 6 s, prints η = collected/fed per class (the scene's `dust_outlet` zone)
-# with Wilson's 95 % interval, and 1 − escaped/fed and the undecided share beside it.
+# The cyclone's grade efficiency under what decides it next to the walls and in the air:
+# the interpolation (the scene's volume-conserving `conservative`, `cell_point` with or
+# without the CFD's log law at the walls, `cell_value`), the turbulent dispersion (the
+# scene's drift-corrected Langevin walk, OpenFOAM's stochastic eddy model, none), the wall
+# rebound, and the dust-outlet trap's wait. Writes each variant of cases/cyclone.toml into
+# --out, runs it for 6 s, prints η = collected/fed per class (the scene's `dust_outlet`
+# zone) with Wilson's 95 % interval, and 1 − escaped/fed and the undecided share beside it.
 #
 #   bash cases/cyclone/near-wall.sh [--out DIR] [--feed-scale F] [--only NAMES] [--case DIR]
 #
 #   --case DIR  another build of the field (e.g. build.sh --full --layers 3 --out DIR)
 #               instead of the committed cases/cyclone/coarse
 #
-# Variants (the scene has the wall function and stochastic_ras dispersion):
-#   nowall      the no-slip ramp, no dispersion (the scene before the wall function)
-#   nodisp      the wall function, no dispersion
-#   eddy        the scene as committed (stochastic_ras)
-#   langevin    dispersion by the drift-corrected Langevin walk
-#   eddy_cv     the scene with interpolation = cell_value
+# Variants (the scene: conservative, langevin, rebound e = 0.5 without friction, a trap
+# that waits 0.1 s):
+#   scene       the scene as committed
+#   eddy        dispersion by the stochastic eddy model (stochastic_ras)
+#   nodisp      no dispersion
+#   cell_point  interpolation = cell_point (ramps to the no-slip walls)
+#   wallfn      cell_point with the CFD's log law at the walls ([flow.wall_function])
+#   cell_value  interpolation = cell_value
+#   entry       the trap collects on entry (no wait)
 #   e09, mu02, mu05, e09_mu05   the wall rebound: restitution 0.9 and/or friction 0.2, 0.5
-#               (the scene: e = 0.5, no friction)
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
@@ -32,7 +35,7 @@ while [ $# -gt 0 ]; do
     --feed-scale) feed="$2"; shift 2 ;;
     --only) only="$2"; shift 2 ;;
     --case) case_dir="$(cd "$2" && pwd)"; shift 2 ;;
-    -h|--help) sed -n 2,21p "$0"; exit 0 ;;
+    -h|--help) sed -n 2,24p "$0"; exit 0 ;;
     *) echo "near-wall.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
@@ -45,22 +48,26 @@ root, out, case = sys.argv[1], sys.argv[2], sys.argv[3]
 src = open(f"{root}/cases/cyclone.toml").read()
 assert 'case = "cyclone/coarse"' in src, "cases/cyclone.toml: no case = \"cyclone/coarse\""
 src = src.replace('case = "cyclone/coarse"', f'case = "{case}"')
-wall = '[flow.wall_function]\nmodel = "log_law"\nk = "kMean"\n'
-assert wall in src, "cases/cyclone.toml has no [flow.wall_function]"
-disp = '[dispersion]\nmodel = "stochastic_ras"\n'
+interp = 'interpolation = "conservative"'
+assert interp in src, "cases/cyclone.toml: no interpolation = \"conservative\""
+line = next(l for l in src.splitlines() if l.startswith(interp))
+disp = '[dispersion]\nmodel = "langevin"\n'
 block = disp + 'k = "kMean"\nomega = "omegaMean"\n'
-assert block in src, "cases/cyclone.toml has no stochastic_ras [dispersion] on kMean, omegaMean"
-nodisp = src.replace(block, "")
+assert block in src, "cases/cyclone.toml has no langevin [dispersion] on kMean, omegaMean"
+wait = "collects_after = 0.1"
+assert wait in src, "cases/cyclone.toml: no collects_after = 0.1"
 rebound = 'wall_model = "rebound"'
 def walls(e=None, mu=None):
     extra = (f"\nrestitution = {e}" if e else "") + (f"\nfriction = {mu}" if mu else "")
     return src.replace(rebound, rebound + extra, 1)
 v = {
-    "nowall": nodisp.replace(wall, '[flow.wall_function]\nmodel = "none"\n'),
-    "nodisp": nodisp,
-    "eddy": src,
-    "langevin": src.replace(disp, '[dispersion]\nmodel = "langevin"\n'),
-    "eddy_cv": src.replace('field = "UMean"', 'field = "UMean"\ninterpolation = "cell_value"', 1),
+    "scene": src,
+    "eddy": src.replace(disp, '[dispersion]\nmodel = "stochastic_ras"\n'),
+    "nodisp": src.replace(block, ""),
+    "cell_point": src.replace(line, 'interpolation = "cell_point"'),
+    "wallfn": src.replace(line, 'interpolation = "cell_point"\n\n[flow.wall_function]\nmodel = "log_law"\nk = "kMean"'),
+    "cell_value": src.replace(line, 'interpolation = "cell_value"'),
+    "entry": src.replace(wait, ""),
     "e09": walls(e=0.9),
     "mu02": walls(mu=0.2),
     "mu05": walls(mu=0.5),
@@ -69,7 +76,7 @@ v = {
 for k, s in v.items():
     open(f"{out}/{k}.toml", "w").write(s)
 PY
-names="nowall nodisp eddy langevin eddy_cv e09 mu02 mu05 e09_mu05"
+names="scene eddy nodisp cell_point wallfn cell_value entry e09 mu02 mu05 e09_mu05"
 [ -n "$only" ] && names="${only//,/ }"
 for k in $names; do
   [ -f "$out/$k.toml" ] || { echo "near-wall.sh: unknown variant $k" >&2; exit 2; }

@@ -315,9 +315,18 @@ class LikeForLike(unittest.TestCase):
         # the committed scene as is: refused, naming the key
         with self.assertRaises(vs.SceneError) as e:
             vs.read_scene(src)
-        self.assertIn("flow.interpolation", str(e.exception))
+        self.assertIn("zones.0.collects", str(e.exception))
         dest = os.path.join(self.tmp, "scene.toml")
         changes = vs.like(src, dest)
+        # the conservative interpolation alone is refused too
+        cons = os.path.join(self.tmp, "cons.toml")
+        with open(dest, encoding="utf-8") as f:
+            text = f.read().replace('interpolation = "cell_point_idw"', 'interpolation = "conservative"')
+        with open(cons, "w", encoding="utf-8") as f:
+            f.write(text)
+        with self.assertRaises(vs.SceneError) as e:
+            vs.read_scene(cons)
+        self.assertIn("flow.interpolation", str(e.exception))
         self.assertEqual(len(changes), 3, changes)
         self.assertTrue(changes[0].startswith("flow.interpolation: conservative -> cell_point_idw"), changes)
         self.assertTrue(changes[1].startswith("dispersion.model: langevin -> stochastic_ras"), changes)
@@ -330,24 +339,18 @@ class LikeForLike(unittest.TestCase):
         # a wall function goes too
         wfs = os.path.join(self.tmp, "wf.toml")
         with open(src, encoding="utf-8") as f:
-            text = f.read().replace('interpolation = "conservative"\n',
-                                    '[flow.wall_function]\nmodel = "log_law"\nk = "kMean"\n', 1)
+            text = f.read().replace('interpolation = "conservative"',
+                                    'interpolation = "cell_point"\n[flow.wall_function]\n'
+                                    'model = "log_law"\nk = "kMean"\n#', 1)
         self.assertIn("log_law", text)
         with open(wfs, "w", encoding="utf-8") as f:
             f.write(text)
         wf_changes = vs.like(wfs, os.path.join(self.tmp, "wf-like.toml"))
         self.assertTrue(wf_changes[0].startswith("flow.wall_function"), wf_changes)
         self.assertEqual([z.get("collects", False) for z in got["zones"]], [False, False])
-        # a waiting trap (collects_after) goes with it
-        waits = os.path.join(self.tmp, "waits.toml")
-        with open(src, encoding="utf-8") as f:
-            text = f.read().replace("collects = true\n", "collects = true\ncollects_after = 0.2\n", 1)
-        self.assertIn("collects_after", text)
-        with open(waits, "w", encoding="utf-8") as f:
-            f.write(text)
-        vs.like(waits, os.path.join(self.tmp, "waits-like.toml"))
-        with open(os.path.join(self.tmp, "waits-like.toml"), "rb") as f:
-            self.assertNotIn("collects_after", tomllib.load(f)["zones"][0])
+        # the scene's waiting trap (collects_after) goes with it
+        self.assertIn("collects_after", orig["zones"][0])
+        self.assertNotIn("collects_after", got["zones"][0])
         self.assertTrue(os.path.isabs(got["flow"]["case"]) and os.path.isdir(got["flow"]["case"]))
         # everything else as it was: dispersion fields, walls, feeders, groups
         self.assertEqual({k: v for k, v in got["dispersion"].items() if k != "model"},

@@ -10,7 +10,8 @@
 //!
 //! 1. **Face fluxes** ([`face_fluxes`]): φ_f = u_f·A_f with u_f linear between the two
 //!    cells' values on an internal face (as OpenFOAM's `linear` interpolation of U), the
-//!    field's boundary value on a boundary face.
+//!    field's boundary value on a boundary face, zero on constraint patches (`empty`,
+//!    `symmetry`, `symmetryPlane`, `wedge`).
 //! 2. **Projection**: the smallest correction that balances every cell, φ_f − a_f·(p_N −
 //!    p_P) with a_f = |A_f|²/(A_f·d_PN) (OpenFOAM's `snGrad` coefficient), p from the
 //!    Laplace equation Σ_f a_f (p_P − p_Q) = −Σ_f φ_f solved by conjugate gradients. The
@@ -89,9 +90,18 @@ pub fn face_fluxes(
     let mut outflow_before = 0.0;
     for (pi, p) in mesh.patches.iter().enumerate() {
         let vals = field.patches[pi].as_ref();
+        // constraint patches carry nothing through (a 2-D case's front and back, mirrors)
+        let closed = matches!(
+            p.kind.as_str(),
+            "empty" | "symmetry" | "symmetryPlane" | "wedge"
+        );
         for (i, f) in (p.start..p.start + p.size).enumerate() {
             let u = vals.map_or(field.cells[mesh.owner[f] as usize], |v| v[i]);
-            phi[f] = u.dot(geom.face_areas[f]);
+            phi[f] = if closed && !outflow[pi] {
+                0.0
+            } else {
+                u.dot(geom.face_areas[f])
+            };
             free[f] = outflow[pi];
             if outflow[pi] {
                 outflow_before += phi[f];
@@ -100,7 +110,7 @@ pub fn face_fluxes(
             }
         }
     }
-    for f in 0..ni {
+    for (f, q) in phi.iter_mut().enumerate().take(ni) {
         let (o, n) = (mesh.owner[f] as usize, mesh.neighbour[f] as usize);
         let xf = geom.face_centres[f];
         let (dof, dnf) = (
@@ -109,7 +119,7 @@ pub fn face_fluxes(
         );
         let w = dnf / (dof + dnf);
         let uf = field.cells[o] * w + field.cells[n] * (1.0 - w);
-        phi[f] = uf.dot(geom.face_areas[f]);
+        *q = uf.dot(geom.face_areas[f]);
     }
     let div = divergence(mesh, &phi);
     let imbalance_before = div.iter().map(|d| d.abs()).sum();
@@ -125,8 +135,8 @@ pub fn face_fluxes(
         }
     };
     let mut a = vec![0.0; nf];
-    for f in 0..ni {
-        a[f] = coeff(f, geom.cell_centres[mesh.neighbour[f] as usize]);
+    for (f, af) in a.iter_mut().enumerate().take(ni) {
+        *af = coeff(f, geom.cell_centres[mesh.neighbour[f] as usize]);
     }
     let any_free = free.iter().any(|&x| x);
     for f in ni..nf {
@@ -216,10 +226,10 @@ fn solve_laplacian(mesh: &PolyMesh, a: &[f64], rhs: &[f64], pin: bool) -> (Vec<f
         for (c, yc) in y.iter_mut().enumerate() {
             *yc = diag[c] * x[c];
         }
-        for f in 0..ni {
+        for (f, &af) in a.iter().enumerate().take(ni) {
             let (o, n) = (mesh.owner[f] as usize, mesh.neighbour[f] as usize);
-            y[o] -= a[f] * x[n];
-            y[n] -= a[f] * x[o];
+            y[o] -= af * x[n];
+            y[n] -= af * x[o];
         }
         if pin {
             y[0] = x[0];
@@ -342,7 +352,7 @@ pub fn tet_velocities(
     let mut vel = Vec::with_capacity(tri_flux.len() * 2);
     let mut unbalanced = 0;
     let mut cell = CellTets::default();
-    for c in 0..mesh.n_cells {
+    for (c, &uc) in cells.iter().enumerate().take(mesh.n_cells) {
         let cc = geom.cell_centres[c];
         cell.clear();
         for &f in geom.faces_of(c) {
@@ -367,10 +377,10 @@ pub fn tet_velocities(
                 }
             }
         }
-        if !cell.solve(cc, cells[c], &node, &node_value) {
+        if !cell.solve(cc, uc, &node, &node_value) {
             unbalanced += 1;
             cell.velocity.clear();
-            cell.velocity.resize(cell.tets.len(), cells[c]);
+            cell.velocity.resize(cell.tets.len(), uc);
         }
         vel.extend_from_slice(&cell.velocity);
     }
