@@ -210,14 +210,15 @@ fn an_mrf_case_moves_the_faces_of_its_rotor() {
 }
 
 /// A reduced run of the originals (200 per class, the scene's 1 s): the fine classes pass
-/// the wheel, the coarse ones do not, and the cut lies between the smallest equilibrium
-/// cut on the particles' way in (the wheel's inner vortex at the fines outlet, 3.5 µm) and
-/// the equilibrium cut at the wheel radius with the field's own v_r and u_θ (4.65 µm):
-/// the particles between the two pass the blades and then orbit in the inner vortex until
-/// the turbulence carries them out (the full study: 4.25 µm; the held 4.5 µm particles'
-/// median radius 25 mm).
+/// the wheel, the coarse ones do not, and the cut lies above the equilibrium cut at the
+/// wheel radius with the field's own v_r and u_θ (4.8 µm) — the turbulence carries
+/// particles across their equilibrium radius — and below the largest equilibrium cut
+/// inside the blades (7.1 µm at 35.5 mm). With OpenFOAM's eddy model instead, which holds
+/// particles where k is low (the inner vortex: the tracers overstay 1.09·V/Q), the cut
+/// falls below the equilibrium cut: the dispersion model decides where, the test shows
+/// both (the full study: 5.53 µm with the Langevin walk, 4.25 µm with the eddy model).
 #[test]
-fn the_wheel_cuts_between_the_equilibrium_cuts_of_its_field() {
+fn the_wheel_cut_and_the_dispersion_model() {
     let text = scg::cli::study::case_scene(wheel::WHEEL, "wheel/coarse").unwrap();
     let o = wheel::variant_overrides("original", 1.0, "scg", 0.4, 1.0);
     let theory = wheel::theory(&text, &o).unwrap();
@@ -231,55 +232,68 @@ fn the_wheel_cuts_between_the_equilibrium_cuts_of_its_field() {
         r_c * 1e3
     );
     assert!(r_c < 0.03, "the smallest cut is in the inner vortex: {r_c}");
-    // the CFD's own inflow: 0.5 m/s over the inlet circle, 2π·0.1·0.01 m²
+    // the CFD's own inflow: 0.5 m/s over the inlet circle, 2π·0.1·0.01 m², carried by the
+    // conservative field at the wheel radius too
+    let nominal = 0.5 * 0.1 / 0.05;
     assert!((theory.inflow.0 / (std::f64::consts::TAU * 0.1 * 0.01 * 0.5) - 1.0).abs() < 1e-3);
-    let run = wheel::run_variant("original", &text, &o, 1.0, None).unwrap();
-    print!(
-        "{}",
-        wheel::report(std::slice::from_ref(&run), &theory, None)
-    );
-    let c = &run.run.classes;
-    assert!(c[0].escaped as f64 >= 0.98 * c[0].fed as f64, "2 µm");
-    assert_eq!(c.last().unwrap().escaped, 0, "8 µm");
-    let (cut, _) = wheel::report::cut(&run);
-    let cut = cut.expect("a cut");
+    assert!((theory.v_r / nominal - 1.0).abs() < 0.01, "v_r {}", theory.v_r);
+    let cut_of = |o: &[String]| {
+        let run = wheel::run_variant("original", &text, o, 1.0, None).unwrap();
+        print!(
+            "{}",
+            wheel::report(std::slice::from_ref(&run), &theory, None)
+        );
+        let c = &run.run.classes;
+        assert!(c[0].escaped as f64 >= 0.98 * c[0].fed as f64, "2 µm");
+        assert_eq!(c.last().unwrap().escaped, 0, "8 µm");
+        wheel::report::cut(&run).0.expect("a cut")
+    };
+    let cut = cut_of(&o);
     assert!(
-        d_c < cut && cut < theory.d50_field,
-        "cut {cut} outside [{d_c}, {}]",
+        theory.d50_field < cut && cut < 1.25 * theory.d50_field,
+        "cut {cut} outside [{}, 1.25×]",
         theory.d50_field
     );
-    // the held 4.5 µm particles orbit inside the blades' inner edge
-    let k = c
-        .iter()
-        .position(|c| (c.diameter - 4.5e-6).abs() < 1e-12)
-        .unwrap();
-    let r = run.held_radius[k].expect("4.5 µm particles held");
-    assert!(r < 0.035, "{r}");
+    let mut eddy = o.clone();
+    eddy.push("dispersion.model=\"stochastic_ras\"".into());
+    let cut_eddy = cut_of(&eddy);
+    assert!(
+        d_c < cut_eddy && cut_eddy < theory.d50_field,
+        "eddy cut {cut_eddy} outside [{d_c}, {}]",
+        theory.d50_field
+    );
 }
 
-/// Fluid tracers fed over the inlet with the scene's models (dispersion, the guide-vane
-/// ring, the blades) leave through the fines outlet within 5·V/Q.
+/// Fluid tracers fed over the inlet with the scene's models (the conservative field, the
+/// Langevin walk, the guide-vane ring, the blades) leave through the fines outlet within
+/// 5·V/Q, with a mean residence of V/Q within 5 % (1600 tracers).
 #[test]
 fn tracers_leave_the_wheel() {
     let text = scg::cli::study::case_scene(wheel::WHEEL, "wheel/coarse").unwrap();
-    let t = scg::cli::study::cyclone::run_tracers(&text, &[], 2.0e4).unwrap();
+    let t = scg::cli::study::cyclone::run_tracers(&text, &[], 8.0e4).unwrap();
     println!("{}", t.text());
-    assert!(t.fed >= 300);
+    assert!(t.fed >= 1500);
     assert!(t.leave(), "{}", t.text());
+    assert!((t.ratio() - 1.0).abs() <= 0.05, "{}", t.text());
 }
 
 /// The committed full study (`scg study wheel`, docs/data/wheel-study): SCG at α = 2 and
 /// the parcel law within the originals' intervals in every class, as is sampling at α = 2;
-/// at α = 4 (78 per class) SCG and sampling alike at most one class out; the
-/// unchanged-density law far out; every cut but that law's within 0.1 µm of the
-/// originals', which lies between the field's equilibrium cuts.
+/// at α = 4 (78 per class) at most two classes of eight out (SCG 2, sampling 0: about what
+/// 95 % intervals give over 16 comparisons); the unchanged-density law far out; every cut
+/// but that law's within 0.1 µm of the originals', which lies above the field's
+/// equilibrium cut at the wheel radius and within 1.25× it.
 #[test]
 fn the_committed_study_keeps_scg_and_separates_none() {
     let s = wheel::read_summary(&common::repo("docs/data/wheel-study")).unwrap();
     let o = &s.variants[0];
     let cut0 = wheel::report::cut(o).0.unwrap();
     let (_, d_c) = s.theory.critical().unwrap();
-    assert!(d_c < cut0 && cut0 < s.theory.d50_field, "{cut0}");
+    assert!(d_c < s.theory.d50_field, "{d_c}");
+    assert!(
+        s.theory.d50_field < cut0 && cut0 < 1.25 * s.theory.d50_field,
+        "{cut0}"
+    );
     for v in &s.variants[1..] {
         let (ok, line) = wheel::report::verdict(o, v);
         println!("{line}");
@@ -297,7 +311,7 @@ fn the_committed_study_keeps_scg_and_separates_none() {
             .count();
         match v.run.name.as_str() {
             "scg2" | "parcel2" | "sample2" => assert!(ok, "{line}"),
-            "scg4" | "sample4" => assert!(out <= 1, "{line}"),
+            "scg4" | "sample4" => assert!(out <= 2, "{line}"),
             // the frozen rotor: the same field, the blades held still; its cut beside the
             // SRF's (docs: where it differs)
             "frozen-rotor" => {}

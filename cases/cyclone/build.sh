@@ -22,7 +22,17 @@
 #   --average-from  first iteration of the averages UMean, kMean, omegaMean (default: half
 #                 the iterations)
 #   --np          processes for simpleFoam (1 = serial)
+#   --model M     the RAS model: kOmegaSST (default), or a Reynolds-stress model that holds
+#                 a cyclone's swirl better, LRR or SSG (R and epsilon solved, wall
+#                 functions kqRWallFunction / epsilonWallFunction, relaxation 0.5; the
+#                 export then carries RMean, epsilonMean and kMean (the average of
+#                 k = tr(R)/2) instead of omega: [dispersion] k = "kMean",
+#                 epsilon = "epsilonMean")
 #   --keep        keep the OpenFOAM working directory (printed) instead of deleting it
+#
+# The summary (summary.txt) ends with the pressure drop: the static and total pressure
+# (p, p + |U|²/2, averaged over the same iterations as U) area-averaged over the inlet and
+# the outlet, and their differences in Pa (ρ = 1.2 kg/m³).
 #
 # Steps: install OpenFOAM (Debian's openfoam + openfoam-examples) with apt if missing;
 # copy the tutorial's geometry (resources/geometry/cyclone.stl.gz), blockMeshDict and
@@ -45,6 +55,7 @@ average_from=""
 np=""
 layers=0
 keep=0
+model=kOmegaSST
 while [ $# -gt 0 ]; do
     case "$1" in
         --coarse) variant=coarse ;;
@@ -55,11 +66,16 @@ while [ $# -gt 0 ]; do
         --layers) layers="$2"; shift ;;
         --average-from) average_from="$2"; shift ;;
         --keep) keep=1 ;;
+        --model) model="$2"; shift ;;
         -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
         *) echo "build.sh: unknown argument $1" >&2; exit 2 ;;
     esac
     shift
 done
+case "$model" in
+    kOmegaSST|LRR|SSG) ;;
+    *) echo "build.sh: --model $model: kOmegaSST, LRR or SSG" >&2; exit 2 ;;
+esac
 if [ "$variant" = coarse ]; then
     blocks="33 33 63"; : "${iterations:=800}"; : "${np:=1}"
 else
@@ -115,6 +131,63 @@ PY
     echo "== $layers inflation layers on walls"
 fi
 sed -i -e "s/ITERATIONS/$iterations/g" -e "s/AVERAGE_START/$average_from/" "$work/system/controlDict"
+if [ "$model" != kOmegaSST ]; then
+    # a Reynolds-stress model: R and epsilon instead of k and omega
+    python3 - "$work" "$model" <<'PY'
+import re, sys
+work, model = sys.argv[1], sys.argv[2]
+def edit(path, subs):
+    s = open(path).read()
+    for pat, rep in subs:
+        s, k = re.subn(pat, rep, s, count=1)
+        if k != 1:
+            sys.exit(f"build.sh: {path}: no match for {pat}")
+    open(path, "w").write(s)
+edit(f"{work}/constant/turbulenceProperties", [(r"RASModel\s+kOmegaSST;", f"RASModel        {model};")])
+edit(f"{work}/system/fvSchemes", [
+    (r"div\(phi,omega\)[^;]*;", "div(phi,R)      bounded Gauss upwind;\n    div(phi,epsilon) bounded Gauss upwind;\n    div(R)          Gauss linear;"),
+    (r"grad\(omega\)[^;]*;", "grad(epsilon)   cellLimited Gauss linear 1;"),
+])
+edit(f"{work}/system/fvSolution", [
+    (r'"\(U\|k\|omega\)"', '"(U|R|epsilon)"'),
+    (r'"\(k\|omega\)"\s+1e-5;', '"(R|epsilon)"   1e-5;'),
+    (r"U\s+0\.7;", "U               0.5;"),
+    (r'"\.\*"\s+0\.7;', '".*"            0.5;'),
+    (r"p\s+0\.3;", "p               0.2;"),
+])
+# averages of R and epsilon, and k = tr(R)/2 registered each iteration to average it
+edit(f"{work}/system/controlDict", [
+    (r"k \{ mean on; prime2Mean off; base iteration; \}\s*omega \{ mean on; prime2Mean off; base iteration; \}",
+     "R { mean on; prime2Mean off; base iteration; }\n            epsilon { mean on; prime2Mean off; base iteration; }\n            \"turbulenceProperties:k\" { mean on; prime2Mean off; base iteration; }"),
+    (r"    iterationAverage\n", "    kOfR\n    {\n        type            turbulenceFields;\n        libs            (\"libfieldFunctionObjects.so\");\n        executeControl  timeStep;\n        writeControl    writeTime;\n        fields          (k);\n    }\n    iterationAverage\n"),
+])
+k = 0.375
+eps = 0.09 * k * 60.0
+r = 2.0 * k / 3.0
+head = "FoamFile {{ version 2.0; format ascii; class {c}; object {o}; }}\n"
+open(f"{work}/0/R", "w").write(head.format(c="volSymmTensorField", o="R") + f"""
+dimensions      [0 2 -2 0 0 0 0];
+internalField   uniform ({r} 0 0 {r} 0 {r});
+boundaryField
+{{
+    inlet   {{ type fixedValue; value uniform ({r} 0 0 {r} 0 {r}); }}
+    outlet  {{ type inletOutlet; inletValue uniform ({r} 0 0 {r} 0 {r}); value uniform ({r} 0 0 {r} 0 {r}); }}
+    walls   {{ type kqRWallFunction; value uniform ({r} 0 0 {r} 0 {r}); }}
+}}
+""")
+open(f"{work}/0/epsilon", "w").write(head.format(c="volScalarField", o="epsilon") + f"""
+dimensions      [0 2 -3 0 0 0 0];
+internalField   uniform {eps};
+boundaryField
+{{
+    inlet   {{ type fixedValue; value uniform {eps}; }}
+    outlet  {{ type inletOutlet; inletValue uniform {eps}; value uniform {eps}; }}
+    walls   {{ type epsilonWallFunction; value uniform {eps}; }}
+}}
+""")
+PY
+    echo "== RAS model $model (R, epsilon)"
+fi
 cat > "$work/system/decomposeParDict" <<DICT
 FoamFile { version 2.0; format ascii; class dictionary; object decomposeParDict; }
 numberOfSubdomains $np;
@@ -132,7 +205,7 @@ grep -q "Mesh OK." log.checkMesh || { echo "build.sh: checkMesh failed:" >&2; gr
 cells=$(awk '/^ *cells:/ {print $2; exit}' log.checkMesh)
 grep -E "^ *(points|faces|cells):|non-orthogonality Max|Max skewness|Max aspect ratio" log.checkMesh | sed 's/^ */   /'
 
-echo "== simpleFoam, k-omega SST, $iterations iterations max, $np process(es)"
+echo "== simpleFoam, $model, $iterations iterations max, $np process(es)"
 if [ "$np" -gt 1 ]; then
     step decomposePar decomposePar
     mpi_root=""; [ "$(id -u)" -eq 0 ] && mpi_root=--allow-run-as-root   # containers, CI
@@ -143,14 +216,19 @@ else
 fi
 final=$(ls -d [0-9]* | sort -g | tail -1)
 [ -n "$final" ] && [ "$final" != 0 ] && [ -f "$final/U" ] && [ -f "$final/UMean" ] || { echo "build.sh: no final U written" >&2; trap - EXIT; exit 1; }
-for f in k omega nut kMean omegaMean; do
+if [ "$model" = kOmegaSST ]; then turb="k omega nut kMean omegaMean"; else turb="R epsilon nut RMean epsilonMean turbulenceProperties:kMean"; fi
+for f in $turb; do
     [ -f "$final/$f" ] || { echo "build.sh: no final $f written" >&2; trap - EXIT; exit 1; }
 done
+if [ "$model" != kOmegaSST ]; then
+    # the average of k = tr(R)/2 under the name scg's scenes use
+    mv "$final/turbulenceProperties:kMean" "$final/kMean"
+fi
 # the last iteration's initial residuals and the inlet/outlet volume flows
 summary="$work/summary.txt"
 {
     echo "variant: $variant; blocks ($blocks); inflation layers: $layers; cells: $cells; processes: $np"
-    echo "turbulence: RAS kOmegaSST, steady (simpleFoam, SIMPLEC), nu = 1.5e-5 m^2/s, inlet U = (-10 0 0) m/s"
+    echo "turbulence: RAS $model, steady (simpleFoam, SIMPLEC), nu = 1.5e-5 m^2/s, inlet U = (-10 0 0) m/s"
     if [ "$layers" -gt 0 ]; then
         echo "layers added by snappyHexMesh (log.snappyHexMesh):"
         grep -A5 -E "^patch +faces +layers" log.snappyHexMesh | tail -6 | sed 's/^/   /'
@@ -159,7 +237,8 @@ summary="$work/summary.txt"
     if grep -q "reached convergence" log.simpleFoam; then grep "reached convergence" log.simpleFoam; fi
     echo "UMean, kMean, omegaMean: U, k, omega averaged over iterations $average_from..$final"
     echo "initial residuals (first solve of each iteration): last; min..max over the averaged iterations"
-    for f in Ux Uy Uz p k omega; do
+    if [ "$model" = kOmegaSST ]; then solved="Ux Uy Uz p k omega"; else solved="Ux Uy Uz p Rxx epsilon"; fi
+    for f in $solved; do
         awk -v f="$f" -v a="$average_from" '
             /^Time = / { t = $3; seen = 0 }
             $0 ~ ("Solving for " f ",") && !seen {
@@ -172,6 +251,14 @@ summary="$work/summary.txt"
     echo "continuity (last): $(grep 'continuity errors' log.simpleFoam | tail -1 | sed 's/^ *//')"
     echo "volume flow at the last iteration, sum(phi), m^3/s: inlet $(tail -1 postProcessing/inletFlow/0/surfaceFieldValue.dat | awk '{print $2}')," \
          "outlet $(tail -1 postProcessing/outletFlow/0/surfaceFieldValue.dat | awk '{print $2}')"
+    # the pressure drop: the averaged static (kinematic) and total (Pa) pressures over the
+    # inlet and the outlet (surfaceFieldValue areaAverage at the final time)
+    pin=$(grep -v '^#' postProcessing/inletPressure/*/surfaceFieldValue.dat | tail -1)
+    pout=$(grep -v '^#' postProcessing/outletPressure/*/surfaceFieldValue.dat | tail -1)
+    echo "pressure, area-averaged over the patch (averaged fields): inlet p $(echo "$pin" | awk '{printf "%.4g", 1.2 * $2}') Pa, p_t $(echo "$pin" | awk '{printf "%.4g", $3}') Pa;" \
+         "outlet p $(echo "$pout" | awk '{printf "%.4g", 1.2 * $2}') Pa, p_t $(echo "$pout" | awk '{printf "%.4g", $3}') Pa"
+    echo "pressure drop inlet to outlet: static $(awk -v a="$pin" -v b="$pout" 'BEGIN { split(a, x); split(b, y); printf "%.1f", 1.2 * (x[2] - y[2]) }') Pa," \
+         "total $(awk -v a="$pin" -v b="$pout" 'BEGIN { split(a, x); split(b, y); printf "%.1f", x[3] - y[3] }') Pa"
     echo "wall times (s):"
     cat timings
     echo "load: $(uptime | sed 's/.*load/load/')"
@@ -179,7 +266,7 @@ summary="$work/summary.txt"
 cat "$summary"
 
 # --- the case scg reads ---------------------------------------------------------------
-foam_export "$out" "$final" "U UMean k omega nut kMean omegaMean" \
+foam_export "$out" "$final" "U UMean p pMean k omega nut kMean omegaMean R RMean epsilon epsilonMean" \
     controlDict fvSchemes fvSolution blockMeshDict snappyHexMeshDict
 mkdir -p "$out/constant/triSurface"
 cp "$stl" "$out/constant/triSurface/"   # for [[walls]] kind = "mesh" (scg reads .stl.gz)

@@ -141,6 +141,37 @@ impl Cyclone {
             .sqrt()
     }
 
+    /// Shepherd–Lapple's pressure drop Δp = K·(a·b/D_x²)·ρ·v_in²/2 with K = 16 (a
+    /// tangential slot inlet), D_x = 2·R_x the vortex finder's diameter, Pa.
+    pub fn shepherd_lapple_pressure_drop(&self) -> f64 {
+        let d_x = 2.0 * self.vortex_finder_radius;
+        16.0 * self.inlet_height * self.inlet_width / (d_x * d_x)
+            * 0.5
+            * self.gas_density
+            * self.inlet_velocity.powi(2)
+    }
+
+    /// Barth–Muschelknautz's pressure drop (Hoffmann & Stein eqs. 6.2.1–6.2.3, clean gas)
+    /// with the tangential velocity at the control surface `v_theta` (m/s; the model's is
+    /// [`Cyclone::bm_tangential_velocity`]): the body's wall friction f·A_R·ρ·(v_θw·v_θCS)^1.5
+    /// / (2·0.9·Q) plus the vortex finder's ½ρv_x²·[2 + (v_θCS/v_x)² + 3·(v_θCS/v_x)^(4/3)],
+    /// v_x = Q/(π·R_x²) and v_θw = v_in·R_in/(α·R); (body, vortex finder), Pa.
+    pub fn bm_pressure_drop(&self, v_theta: f64) -> (f64, f64) {
+        let q = self.flow_rate();
+        let v_wall = self.inlet_velocity * self.inlet_radius / (self.constriction() * self.radius);
+        let body = self.friction * self.friction_area() * self.gas_density
+            * (v_wall * v_theta).powf(1.5)
+            / (2.0 * 0.9 * q);
+        let v_x = q / (PI * self.vortex_finder_radius.powi(2));
+        let ratio = v_theta / v_x;
+        let finder = 0.5
+            * self.gas_density
+            * v_x
+            * v_x
+            * (2.0 + ratio * ratio + 3.0 * ratio.powf(4.0 / 3.0));
+        (body, finder)
+    }
+
     /// A flow's mean velocities on Barth–Muschelknautz's control surface, the cylinder of
     /// radius R_x from the vortex finder's bottom down to the cone's bottom, for a cyclone
     /// on the z axis with its roof at `roof_z`: (|mean tangential|, mean inward radial), m/s,
@@ -218,6 +249,17 @@ mod tests {
             "{vt} {vr}"
         );
         assert!(c.control_surface(1.0, 4, |_| None).is_none());
+        // Pressure drops: Shepherd–Lapple 16·(0.4·0.2/0.3²)·½·1.2·10² = 853.3 Pa;
+        // Barth–Muschelknautz with its own swirl: v_x = 11.32 m/s, body 116 Pa, vortex
+        // finder 1291 Pa (by hand from the formulas above, to 1 Pa).
+        assert!((c.shepherd_lapple_pressure_drop() - 853.33).abs() < 0.01);
+        let (body, finder) = c.bm_pressure_drop(c.bm_tangential_velocity());
+        assert!((body - 116.0).abs() < 1.5, "{body}");
+        assert!((finder - 1291.0).abs() < 5.0, "{finder}");
+        // no swirl: the vortex finder's loss is 2 dynamic heads
+        let (b0, f0) = c.bm_pressure_drop(0.0);
+        let v_x = 0.8 / (PI * 0.15f64.powi(2));
+        assert!(b0 == 0.0 && (f0 - 1.2 * v_x * v_x).abs() < 1e-9);
         // Lapple: d50 ∝ √(1/(ρ_p − ρ)) exactly.
         let r = c.lapple_d50(1000.0) / c.lapple_d50(4000.0);
         assert!((r - ((4000.0 - 1.2) / (1000.0 - 1.2f64)).sqrt()).abs() < 1e-12);
