@@ -236,7 +236,11 @@ fn the_wheel_cut_and_the_dispersion_model() {
     // conservative field at the wheel radius too
     let nominal = 0.5 * 0.1 / 0.05;
     assert!((theory.inflow.0 / (std::f64::consts::TAU * 0.1 * 0.01 * 0.5) - 1.0).abs() < 1e-3);
-    assert!((theory.v_r / nominal - 1.0).abs() < 0.01, "v_r {}", theory.v_r);
+    assert!(
+        (theory.v_r / nominal - 1.0).abs() < 0.01,
+        "v_r {}",
+        theory.v_r
+    );
     let cut_of = |o: &[String]| {
         let run = wheel::run_variant("original", &text, o, 1.0, None).unwrap();
         print!(

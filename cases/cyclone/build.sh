@@ -145,7 +145,7 @@ def edit(path, subs):
     open(path, "w").write(s)
 edit(f"{work}/constant/turbulenceProperties", [(r"RASModel\s+kOmegaSST;", f"RASModel        {model};")])
 edit(f"{work}/system/fvSchemes", [
-    (r"div\(phi,omega\)[^;]*;", "div(phi,R)      bounded Gauss upwind;\n    div(phi,epsilon) bounded Gauss upwind;\n    div(R)          Gauss linear;"),
+    (r"div\(phi,omega\)[^;]*;", "div(phi,R)      bounded Gauss upwind;\n    div(phi,epsilon) bounded Gauss upwind;\n    div(R)          Gauss linear;\n    div((nu*dev2(T(grad(U))))) Gauss linear;"),
     (r"grad\(omega\)[^;]*;", "grad(epsilon)   cellLimited Gauss linear 1;"),
 ])
 edit(f"{work}/system/fvSolution", [
@@ -235,7 +235,11 @@ summary="$work/summary.txt"
     fi
     echo "final iteration: $final (of $iterations max)"
     if grep -q "reached convergence" log.simpleFoam; then grep "reached convergence" log.simpleFoam; fi
-    echo "UMean, kMean, omegaMean: U, k, omega averaged over iterations $average_from..$final"
+    if [ "$model" = kOmegaSST ]; then
+        echo "UMean, kMean, omegaMean, pMean: U, k, omega, p averaged over iterations $average_from..$final"
+    else
+        echo "UMean, RMean, epsilonMean, kMean, pMean: U, R, epsilon, k = tr(R)/2, p averaged over iterations $average_from..$final"
+    fi
     echo "initial residuals (first solve of each iteration): last; min..max over the averaged iterations"
     if [ "$model" = kOmegaSST ]; then solved="Ux Uy Uz p k omega"; else solved="Ux Uy Uz p Rxx epsilon"; fi
     for f in $solved; do
