@@ -129,13 +129,7 @@ fn tetrahedra_carry_the_balanced_fluxes() {
         let (phi, _) = face_fluxes(&m, &g, &field, &outflow).unwrap();
         assert_eq!(it.projection().unwrap().unbalanced_cells, 0);
         let np = m.points.len() as u32;
-        let node = |n: u32| {
-            if n < np {
-                m.points[n as usize]
-            } else {
-                g.face_centres[(n - np) as usize]
-            }
-        };
+        let node = |n: u32| loc.node(n);
         // per mesh face: the flux of its triangles from each side
         let mut face_sum: HashMap<(u32, usize), f64> = HashMap::new();
         let mut tri_flux: HashMap<(u32, usize), Vec<f64>> = HashMap::new();

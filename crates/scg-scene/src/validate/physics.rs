@@ -296,12 +296,10 @@ pub(super) fn mesh_flow(
         Some(w) => wall_function(w, fluid, &mesh, &reader, cx)?,
     };
     if wall.is_some() && scheme == Interpolation::Conservative {
-        return Err(cx.err(
-            "flow.wall_function",
-            "cannot be combined with interpolation = \"conservative\": the log law would \
-             change the face fluxes the conservative field keeps (its wall tetrahedra slide \
-             along the wall already); remove one",
-        ));
+        let why = "cannot be combined with interpolation = \"conservative\": the log law \
+                   would change the face fluxes the conservative field keeps (its wall \
+                   tetrahedra slide along the wall already); remove one";
+        return Err(cx.err("flow.wall_function", why));
     }
     let (moving, rotors) = match &reader {
         FieldReader::Foam { case, .. } => {

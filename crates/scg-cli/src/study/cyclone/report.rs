@@ -450,19 +450,7 @@ pub fn report(
             theory.bm_d50_with_swirl(rho, vt) * 1e6
         );
     }
-    let (body, finder) = theory.bm_pressure_drop(theory.bm_tangential_velocity());
-    let _ = write!(
-        s,
-        "pressure drop: Shepherd–Lapple {:.0} Pa; Barth–Muschelknautz {:.0} Pa (body {body:.0}, \
-         vortex finder {finder:.0}) with its swirl",
-        theory.shepherd_lapple_pressure_drop(),
-        body + finder
-    );
-    if let Some((vt, _)) = theory.field_swirl {
-        let (b, f) = theory.bm_pressure_drop(vt);
-        let _ = write!(s, ", {:.0} Pa with the field's", b + f);
-    }
-    let _ = writeln!(s, " (the CFD's own: cases/cyclone/build.sh's summary.txt)");
+    let _ = writeln!(s, "{}", theory.pressure_drops());
     if let Some(t) = tracers {
         s += &t.text();
     }

@@ -172,6 +172,23 @@ impl Cyclone {
         (body, finder)
     }
 
+    /// One line of the study's report: Shepherd–Lapple's pressure drop and
+    /// Barth–Muschelknautz's with its own swirl and, when measured, the field's.
+    pub fn pressure_drops(&self) -> String {
+        let (body, finder) = self.bm_pressure_drop(self.bm_tangential_velocity());
+        let field = self.field_swirl.map_or(String::new(), |(vt, _)| {
+            let (b, f) = self.bm_pressure_drop(vt);
+            format!(", {:.0} Pa with the field's", b + f)
+        });
+        format!(
+            "pressure drop: Shepherd–Lapple {:.0} Pa; Barth–Muschelknautz {:.0} Pa (body \
+             {body:.0}, vortex finder {finder:.0}) with its swirl{field} (the CFD's own: \
+             cases/cyclone/build.sh's summary.txt)",
+            self.shepherd_lapple_pressure_drop(),
+            body + finder
+        )
+    }
+
     /// A flow's mean velocities on Barth–Muschelknautz's control surface, the cylinder of
     /// radius R_x from the vortex finder's bottom down to the cone's bottom, for a cyclone
     /// on the z axis with its roof at `roof_z`: (|mean tangential|, mean inward radial), m/s,
