@@ -33,6 +33,10 @@
 //! and the rows of the value's gradient together (96 bytes), so that a query reads the cell
 //! line and one contiguous run of face records, and nothing else.
 //!
+//! With [`crate::Interpolation::Conservative`] every cell takes the general records and
+//! each tetrahedron also its constant velocity (24 bytes), which a query answers instead
+//! of the linear value.
+//!
 //! Memory: 64 bytes per cell; a simple cell 96 per face (a tetrahedron: 0.45 kB); any other
 //! 32 per cell face and 144 per tetrahedron of the decomposition (a hexahedron's 24:
 //! 3.7 kB). [`CellTable::new`] declines (returns `None`) above [`CellTable::MAX_BYTES`].
@@ -100,8 +104,8 @@ pub struct CellTable {
     simple_next: Vec<u32>,
     /// What is across each of `faces`' faces (see [`BOUNDARY`]; [`NO_CELL`] for padding).
     faces_next: Vec<u32>,
-    /// The conservative scheme: each of `tets`' constant velocity (empty otherwise; then
-    /// no cell is simple).
+    /// The conservative scheme's constant velocity of each of `tets` (empty for the other
+    /// schemes; with it no cell is simple, and a query answers its tetrahedron's value).
     tet_values: Vec<DVec3>,
 }
 
