@@ -125,7 +125,7 @@ pub struct Interpolator<'a> {
     cells: Vec<DVec3>,
     nodes: Vec<DVec3>,
     /// `Conservative`: the velocity of every tetrahedron, and the offset of every entry of
-    /// [`MeshGeometry::cell_faces`] into it (plus one).
+    /// [`crate::MeshGeometry::cell_faces`] into it (plus one).
     tets: Vec<DVec3>,
     tet_offsets: Vec<u32>,
     projection: Option<Projection>,
@@ -216,7 +216,7 @@ impl<'a> Interpolator<'a> {
     }
 
     /// The conservative scheme's velocity of the `i`-th tetrahedron of cell-face entry `k`
-    /// (an index into [`MeshGeometry::cell_faces`]); `None` for the other schemes or out
+    /// (an index into [`crate::MeshGeometry::cell_faces`]); `None` for the other schemes or out
     /// of range.
     #[inline]
     pub fn tet_velocity(&self, k: usize, i: usize) -> Option<DVec3> {
