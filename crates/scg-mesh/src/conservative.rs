@@ -91,10 +91,7 @@ pub fn face_fluxes(
     for (pi, p) in mesh.patches.iter().enumerate() {
         let vals = field.patches[pi].as_ref();
         // constraint patches carry nothing through (a 2-D case's front and back, mirrors)
-        let closed = matches!(
-            p.kind.as_str(),
-            "empty" | "symmetry" | "symmetryPlane" | "wedge"
-        );
+        let closed = p.is_constraint();
         for (i, f) in (p.start..p.start + p.size).enumerate() {
             let u = vals.map_or(field.cells[mesh.owner[f] as usize], |v| v[i]);
             phi[f] = if closed && !outflow[pi] {
@@ -111,15 +108,7 @@ pub fn face_fluxes(
         }
     }
     for (f, q) in phi.iter_mut().enumerate().take(ni) {
-        let (o, n) = (mesh.owner[f] as usize, mesh.neighbour[f] as usize);
-        let xf = geom.face_centres[f];
-        let (dof, dnf) = (
-            (xf - geom.cell_centres[o]).length(),
-            (geom.cell_centres[n] - xf).length(),
-        );
-        let w = dnf / (dof + dnf);
-        let uf = field.cells[o] * w + field.cells[n] * (1.0 - w);
-        *q = uf.dot(geom.face_areas[f]);
+        *q = linear_face_value(mesh, geom, &field.cells, f).dot(geom.face_areas[f]);
     }
     let div = divergence(mesh, &phi);
     let imbalance_before = div.iter().map(|d| d.abs()).sum();
@@ -217,6 +206,20 @@ pub fn face_fluxes(
     ))
 }
 
+/// The cell values `cells` at internal face `f`'s centre, linear between its two cells
+/// (weighted by the distances of their centres to the face), as OpenFOAM's `linear`
+/// interpolation.
+pub fn linear_face_value(mesh: &PolyMesh, geom: &MeshGeometry, cells: &[DVec3], f: usize) -> DVec3 {
+    let (o, n) = (mesh.owner[f] as usize, mesh.neighbour[f] as usize);
+    let xf = geom.face_centres[f];
+    let (dof, dnf) = (
+        (xf - geom.cell_centres[o]).length(),
+        (geom.cell_centres[n] - xf).length(),
+    );
+    let w = dnf / (dof + dnf);
+    cells[o] * w + cells[n] * (1.0 - w)
+}
+
 /// Net outflow of every cell, Σ_f ±φ_f, m³/s.
 fn divergence(mesh: &PolyMesh, phi: &[f64]) -> Vec<f64> {
     let mut div = vec![0.0; mesh.n_cells];
@@ -291,7 +294,7 @@ fn solve_laplacian(
     let mut d = z.clone();
     let mut q = vec![0.0; nc];
     let mut rz: f64 = r.iter().zip(&z).map(|(a, b)| a * b).sum();
-    // CG on a mesh Laplacian needs O(n^(1/3)) iterations times a modest factor (448 on the
+    // CG on a mesh Laplacian needs O(n^(1/3)) iterations times a modest factor (393 on the
     // 30 819-cell cyclone); the cap only stops a run that will not converge
     let max_iter = 20_000.min(20 * nc + 100);
     let mut it = 0;

@@ -124,9 +124,10 @@ pub struct Interpolator<'a> {
     scheme: Interpolation,
     cells: Vec<DVec3>,
     nodes: Vec<DVec3>,
-    /// `Conservative`: the velocity of every tetrahedron, and the offset of every entry of
+    /// `Conservative`: the velocity of every tetrahedron (shared with the hot path's
+    /// [`crate::CellTable`]), and the offset of every entry of
     /// [`crate::MeshGeometry::cell_faces`] into it (plus one).
-    tets: Vec<DVec3>,
+    tets: Arc<[DVec3]>,
     tet_offsets: Vec<u32>,
     projection: Option<Projection>,
 }
@@ -177,7 +178,7 @@ impl<'a> Interpolator<'a> {
                 nodes
             }
         };
-        let (mut tets, mut tet_offsets, mut projection) = (Vec::new(), Vec::new(), None);
+        let (mut tets, mut tet_offsets, mut projection) = (Arc::from([]), Vec::new(), None);
         if scheme == Interpolation::Conservative {
             let Some(outflow) = outflow else {
                 return Err(MeshError::invalid(
@@ -197,7 +198,7 @@ impl<'a> Interpolator<'a> {
                 &phi,
             );
             p.unbalanced_cells = unbalanced;
-            (tets, tet_offsets, projection) = (vel, offsets, Some(p));
+            (tets, tet_offsets, projection) = (Arc::from(vel), offsets, Some(p));
         }
         Ok(Interpolator {
             loc,
@@ -213,6 +214,13 @@ impl<'a> Interpolator<'a> {
     /// What the conservative scheme's projection changed (`None` for the other schemes).
     pub fn projection(&self) -> Option<&Projection> {
         self.projection.as_ref()
+    }
+
+    /// The conservative scheme's tetrahedron velocities (per cell in face order, per face
+    /// in fan order) and the offset of every [`crate::MeshGeometry::cell_faces`] entry into
+    /// them; `None` for the other schemes.
+    pub fn tet_velocities(&self) -> Option<(&Arc<[DVec3]>, &[u32])> {
+        (self.scheme == Interpolation::Conservative).then_some((&self.tets, &self.tet_offsets))
     }
 
     /// The conservative scheme's velocity of the `i`-th tetrahedron of cell-face entry `k`

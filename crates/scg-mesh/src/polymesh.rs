@@ -17,6 +17,17 @@ pub struct Patch {
     pub size: usize,
 }
 
+/// Patch kinds that constrain the flow instead of bounding it (OpenFOAM's constraint
+/// types): nothing crosses them, and a particle reaching one is mirrored.
+pub const CONSTRAINT_KINDS: [&str; 4] = ["empty", "symmetry", "symmetryPlane", "wedge"];
+
+impl Patch {
+    /// Whether the patch's kind is one of [`CONSTRAINT_KINDS`].
+    pub fn is_constraint(&self) -> bool {
+        CONSTRAINT_KINDS.contains(&self.kind.as_str())
+    }
+}
+
 /// An unstructured mesh of arbitrary polyhedral cells.
 ///
 /// Faces are stored compressed: face `f` has the points

@@ -33,9 +33,10 @@
 //! and the rows of the value's gradient together (96 bytes), so that a query reads the cell
 //! line and one contiguous run of face records, and nothing else.
 //!
-//! With [`crate::Interpolation::Conservative`] every cell takes the general records and
-//! each tetrahedron also its constant velocity (24 bytes), which a query answers instead
-//! of the linear value.
+//! With [`crate::Interpolation::Conservative`] every cell takes the general records, and a
+//! query answers its tetrahedron's constant velocity instead of the linear value, read
+//! from the interpolator's velocities (shared, not copied: each cell record knows where
+//! its cell's start).
 //!
 //! Memory: 64 bytes per cell; a simple cell 96 per face (a tetrahedron: 0.45 kB); any other
 //! 32 per cell face and 144 per tetrahedron of the decomposition (a hexahedron's 24:
@@ -60,7 +61,14 @@ struct CellRec {
     /// A convex cell of triangular faces: one tetrahedron per face, whose record holds
     /// the rows of the value's gradient G (u = u_c + G·(x − cc)) instead of M and Δu.
     simple: u32,
+    /// The conservative scheme: the index of the cell's first tetrahedron in
+    /// [`CellTable::tet_values`].
+    tet_base: u32,
 }
+
+// the cell record is one cache line (the conservative scheme's `tet_base` uses its spare
+// four bytes)
+const _: () = assert!(size_of::<CellRec>() == 64);
 
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(32))]
@@ -104,9 +112,10 @@ pub struct CellTable {
     simple_next: Vec<u32>,
     /// What is across each of `faces`' faces (see [`BOUNDARY`]; [`NO_CELL`] for padding).
     faces_next: Vec<u32>,
-    /// The conservative scheme's constant velocity of each of `tets` (empty for the other
-    /// schemes; with it no cell is simple, and a query answers its tetrahedron's value).
-    tet_values: Vec<DVec3>,
+    /// The conservative scheme's tetrahedron velocities, the interpolator's (`None` for the
+    /// other schemes; with them no cell is simple, and a query answers its tetrahedron's
+    /// value).
+    tet_values: Option<std::sync::Arc<[DVec3]>>,
 }
 
 /// Nothing across (padding records).
@@ -186,12 +195,11 @@ impl CellTable {
             simple: Vec::new(),
             simple_next: Vec::new(),
             faces_next: Vec::with_capacity(n_faces),
-            tet_values: Vec::new(),
+            tet_values: None,
         };
-        let conservative = it.scheme() == crate::Interpolation::Conservative;
-        if conservative {
-            t.tet_values.reserve_exact(n_tets);
-        }
+        let shared = it.tet_velocities();
+        t.tet_values = shared.map(|(v, _)| std::sync::Arc::clone(v));
+        let conservative = shared.is_some();
         // room for the cells that may be simple (all faces triangles), each on a line
         let tri_faced: usize = (0..nc)
             .map(|c| geom.faces_of(c))
@@ -213,10 +221,8 @@ impl CellTable {
             }
             let (f0, t0) = (t.faces.len(), t.tets.len());
             let mut ok = true;
-            let k0 = geom.cell_face_offsets[c] as usize;
-            for (k, &f) in geom.faces_of(c).iter().enumerate() {
+            for &f in geom.faces_of(c) {
                 let fi = f as usize;
-                let mut fan = 0;
                 let a = geom.face_areas[fi];
                 let den = (geom.face_centres[fi] - cc).dot(a);
                 let q = a / den;
@@ -234,11 +240,6 @@ impl CellTable {
                     let m = [n23 * inv, v[2].cross(v[0]) * inv, v[0].cross(v[1]) * inv];
                     let du = nodes.map(|n| nodev.get(n as usize).map_or(DVec3::ZERO, |&u| u - uc));
                     t.tets.push(TetRec { m, du });
-                    if conservative {
-                        t.tet_values
-                            .push(it.tet_velocity(k0 + k, fan).unwrap_or(DVec3::NAN));
-                    }
-                    fan += 1;
                     true
                 };
                 if pts.len() == 3 {
@@ -273,7 +274,6 @@ impl CellTable {
                 t.faces.truncate(f0);
                 t.faces_next.truncate(f0);
                 t.tets.truncate(t0);
-                t.tet_values.truncate(t0.min(t.tet_values.len()));
             }
             // convex with triangular faces: every point of the cell on the inner side of
             // every face plane, one tetrahedron per face
@@ -321,6 +321,9 @@ impl CellTable {
                 face: face as u32,
                 n_faces: n_faces as u32,
                 simple: u32::from(simple),
+                tet_base: shared.map_or(0, |(_, offsets)| {
+                    offsets[geom.cell_face_offsets[c] as usize]
+                }),
             });
         }
         // the general records were sized for every cell: give back what the simple cells
@@ -328,7 +331,6 @@ impl CellTable {
         t.faces.shrink_to_fit();
         t.faces_next.shrink_to_fit();
         t.tets.shrink_to_fit();
-        t.tet_values.shrink_to_fit();
         Some(t)
     }
 
@@ -346,7 +348,6 @@ impl CellTable {
             + self.faces.len() * (size_of::<FaceRec>() + size_of::<u32>())
             + self.tets.len() * size_of::<TetRec>()
             + self.simple.len() * (size_of::<SimpleFace>() + size_of::<u32>())
-            + self.tet_values.len() * size_of::<DVec3>()
     }
 
     /// The interpolated value at x when x is in cell `c` (in one of its tetrahedra, up to
@@ -436,7 +437,9 @@ impl CellTable {
         else {
             return Query::Unknown;
         };
-        match self.in_tets(bf.tet as usize, tets, rec.uc, d) {
+        // the index of `tets`' first in the shared velocities (conservative scheme)
+        let first = rec.tet_base as usize + (bf.tet - faces[0].tet) as usize;
+        match self.in_tets(first, tets, rec.uc, d) {
             Some(Some(u)) => return Query::Inside(u),
             // the ray leaves through the outer triangle of one of this face's tetrahedra:
             // the locator crosses this face too
@@ -449,15 +452,16 @@ impl CellTable {
         let Some(all) = self.tets.get(a as usize..(b.tet + b.n_tets) as usize) else {
             return Query::Unknown;
         };
-        match self.in_tets(a as usize, all, rec.uc, d) {
+        match self.in_tets(rec.tet_base as usize, all, rec.uc, d) {
             Some(Some(u)) => Query::Inside(u),
             _ => Query::Unknown,
         }
     }
 
-    /// The tetrahedron of `tets` (records from `first` on) the ray from the centre along d
-    /// crosses: `Some(Some(u))` when d is inside it, `Some(None)` when beyond its outer
-    /// triangle, `None` when no tetrahedron takes the ray.
+    /// The tetrahedron of `tets` the ray from the centre along d crosses: `Some(Some(u))`
+    /// when d is inside it, `Some(None)` when beyond its outer triangle, `None` when no
+    /// tetrahedron takes the ray. With the conservative scheme's velocities the value is
+    /// that of the tetrahedron's, `first` being the index of `tets[0]` among them.
     #[inline(always)]
     fn in_tets(&self, first: usize, tets: &[TetRec], uc: DVec3, d: DVec3) -> Option<Option<DVec3>> {
         for (i, t) in tets.iter().enumerate() {
@@ -479,8 +483,8 @@ impl CellTable {
             if w.element_sum() > 1.0 + TOL {
                 return Some(None);
             }
-            if !self.tet_values.is_empty() {
-                return self.tet_values.get(first + i).map(|&u| Some(u));
+            if let Some(v) = &self.tet_values {
+                return v.get(first + i).map(|&u| Some(u));
             }
             return Some(Some(uc + w.x * t.du[0] + w.y * t.du[1] + w.z * t.du[2]));
         }

@@ -14,8 +14,8 @@ use crate::model::{PatchModel, PatchWalls, SceneMeshFlow};
 use crate::raw::{RawFlow, RawWall, RawWallModel};
 
 /// Mesh patch types whose unlisted patches reflect particles specularly, as OpenFOAM's
-/// tracking does at constraint patches.
-pub const MIRROR_KINDS: [&str; 4] = ["empty", "symmetry", "symmetryPlane", "wedge"];
+/// tracking does at constraint patches ([`scg_mesh::polymesh::CONSTRAINT_KINDS`]).
+pub const MIRROR_KINDS: [&str; 4] = scg_mesh::polymesh::CONSTRAINT_KINDS;
 
 /// The model of every patch of `mf`, in mesh order. Wall patches take `wall_model`
 /// (default `contact` with a `[material]`, else `rebound`); unlisted constraint patches

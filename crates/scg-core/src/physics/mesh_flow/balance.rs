@@ -33,19 +33,13 @@ impl MeshFlow {
     }
 
     /// The cell field at internal face `f`'s centre, linear between its two cells' values
-    /// (weighted by the distances of their centres to the face), m/s.
+    /// ([`scg_mesh::conservative::linear_face_value`]), m/s.
     pub(super) fn linear_face_value(&self, f: usize) -> DVec3 {
-        let (m, g, u) = (self.mesh(), self.geometry(), self.interp.cell_values());
-        let (o, n, xf) = (
-            m.owner[f] as usize,
-            m.neighbour[f] as usize,
-            g.face_centres[f],
-        );
-        let (dof, dnf) = (
-            (xf - g.cell_centres[o]).length(),
-            (g.cell_centres[n] - xf).length(),
-        );
-        let w = dnf / (dof + dnf);
-        u[o] * w + u[n] * (1.0 - w)
+        scg_mesh::conservative::linear_face_value(
+            self.mesh(),
+            self.geometry(),
+            self.interp.cell_values(),
+            f,
+        )
     }
 }
