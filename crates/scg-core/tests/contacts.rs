@@ -859,7 +859,26 @@ fn tangential_history_survives_rebuilds_and_set_changes() {
 /// the test sees local–ghost contacts, migrations and histories carried along.
 #[test]
 fn ghosts_and_migration_follow_the_whole_simulation() {
-    use scg_core::stages::contacts::ghosts::table_rows;
+    let sets = ghosts_follow_the_whole(false);
+    assert_eq!(sets, 4000, "a new ghost set every step");
+}
+
+/// The same with the driver's protocol since issue 39 (LAMMPS's): a new ghost set, and
+/// migration, only on the steps where either half's `rebuild_due_here` asks for one
+/// (one of its particles moved more than half the skin, or its table changed); the
+/// ghosts' states forwarded row for row between (`forward_ghosts`, no list rebuild).
+#[test]
+fn forwarded_ghosts_follow_the_whole_simulation() {
+    let sets = ghosts_follow_the_whole(true);
+    assert!(
+        (2..1000).contains(&sets),
+        "{sets} ghost sets in 4000 steps: the protocol shows nothing"
+    );
+}
+
+/// Runs the lattice below whole and split in two; returns the ghost sets given.
+fn ghosts_follow_the_whole(forward: bool) -> usize {
+    use scg_core::stages::contacts::ghosts::{Due, rebuild_due_here, table_rows, table_states};
     let v = 0.5;
     let dt = auto_dt_pair(v);
     let cfg = || config(dt, Some(contact_cfg(0.7, 0.5, None)), None);
@@ -903,17 +922,47 @@ fn ghosts_and_migration_follow_the_whole_simulation() {
     for (k, h) in halves.iter_mut().enumerate() {
         drop(h.extract_particles(|_, x| side(x) != k));
     }
-    let (mut migrated, mut carried, mut ghost_contacts) = (0, 0, 0);
-    for _ in 0..4000 {
-        let rows = [
-            table_rows(&mut halves[0].world),
-            table_rows(&mut halves[1].world),
-        ];
-        for k in 0..2 {
-            halves[k]
-                .world
-                .resource_mut::<ContactState>()
-                .set_ghosts(rows[1 - k].sorted_by_id());
+    let (mut migrated, mut carried, mut ghost_contacts, mut sets) = (0, 0, 0, 0);
+    for step in 0..4000 {
+        let due = !forward
+            || step == 0
+            || halves
+                .iter_mut()
+                .map(|h| rebuild_due_here(&mut h.world))
+                .any(|d| d != Due::No);
+        if due {
+            sets += 1;
+            let rows = [
+                table_rows(&mut halves[0].world),
+                table_rows(&mut halves[1].world),
+            ];
+            for k in 0..2 {
+                halves[k]
+                    .world
+                    .resource_mut::<ContactState>()
+                    .set_ghosts(rows[1 - k].sorted_by_id());
+            }
+        } else {
+            // The other half's particles in the order of the set (sorted by id).
+            let mut states = [Vec::new(), Vec::new()];
+            for (k, h) in halves.iter_mut().enumerate() {
+                let rows = table_rows(&mut h.world);
+                let mut order: Vec<u32> = (0..rows.len() as u32).collect();
+                order.sort_unstable_by_key(|&r| rows.ids[r as usize]);
+                table_states(&mut h.world, &order, &mut states[k]);
+            }
+            for k in 0..2 {
+                let s = &states[1 - k];
+                let col = |c: usize| -> Vec<DVec3> {
+                    s.chunks_exact(9)
+                        .map(|w| DVec3::new(w[c], w[c + 1], w[c + 2]))
+                        .collect()
+                };
+                halves[k]
+                    .world
+                    .resource_mut::<ContactState>()
+                    .forward_ghosts(&col(0), &col(3), &col(6));
+            }
         }
         whole.step().unwrap();
         for h in &mut halves {
@@ -923,6 +972,16 @@ fn ghosts_and_migration_follow_the_whole_simulation() {
             ghost_contacts += (st.pairs.in_contact(&st.list.pairs))
                 .filter(|([_, j], _)| *j >= local)
                 .count();
+        }
+        // Migration: every step, or (forwarding) only before a new ghost set, that is
+        // after a step where a half asks for one.
+        if forward
+            && !halves
+                .iter_mut()
+                .map(|h| rebuild_due_here(&mut h.world))
+                .any(|d| d != Due::No)
+        {
+            continue;
         }
         let mut moving = Vec::new();
         for (k, h) in halves.iter_mut().enumerate() {
@@ -956,12 +1015,13 @@ fn ghosts_and_migration_follow_the_whole_simulation() {
     let tally = |s: &Simulation| s.world.resource::<Tally>().collisions[0];
     let (c_whole, c_split) = (tally(&whole), tally(&halves[0]) + tally(&halves[1]));
     eprintln!(
-        "largest distance from the whole run {worst:.3e} m; collisions {c_whole} and {c_split}; {migrated} migrations carrying {carried} histories; {ghost_contacts} local–ghost contacts over the steps"
+        "largest distance from the whole run {worst:.3e} m; collisions {c_whole} and {c_split}; {migrated} migrations carrying {carried} histories; {ghost_contacts} local–ghost contacts over the steps; {sets} ghost sets"
     );
     assert!(migrated > 5 && carried > 0 && ghost_contacts > 100);
     assert!(c_whole > 50);
     assert_eq!(c_whole, c_split);
     assert!(worst < 1e-9 * D, "{worst:.3e} m");
+    sets
 }
 
 /// A cylinder with a floor and a triangle-mesh lid, packed loosely with spheres moving

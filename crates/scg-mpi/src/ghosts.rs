@@ -163,25 +163,39 @@ mod exchange {
     use scg_core::Simulation;
     use scg_core::checkpoint::ParticleRecord;
     use scg_core::stages::contacts::ContactState;
-    use scg_core::stages::contacts::ghosts::{Ghosts, table_rows_where};
+    use scg_core::stages::contacts::ghosts::{Ghosts, table_rows_indexed_where, table_states};
 
     use super::{Migrants, ghost_targets, peers, reach};
     use crate::comm::{Comm, decode, encode};
     use crate::decomp::Owners;
 
-    /// The ghost exchange of a run with contacts, and what it did.
+    /// The ghosts of a run with contacts: the set given at the last rebuild and the
+    /// rows forwarded since, and what it did.
     #[derive(Debug, Default)]
     pub struct Halo {
         /// The largest particle radius of the scene, m ([`super::largest_radius`]).
         pub r_max: f64,
-        /// Exchanges so far.
+        /// Ghost sets given so far (one per rebuild).
         pub exchanges: u64,
-        /// Ghost rows received, summed over the exchanges.
+        /// Steps whose ghost states were forwarded.
+        pub forwards: u64,
+        /// Ghost rows held, summed over the steps.
         pub received: u64,
+        /// The peers of the current set (ascending).
+        with: Vec<usize>,
+        /// Per peer: the table rows whose states go to it, in the order of its ghosts.
+        send: Vec<Vec<u32>>,
+        /// Per peer: how many of this rank's ghost rows it owns (in peer order).
+        recv: Vec<usize>,
+        /// Every rank's peers are all the other ranks (decided with the set).
+        all_peers: bool,
     }
 
+    /// What a forward message starts with: the sender's flags, and whether states follow.
+    const HEADER: usize = 2;
+
     impl Halo {
-        /// The exchange of a run of `scene`.
+        /// The ghosts of a run of `scene`.
         pub fn new(scene: &scg_scene::Scene) -> Self {
             Halo {
                 r_max: super::largest_radius(scene),
@@ -189,9 +203,29 @@ mod exchange {
             }
         }
 
-        /// Give every rank its ghosts for the coming step (a collective; nothing when
-        /// the scene has no contacts or the owners are not slabs).
-        pub fn exchange(&mut self, comm: &Comm, sim: &mut Simulation, owners: &Owners) {
+        /// True while a ghost set is held (contacts, slabs, another rank within reach).
+        pub fn active(&self) -> bool {
+            !self.with.is_empty()
+        }
+
+        /// Whether every rank's peers are all the other ranks (the same answer on every
+        /// rank), so that a forward exchange reaches everybody and can carry the step's
+        /// flags in place of a collective.
+        pub fn reaches_all(&self) -> bool {
+            self.all_peers
+        }
+
+        /// Give every rank a new ghost set (a collective, at a rebuild: after the
+        /// migration, with the slabs as they now are). Each rank sends each peer its
+        /// particles within their reach of the peer's slab, whole (id, group, radius,
+        /// mass, x, v, ω), and remembers their table rows for [`Halo::forward`]; the
+        /// ghost rows come in peer order, each peer's in its table order. Nothing when
+        /// the scene has no contacts or the owners are not slabs.
+        pub fn regather(&mut self, comm: &Comm, sim: &mut Simulation, owners: &Owners) {
+            self.with.clear();
+            self.send.clear();
+            self.recv.clear();
+            self.all_peers = false;
             let Owners::Slabs(slabs) = owners else {
                 return;
             };
@@ -203,36 +237,107 @@ mod exchange {
                 return;
             };
             let me = comm.rank();
-            // Only with the slabs a particle can reach: point to point.
             let with = peers(slabs, me, reach(self.r_max, self.r_max, skin));
+            let full = u64::from(with.len() + 1 == comm.size());
+            self.all_peers = comm.all_gather_u64(&[full]).iter().all(|&f| f == 1);
             if with.is_empty() {
-                // one rank: nobody to exchange with
                 return;
             }
             let mut to = Vec::new();
             let r_max = self.r_max;
-            let rows = table_rows_where(&mut sim.world, |x, r| {
+            let (rows, g) = table_rows_indexed_where(&mut sim.world, |x, r| {
                 ghost_targets(slabs, me, x[slabs.axis], reach(r, r_max, skin), &mut to);
                 !to.is_empty()
             });
-            let mut out = vec![Ghosts::default(); comm.size()];
-            for k in 0..rows.len() {
-                // Reach of this particle: its radius, the largest of any other, the skin.
-                let halo = reach(rows.radius[k], self.r_max, skin);
-                ghost_targets(slabs, me, rows.pos[k][slabs.axis], halo, &mut to);
+            let mut out = vec![Ghosts::default(); with.len()];
+            let mut send = vec![Vec::new(); with.len()];
+            for (k, &row) in rows.iter().enumerate() {
+                let halo = reach(g.radius[k], self.r_max, skin);
+                ghost_targets(slabs, me, g.pos[k][slabs.axis], halo, &mut to);
                 for &q in &to {
-                    out[q].push_row(&rows, k);
+                    let p = with.binary_search(&q).expect("a ghost goes to a peer");
+                    out[p].push_row(&g, k);
+                    send[p].push(row);
                 }
             }
-            let send: Vec<Vec<u8>> = with.iter().map(|&q| encode(&out[q])).collect();
+            let msgs: Vec<Vec<u8>> = out.iter().map(encode).collect();
             let mut ghosts = Ghosts::default();
-            for part in comm.exchange_with(&with, &send) {
-                ghosts.extend(&decode::<Ghosts>(&part));
+            let mut recv = Vec::with_capacity(with.len());
+            for part in comm.exchange_with(&with, &msgs) {
+                let got = decode::<Ghosts>(&part);
+                recv.push(got.len());
+                ghosts.extend(&got);
             }
-            let ghosts = ghosts.sorted_by_id();
             self.exchanges += 1;
             self.received += ghosts.len() as u64;
+            (self.with, self.send, self.recv) = (with, send, recv);
             sim.world.resource_mut::<ContactState>().set_ghosts(ghosts);
+        }
+
+        /// Forward this rank's particles' states to their ghosts on the peers and take in
+        /// the ghosts' (point to point, along the lists of the last [`Halo::regather`]),
+        /// each message led by the sender's `flags`; returns the peers' flags or-ed with
+        /// these. When `flags` has `stale` set this rank's table changed since the
+        /// rebuild, so it sends its flags alone; when any peer's has, nothing is taken
+        /// in (a rebuild follows).
+        pub fn forward(
+            &mut self,
+            comm: &Comm,
+            sim: &mut Simulation,
+            flags: u64,
+            stale: u64,
+        ) -> u64 {
+            if !self.active() {
+                return flags;
+            }
+            let msgs: Vec<Vec<u8>> = self
+                .send
+                .iter()
+                .map(|rows| {
+                    let mut words = vec![f64::from_bits(flags), 0.0];
+                    if flags & stale == 0 {
+                        words[1] = 1.0;
+                        table_states(&mut sim.world, rows, &mut words);
+                    }
+                    bytemuck::cast_slice(&words).to_vec()
+                })
+                .collect();
+            let got = comm.exchange_with(&self.with, &msgs);
+            let mut any = flags;
+            for part in &got {
+                any |= u64::from_le_bytes(part[..8].try_into().expect("a flag word"));
+            }
+            if any & stale != 0 {
+                return any;
+            }
+            let n: usize = self.recv.iter().sum();
+            let (mut x, mut v, mut w) = (
+                Vec::with_capacity(n),
+                Vec::with_capacity(n),
+                Vec::with_capacity(n),
+            );
+            for (part, &count) in got.iter().zip(&self.recv) {
+                let words: Vec<f64> = part
+                    .chunks_exact(8)
+                    .map(|b| f64::from_le_bytes(b.try_into().expect("eight bytes")))
+                    .collect();
+                assert!(
+                    words.len() == HEADER + 9 * count,
+                    "a peer forwarded {} states for {count} ghosts",
+                    (words.len() - HEADER) / 9
+                );
+                for s in words[HEADER..].chunks_exact(9) {
+                    x.push(glam::DVec3::new(s[0], s[1], s[2]));
+                    v.push(glam::DVec3::new(s[3], s[4], s[5]));
+                    w.push(glam::DVec3::new(s[6], s[7], s[8]));
+                }
+            }
+            self.forwards += 1;
+            self.received += n as u64;
+            sim.world
+                .resource_mut::<ContactState>()
+                .forward_ghosts(&x, &v, &w);
+            any
         }
     }
 

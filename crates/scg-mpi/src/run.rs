@@ -31,13 +31,16 @@ use scg_core::checkpoint::ParticleRecord;
 use scg_core::components::ParticleId;
 use scg_core::frame::{FrameSink, RunMeta};
 use scg_core::stages::contacts::ContactState;
+use scg_core::stages::contacts::ghosts::Due;
+use scg_core::stages::feeder::SpawnOwner;
 use scg_core::stages::recording::{FrameRow, RecordingParams, frame_from_rows};
-use scg_core::state::{NextParticleId, Tally};
+use scg_core::state::Tally;
 use scg_core::{SimError, Simulation};
 use serde::{Deserialize, Serialize};
 
 use crate::comm::{Comm, decode, encode};
 use crate::decomp::{Owners, Slabs, longest_axis, merge_tally, needs_rebalance};
+use crate::ghosts::Halo;
 
 mod checkpoints;
 use checkpoints::Ckpt;
@@ -48,6 +51,31 @@ pub const REBALANCE_TOLERANCE: f64 = 1.2;
 
 /// Steps at least between two rebalances (each gathers every position on every rank).
 pub const REBALANCE_MIN_STEPS: u64 = 100;
+
+/// Steps between the migrations of a run without particle contacts (slabs): nothing
+/// there depends on which rank holds a particle, so a migration only keeps the slabs'
+/// counts near the balance the rebalance check looks at, and its scan of every particle
+/// (≈ 12 ns each) costs ≈ 0.1 ns per particle-step at this interval.
+pub const MIGRATE_EVERY: u64 = 100;
+
+/// The flags of a sync point: this rank's step failed.
+const FAILED: u64 = 1;
+/// … its recorder failed (rank 0).
+const SINK_FAILED: u64 = 1 << 1;
+/// … it was asked to stop (SIGINT, SIGTERM).
+const STOP: u64 = 1 << 2;
+/// … it needs a rebuild: a new ghost set, after a migration (contacts).
+const REBUILD: u64 = 1 << 3;
+/// … its particle table changed since the last rebuild: its rows cannot be forwarded.
+const STALE: u64 = 1 << 4;
+
+/// The message of a failed step.
+fn step_failure(e: SimError) -> String {
+    match e {
+        SimError::NonFinite(n) => n.to_string(),
+        e => e.to_string(),
+    }
+}
 
 /// What a rank sends to rank 0 for a frame.
 #[derive(Serialize, Deserialize)]
@@ -80,6 +108,8 @@ struct Ranked<'c> {
     owners: Owners,
     migrated: u64,
     rebalances: u64,
+    /// Fed particles spawned here up to the last rebuild.
+    kept_at_rebuild: u64,
 }
 
 impl Ranked<'_> {
@@ -99,18 +129,15 @@ impl Ranked<'_> {
         })
     }
 
-    /// Take out the particles that left this rank's slab, by owner; drop the copies of
-    /// particles fed this step (id ≥ `first_new`) that another rank owns.
-    fn leaving(&mut self, first_new: u32) -> Vec<Vec<ParticleRecord>> {
+    /// Take out the particles that left this rank's slab, by owner.
+    fn leaving(&mut self) -> Vec<Vec<ParticleRecord>> {
         let (me, owners) = (self.me(), &self.owners);
         let leaving = self
             .sim
             .extract_particles(|id, x| owners.owner(id, x) != me);
         let mut out: Vec<Vec<ParticleRecord>> = vec![Vec::new(); self.comm.size()];
         for p in leaving {
-            if p.id < first_new {
-                out[owners.owner(p.id, p.spec.position)].push(p);
-            }
+            out[owners.owner(p.id, p.spec.position)].push(p);
         }
         out
     }
@@ -130,8 +157,61 @@ impl Ranked<'_> {
 
     /// Move the particles that left this rank's slab to their owners (a collective).
     fn migrate(&mut self) -> Result<(), String> {
-        let out = self.leaving(u32::MAX);
+        let out = self.leaving();
         self.deliver(&out)
+    }
+
+    /// Make the feeders spawn only the particles this rank owns (every rank draws them
+    /// all, from the same seed).
+    fn own_feeds(&mut self) {
+        let (owners, me) = (self.owners.clone(), self.me());
+        let kept = self
+            .sim
+            .world
+            .get_resource::<SpawnOwner>()
+            .map_or(0, |o| o.kept);
+        self.sim.world.insert_resource(SpawnOwner {
+            keep: Arc::new(move |id, x| owners.owner(id, x) == me),
+            kept,
+        });
+    }
+
+    /// Fed particles spawned here so far.
+    fn kept(&self) -> u64 {
+        self.sim
+            .world
+            .get_resource::<SpawnOwner>()
+            .map_or(0, |o| o.kept)
+    }
+
+    /// A rebuild (a collective): migrate the particles that left their slab, cut the
+    /// slabs again when the counts drifted apart (at most every
+    /// [`REBALANCE_MIN_STEPS`]), and give every rank its new ghost set.
+    fn rebuild(
+        &mut self,
+        halo: Option<&mut Halo>,
+        times: &mut Times,
+        last: &mut u64,
+    ) -> Result<(), String> {
+        let t = Instant::now();
+        self.migrate()?;
+        let held = self.sim.particle_count() as u64;
+        let counts = self.comm.all_gather_u64(&[held]);
+        times.migrate += t.elapsed();
+        let n = self.sim.step_count();
+        if n >= *last + REBALANCE_MIN_STEPS && needs_rebalance(&counts, REBALANCE_TOLERANCE) {
+            *last = n;
+            let t = Instant::now();
+            self.rebalance()?;
+            times.rebalance += t.elapsed();
+        }
+        if let Some(halo) = halo {
+            let t = Instant::now();
+            halo.regather(self.comm, &mut self.sim, &self.owners);
+            times.ghosts += t.elapsed();
+        }
+        self.kept_at_rebuild = self.kept();
+        Ok(())
     }
 
     /// Cut the slabs again at the quantiles of all positions and migrate.
@@ -153,6 +233,7 @@ impl Ranked<'_> {
             .flat_map(|b| decode::<Vec<f64>>(b))
             .collect();
         self.owners = Owners::Slabs(Slabs::balanced(axis, self.comm.size(), &all, period));
+        self.own_feeds();
         self.rebalances += 1;
         self.migrate()
     }
@@ -297,7 +378,9 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         owners,
         migrated: 0,
         rebalances: 0,
+        kept_at_rebuild: 0,
     };
+    r.own_feeds();
 
     let params = RecordingParams {
         every: scene.record_every.max(1),
@@ -345,7 +428,8 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
     }
     // `SCG_MPI_COUNTS=FILE`: rank 0 writes the step, the particle count and an
     // order-independent digest of the ids after every step (tests: no particle lost or
-    // duplicated).
+    // duplicated; a collective every step, only then).
+    let count_every_step = std::env::var_os("SCG_MPI_COUNTS").is_some();
     let mut counts_log = match std::env::var_os("SCG_MPI_COUNTS") {
         Some(p) if root => match std::fs::File::create(&p) {
             Ok(f) => Some(std::io::BufWriter::new(f)),
@@ -356,94 +440,121 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         },
         _ => None,
     };
-    // Ghost particles (contacts): exchanged before every step.
+    // Contacts over slabs: ghost particles, a new set at every rebuild, forwarded states
+    // between (a flag exchange every step). Without, a sync point only every
+    // MIGRATE_EVERY steps and where a frame, a checkpoint or the end is due.
     let mut halo = crate::ghosts::Halo::new(&scene);
+    let contacts = !by_id && r.sim.world.get_resource::<ContactState>().is_some();
+    let start = r.sim.step_count();
     let mut interrupted = false;
-    let mut last_rebalance = 0;
+    let mut last_rebalance = start;
     let mut sink_failed = false;
     let mut checkpointed: Option<u64> = None;
-    while r.sim.step_count() < steps {
-        let first_new = r.sim.world.resource::<NextParticleId>().0;
-        let t = Instant::now();
-        halo.exchange(comm, &mut r.sim, &r.owners);
-        times.ghosts += t.elapsed();
-        let t = Instant::now();
-        let stepped = r.sim.step();
-        times.compute += t.elapsed();
-        if let Err(e) = stepped {
-            failure = Some(match e {
-                SimError::NonFinite(n) => n.to_string(),
-                e => e.to_string(),
-            });
+    let mut n = start;
+    loop {
+        let frame_due = record && n > start && n.is_multiple_of(params.every);
+        let ckpt_due = every.is_some_and(|e| n > start && (n.is_multiple_of(e) || n >= steps));
+        let migrate_due = !by_id && (n - start).is_multiple_of(MIGRATE_EVERY);
+        let sync =
+            contacts || count_every_step || frame_due || ckpt_due || migrate_due || n >= steps;
+        if !sync {
+            let t = Instant::now();
+            if failure.is_none()
+                && let Err(e) = r.sim.step()
+            {
+                failure = Some(step_failure(e));
+            }
+            times.compute += t.elapsed();
+            n += 1;
+            continue;
         }
-        // One collective on a quiet step: counts, id digests, failures, interrupts and
-        // whether anybody has particles to send; the exchange only when somebody has.
+        // The sync point after step n: every rank's flags (failures, interrupts, whether
+        // its ghosts' owners need a rebuild); with contacts they travel with the
+        // forwarded ghost states when the peers are all the ranks.
         let t = Instant::now();
-        let out = r.leaving(first_new);
-        let sent: u64 = out.iter().map(|o| o.len() as u64).sum();
-        let (held, held_ids) = r.id_digest();
-        let ids = out.iter().flatten().fold(held_ids, |h, p| {
-            h.wrapping_add(crate::decomp::splitmix64(u64::from(p.id)))
-        });
-        let flags = u64::from(failure.is_some())
-            | u64::from(sink_failed) << 1
-            | u64::from(stop.load(Ordering::Relaxed)) << 2;
-        let all = comm.all_gather_u64(&[held + sent, flags, ids, sent]);
-        // (per rank before the exchange: what rebalancing needs)
-        let counts: Vec<u64> = all.chunks(4).map(|c| c[0]).collect();
-        let any = all.chunks(4).fold(0, |a, c| a | c[1]);
-        if all.chunks(4).any(|c| c[3] > 0)
-            && let Err(e) = r.deliver(&out)
-        {
-            failure = Some(e);
+        let mut flags = (u64::from(failure.is_some()) * FAILED)
+            | (u64::from(sink_failed) * SINK_FAILED)
+            | (u64::from(stop.load(Ordering::Relaxed)) * STOP);
+        if contacts {
+            match scg_core::stages::contacts::ghosts::rebuild_due_here(&mut r.sim.world) {
+                Due::Table => flags |= REBUILD | STALE,
+                Due::Moved => flags |= REBUILD,
+                Due::No => {}
+            }
+            if r.kept() != r.kept_at_rebuild || n == start {
+                flags |= REBUILD | STALE;
+            }
         }
-        times.migrate += t.elapsed();
-        let t = Instant::now();
-        if record && r.sim.step_count().is_multiple_of(params.every) {
+        let any = if contacts && halo.reaches_all() {
+            let any = halo.forward(comm, &mut r.sim, flags, STALE);
+            times.ghosts += t.elapsed();
+            any
+        } else {
+            let any = comm.all_gather_u64(&[flags]).iter().fold(0, |a, f| a | f);
+            times.migrate += t.elapsed();
+            if contacts && any & REBUILD == 0 {
+                let t = Instant::now();
+                halo.forward(comm, &mut r.sim, 0, STALE);
+                times.ghosts += t.elapsed();
+            }
+            any
+        };
+        if count_every_step {
+            let (held, ids) = r.id_digest();
+            let all = comm.all_gather_u64(&[held, ids]);
+            if let Some(log) = counts_log.as_mut()
+                && n > start
+            {
+                let total: u64 = all.chunks(2).map(|c| c[0]).sum();
+                let digest = all.chunks(2).fold(0u64, |a, c| a.wrapping_add(c[1]));
+                let _ = writeln!(log, "{n} {total} {digest}");
+            }
+        }
+        if any & (FAILED | SINK_FAILED) != 0 {
+            break;
+        }
+        if frame_due {
+            let t = Instant::now();
             let f = r.gather_frame(&params);
             sink_failed |= !write(f, &mut sinks);
-        }
-        times.record += t.elapsed();
-        if let Some(log) = counts_log.as_mut() {
-            let digest = all.chunks(4).fold(0u64, |a, c| a.wrapping_add(c[2]));
-            let total: u64 = counts.iter().sum();
-            let _ = writeln!(log, "{} {total} {digest}", r.sim.step_count());
-        }
-        if any & 0b011 != 0 {
-            break;
+            times.record += t.elapsed();
         }
         // A checkpoint at every multiple of the interval, at the end and when interrupted
         // (a collective: every rank's share gathered and merged on rank 0).
-        if let Some(e) = every {
-            let n = r.sim.step_count();
-            if n.is_multiple_of(e) || n >= steps || any & 0b100 != 0 {
-                let t = Instant::now();
-                let saved = r.write_checkpoint(&checkpoint_path, &scene);
-                times.record += t.elapsed();
-                if let Err(e) = &saved {
-                    failure = Some(e.clone());
-                }
-                if !all_ok(comm, saved.is_ok()) {
-                    failure.get_or_insert_with(|| "a checkpoint failed on rank 0".into());
-                    break;
-                }
-                checkpointed = Some(n);
+        if every.is_some() && (ckpt_due || (any & STOP != 0 && n > start)) {
+            let t = Instant::now();
+            let saved = r.write_checkpoint(&checkpoint_path, &scene);
+            times.record += t.elapsed();
+            if let Err(e) = &saved {
+                failure = Some(e.clone());
             }
+            if !all_ok(comm, saved.is_ok()) {
+                failure.get_or_insert_with(|| "a checkpoint failed on rank 0".into());
+                break;
+            }
+            checkpointed = Some(n);
         }
-        if any & 0b100 != 0 {
+        if any & STOP != 0 {
             interrupted = true;
             break;
         }
-        if r.sim.step_count() >= last_rebalance + REBALANCE_MIN_STEPS
-            && needs_rebalance(&counts, REBALANCE_TOLERANCE)
-        {
-            last_rebalance = r.sim.step_count();
-            let t = Instant::now();
-            if let Err(e) = r.rebalance() {
+        if n >= steps {
+            break;
+        }
+        if (contacts && any & REBUILD != 0) || (!contacts && migrate_due) {
+            let ghosts = if contacts { Some(&mut halo) } else { None };
+            if let Err(e) = r.rebuild(ghosts, &mut times, &mut last_rebalance) {
                 failure = Some(e);
             }
-            times.rebalance += t.elapsed();
         }
+        let t = Instant::now();
+        if failure.is_none()
+            && let Err(e) = r.sim.step()
+        {
+            failure = Some(step_failure(e));
+        }
+        times.compute += t.elapsed();
+        n += 1;
     }
     let wall = t0.elapsed().as_secs_f64();
     if let Some(mut log) = counts_log.take() {
@@ -526,13 +637,17 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         }
         if halo.exchanges > 0 {
             eprintln!(
+                "ghosts: {} sets given (rebuilds), states forwarded on {} steps",
+                halo.exchanges, halo.forwards
+            );
+            eprintln!(
                 "ghost exchange per rank (s; ghosts held per step on average; neighbour-list builds, their time in s):"
             );
             for (k, c) in ghost_stats.chunks(4).enumerate() {
                 eprintln!(
                     "  rank {k:<4} {:>9.3}   {:>9.1}   {:>9} {:>9.3}",
                     c[0] as f64 * 1e-9,
-                    c[1] as f64 / halo.exchanges as f64,
+                    c[1] as f64 / (halo.exchanges + halo.forwards) as f64,
                     c[2],
                     c[3] as f64 * 1e-9
                 );

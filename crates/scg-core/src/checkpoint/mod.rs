@@ -143,6 +143,12 @@ impl Simulation {
         Ok(())
     }
 
+    /// Number of particles.
+    pub fn particle_count(&mut self) -> usize {
+        let mut q = self.world.query::<&ParticleId>();
+        q.iter(&self.world).len()
+    }
+
     /// The particles as a frame records them, in table order.
     pub fn frame_rows(&mut self) -> Vec<crate::stages::recording::FrameRow> {
         let mut q = self.world.query::<crate::stages::recording::FrameData>();

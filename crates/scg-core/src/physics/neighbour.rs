@@ -138,7 +138,14 @@ impl NeighbourList {
     /// the accumulated bound exceeds skin/2; it then replaces the bound with the exact
     /// largest displacement.
     pub fn needs_rebuild(&mut self, pos: &[DVec3], drift: Option<f64>) -> bool {
-        if pos.len() != self.reference.len() || self.builds == 0 {
+        self.needs_rebuild_of(pos, pos.len(), drift)
+    }
+
+    /// [`NeighbourList::needs_rebuild`] for a list over `rows` particles of which `pos`
+    /// are the first: the others' displacement is someone else's to check (the ghost rows
+    /// of a decomposed run, checked by the processes that own them).
+    pub fn needs_rebuild_of(&mut self, pos: &[DVec3], rows: usize, drift: Option<f64>) -> bool {
+        if rows != self.reference.len() || pos.len() > rows || self.builds == 0 {
             return true;
         }
         self.drift_bound += drift.unwrap_or(f64::INFINITY);
@@ -147,14 +154,32 @@ impl NeighbourList {
             return false;
         }
         self.checks += 1;
-        let d2 =
-            crate::exec::par::par_max_zip(pos, &self.reference, |x, r| (*x - *r).length_squared());
+        let d2 = crate::exec::par::par_max_zip(pos, &self.reference[..pos.len()], |x, r| {
+            (*x - *r).length_squared()
+        });
         // A NaN displacement (non-finite state) also rebuilds.
         if d2.is_nan() || d2 > half * half {
             return true;
         }
         self.drift_bound = d2.sqrt();
         false
+    }
+
+    /// Whether [`NeighbourList::needs_rebuild_of`] would say so with `drift` more (m),
+    /// changing nothing: the particle count differs from `rows`, or the bound on the
+    /// drift exceeds skin/2 and so does some particle's exact displacement.
+    pub fn would_rebuild(&self, pos: &[DVec3], rows: usize, drift: Option<f64>) -> bool {
+        if rows != self.reference.len() || pos.len() > rows || self.builds == 0 {
+            return true;
+        }
+        let half = 0.5 * self.skin;
+        if self.drift_bound + drift.unwrap_or(f64::INFINITY) <= half {
+            return false;
+        }
+        let d2 = crate::exec::par::par_max_zip(pos, &self.reference[..pos.len()], |x, r| {
+            (*x - *r).length_squared()
+        });
+        d2.is_nan() || d2 > half * half
     }
 
     /// Rebuild if needed (see [`NeighbourList::needs_rebuild`]); returns true when it

@@ -268,8 +268,22 @@ pub fn plugin(world: &mut World, b: &mut StepBuilder, specs: &[FeederSpec], seed
     );
 }
 
+/// Which fed particles this process spawns (resource; a run decomposed over processes,
+/// `scg-mpi`): every process runs every feeder from the scene's seed (the same ids,
+/// positions and random streams everywhere) and spawns only the particles `keep` gives
+/// it, so that no process scans its particles for strangers after a feed. Without this
+/// resource every fed particle is spawned.
+#[derive(Resource, Clone)]
+pub struct SpawnOwner {
+    /// Whether this process owns a particle with this id fed at this position (m).
+    pub keep: Arc<dyn Fn(u32, DVec3) -> bool + Send + Sync>,
+    /// Fed particles spawned here so far.
+    pub kept: u64,
+}
+
 /// Spawn the particles due at the end of this step (coarse-grained at spawn, so the frame
 /// recorded this step shows their simulated diameter and density).
+#[allow(clippy::too_many_arguments)]
 pub fn feed_particles(
     mut commands: Commands,
     clock: Res<SimClock>,
@@ -278,6 +292,7 @@ pub fn feed_particles(
     mut next: ResMut<NextParticleId>,
     mut tally: ResMut<Tally>,
     mesh: Option<Res<MeshFlowState>>,
+    mut owner: Option<ResMut<SpawnOwner>>,
 ) {
     let t = clock.time();
     let flow = mesh.as_deref().map(|m| &*m.spec.flow);
@@ -341,7 +356,17 @@ pub fn feed_particles(
                 velocity,
             };
             let id = next.take();
-            spawn_particle_deferred_in(&mut commands, &rules, &spec, id, clock.dt, cell);
+            let mine = match owner.as_deref_mut() {
+                Some(o) if !(o.keep)(id, position) => false,
+                Some(o) => {
+                    o.kept += 1;
+                    true
+                }
+                None => true,
+            };
+            if mine {
+                spawn_particle_deferred_in(&mut commands, &rules, &spec, id, clock.dt, cell);
+            }
             f.fed += 1;
             if let Some(c) = tally.fed.get_mut(group as usize) {
                 *c += 1;

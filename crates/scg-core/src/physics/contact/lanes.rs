@@ -45,7 +45,7 @@ mod x86 {
 
     use super::HertzMindlin;
     use crate::physics::contact::normal::OVERLAP_CAP;
-    use crate::physics::contact::pair::{Bodies, PairParams, PairsMut};
+    use crate::physics::contact::pair::{Bodies, PairParams, PairsMut, Rows};
 
     /// What four pairs do to their particles, a row per pair (lane), laid out as the
     /// force slots' per-particle sums `[force, torque]` so a row adds to them whole.
@@ -132,9 +132,7 @@ mod x86 {
         let ij = at.map(|k| unsafe { *pairs.ij.get_unchecked(k) });
         let (i, j) = (ij.map(|p| p[0] as usize), ij.map(|p| p[1] as usize));
         // SAFETY (`v3`, `radius`): every i and j indexes `b`'s arrays (the contract).
-        let v3 = |a: &[glam::DVec3], r: [usize; 4]| {
-            r.map(|k| unsafe { a.as_ptr().add(k) } as *const f64)
-        };
+        let v3 = |a: Rows, r: [usize; 4]| r.map(|k| unsafe { a.ptr(k) });
         let radius = |k: usize| unsafe { *b.radius.get_unchecked(k) };
         // SAFETY: every pointer addresses a DVec3 (three consecutive f64, `repr(C)`).
         let (pi, pj, shift, vi, vj, wi, wj, hist) = unsafe {
@@ -298,9 +296,9 @@ mod tests {
                 .map(|_| (DVec3::new(rng.random(), rng.random(), rng.random()) - 0.5) * 100.0)
                 .collect();
             let b = Bodies {
-                pos: &pos,
-                vel: &vel,
-                omega: &omega,
+                pos: (&pos).into(),
+                vel: (&vel).into(),
+                omega: (&omega).into(),
                 radius: &radius,
             };
             let mut ij = Vec::new();

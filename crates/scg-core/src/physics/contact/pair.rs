@@ -212,14 +212,86 @@ pub struct PairContact {
     pub torque_j: DVec3,
 }
 
+/// One per-particle vector column as the pair kernel reads it: the particle table's rows
+/// followed by the ghost rows of a decomposed run, read in place from the two slices
+/// (row k < `local.len()` is `local[k]`, the rows after are `ghost`'s), so that a step
+/// copies neither.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Rows<'a> {
+    /// The particle table's rows.
+    pub local: &'a [DVec3],
+    /// The ghost rows after them.
+    pub ghost: &'a [DVec3],
+}
+
+impl<'a> Rows<'a> {
+    /// The table's rows followed by `ghost`.
+    pub fn new(local: &'a [DVec3], ghost: &'a [DVec3]) -> Self {
+        Rows { local, ghost }
+    }
+
+    /// Number of rows.
+    #[inline(always)]
+    pub fn len(&self) -> usize {
+        self.local.len() + self.ghost.len()
+    }
+
+    /// True when there is no row.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Pointer to row `k` (three consecutive f64).
+    ///
+    /// # Safety
+    /// `k` must be below [`Rows::len`].
+    #[inline(always)]
+    pub unsafe fn ptr(&self, k: usize) -> *const f64 {
+        let n = self.local.len();
+        // SAFETY: k < len (the contract), so it indexes one of the two slices.
+        unsafe {
+            if k < n {
+                self.local.as_ptr().add(k) as *const f64
+            } else {
+                self.ghost.as_ptr().add(k - n) as *const f64
+            }
+        }
+    }
+}
+
+impl<'a> From<&'a [DVec3]> for Rows<'a> {
+    fn from(local: &'a [DVec3]) -> Self {
+        Rows { local, ghost: &[] }
+    }
+}
+
+impl<'a> From<&'a Vec<DVec3>> for Rows<'a> {
+    fn from(local: &'a Vec<DVec3>) -> Self {
+        Rows { local, ghost: &[] }
+    }
+}
+
+impl std::ops::Index<usize> for Rows<'_> {
+    type Output = DVec3;
+    #[inline(always)]
+    fn index(&self, k: usize) -> &DVec3 {
+        let n = self.local.len();
+        if k < n {
+            &self.local[k]
+        } else {
+            &self.ghost[k - n]
+        }
+    }
+}
+
 /// Per-particle inputs of the pair kernel.
 pub struct Bodies<'a> {
     /// Centres, m.
-    pub pos: &'a [DVec3],
+    pub pos: Rows<'a>,
     /// Velocities, m/s.
-    pub vel: &'a [DVec3],
+    pub vel: Rows<'a>,
     /// Angular velocities, rad/s.
-    pub omega: &'a [DVec3],
+    pub omega: Rows<'a>,
     /// Radii, m.
     pub radius: &'a [f64],
 }

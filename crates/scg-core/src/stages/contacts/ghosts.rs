@@ -133,6 +133,80 @@ pub fn table_rows_where(world: &mut World, mut keep: impl FnMut(DVec3, f64) -> b
     g
 }
 
+/// The rows of the particle table whose position and radius (m) `keep` accepts: their
+/// row indices in the table and their ghost rows, in table order (what a driver sends as
+/// ghosts and then forwards by row until the next ghost set).
+pub fn table_rows_indexed_where(
+    world: &mut World,
+    mut keep: impl FnMut(DVec3, f64) -> bool,
+) -> (Vec<u32>, Ghosts) {
+    let mut k = 0u32;
+    let mut rows = Vec::new();
+    let g = table_rows_where(world, |x, r| {
+        let kept = keep(x, r);
+        if kept {
+            rows.push(k);
+        }
+        k += 1;
+        kept
+    });
+    (rows, g)
+}
+
+/// The position (m), velocity (m/s) and angular velocity (rad/s) of table rows `rows`, as
+/// nine f64 per row (x, v, ω), appended to `out`: the states a driver forwards to
+/// the ghosts of its particles elsewhere.
+///
+/// # Panics
+/// When a row is past the table.
+pub fn table_states(world: &mut World, rows: &[u32], out: &mut Vec<f64>) {
+    let mut qs = world.query::<(&Position, &Velocity, &AngularVelocity)>();
+    let q = qs.query(world);
+    let Some((xs, vs, ws)) = crate::stages::table::columns(&q) else {
+        assert!(rows.is_empty(), "ghost rows of an empty table");
+        return;
+    };
+    out.reserve(9 * rows.len());
+    for &k in rows {
+        let k = k as usize;
+        for v in [xs[k].0, vs[k].0, ws[k].0] {
+            out.extend_from_slice(&v.to_array());
+        }
+    }
+}
+
+/// Why a process of a decomposed run needs a new ghost set before its next step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Due {
+    /// It does not.
+    No,
+    /// A particle here moved more than half the skin since the list was built.
+    Moved,
+    /// The particle table is not the rows the list was built over (a particle fed,
+    /// drained or moved here): its rows cannot be forwarded either.
+    Table,
+}
+
+/// Whether this process's part of a decomposed run needs a new ghost set before its next
+/// step (asked between steps; changes nothing). The driver gives every process a new
+/// set when any of them says so; ghosts are checked by their owners, never here. A feed
+/// and a drain in the same step leave the count alone: the driver counts its feeds.
+pub fn rebuild_due_here(world: &mut World) -> Due {
+    let peek = world.resource::<crate::state::StepDisplacement>().peek();
+    let mut qs = world.query::<&Position>();
+    let q = qs.query(world);
+    let pos: &[Position] = crate::stages::table::columns(&q).unwrap_or_default();
+    let pos = <Position as bytemuck::TransparentWrapper<DVec3>>::peel_slice(pos);
+    let st = world.resource::<ContactState>();
+    if pos.len() != st.local || !st.arrived.is_empty() {
+        Due::Table
+    } else if st.list.would_rebuild(pos, st.ids.len(), peek) {
+        Due::Moved
+    } else {
+        Due::No
+    }
+}
+
 /// The tangential history of one touching pair, keyed by its particles' ids, as seen
 /// from particle `a` (what migrates with a particle).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -155,6 +229,25 @@ impl ContactState {
     pub fn set_ghosts(&mut self, ghosts: Ghosts) {
         assert!(ghosts.consistent(), "ghost rows of unequal lengths");
         self.ghosts = ghosts;
+        self.rebuild_due = true;
+    }
+
+    /// Give the ghost rows of the set last given ([`ContactState::set_ghosts`]) their
+    /// states for the coming step: positions (m), velocities (m/s) and angular
+    /// velocities (rad/s), row for row. The list is not rebuilt: the driver guarantees
+    /// that no ghost moved more than half the skin since the set was given.
+    ///
+    /// # Panics
+    /// When a slice's length differs from the ghost count.
+    pub fn forward_ghosts(&mut self, pos: &[DVec3], vel: &[DVec3], omega: &[DVec3]) {
+        let g = &mut self.ghosts;
+        assert!(
+            pos.len() == g.len() && vel.len() == g.len() && omega.len() == g.len(),
+            "forwarded ghost states for another ghost set"
+        );
+        g.pos.copy_from_slice(pos);
+        g.vel.copy_from_slice(vel);
+        g.omega.copy_from_slice(omega);
     }
 
     /// The ghost rows of the coming (or last) step.

@@ -28,9 +28,9 @@ use crate::state::{SimClock, StepDisplacement};
 /// are gathered again, the list is rebuilt and each touching pair's history is carried
 /// over by (id_i, id_j).
 ///
-/// Ghost rows ([`super::ghosts`]) follow the table's rows: the set changes when their ids
-/// do, their positions are those set for this step, and the list holds no ghost–ghost
-/// pair.
+/// Ghost rows ([`super::ghosts`]) follow the table's rows: the list is rebuilt when a
+/// driver gives a ghost set ([`ContactState::set_ghosts`]), not when it forwards their
+/// states ([`ContactState::forward_ghosts`]), and it holds no ghost–ghost pair.
 pub fn maintain_neighbour_list(
     mut state: ResMut<ContactState>,
     clock: Res<SimClock>,
@@ -43,24 +43,23 @@ pub fn maintain_neighbour_list(
     let (ids, groups, xs, ds, ms) = columns(&q).unwrap_or_default();
     let pos = Position::peel_slice(xs);
     let table_ids = ParticleId::peel_slice(ids);
-    // Ghost rows (a decomposed run) follow the table's rows; their positions are copied
-    // in each step. Their displacement is not the integrator's here: the exact check
-    // runs every step then.
-    let ghosts = !st.ghosts.is_empty();
-    let all_pos: std::borrow::Cow<[DVec3]> = if ghosts {
-        std::borrow::Cow::Owned([pos, &st.ghosts.pos].concat())
-    } else {
-        std::borrow::Cow::Borrowed(pos)
-    };
-    let drift = if ghosts { None } else { drift };
-    let same_set = st.local == table_ids.len()
+    // Ghost rows (a decomposed run) follow the table's rows. Between two ghost sets the
+    // driver forwards their states and guarantees that none moved more than skin/2 since
+    // the set was given (their owners check them); only the table's rows are checked
+    // here, and the list is rebuilt whenever a new set is given.
+    let rows = table_ids.len() + st.ghosts.len();
+    let same_set = !st.rebuild_due
+        && st.local == table_ids.len()
         && st.ids[..st.local] == *table_ids
         && st.ids[st.local..] == st.ghosts.ids[..];
+    st.rebuild_due = false;
+    let joined = |st: &ContactState| -> Vec<DVec3> { [pos, &st.ghosts.pos].concat() };
     if same_set && st.arrived.is_empty() {
-        if !st.list.needs_rebuild(&all_pos, drift) {
+        if !st.list.needs_rebuild_of(pos, rows, drift) {
             return;
         }
         let touching = touching_pairs(st);
+        let all_pos = joined(st);
         st.list.build(&all_pos, &st.radius);
         drop_ghost_pairs(st);
         carry_history(st, &all_pos, touching, None);
@@ -69,6 +68,7 @@ pub fn maintain_neighbour_list(
     }
     let touching = touching_pairs(st);
     let old_ids = gather(st, ids, groups, ds, ms, clock.dt);
+    let all_pos = joined(st);
     st.list.build(&all_pos, &st.radius);
     drop_ghost_pairs(st);
     carry_history(st, &all_pos, touching, Some(&old_ids));

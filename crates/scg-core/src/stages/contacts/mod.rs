@@ -94,6 +94,8 @@ pub struct ContactState {
     local: usize,
     /// Ghost rows set by a decomposed run's driver for the coming step (empty otherwise).
     ghosts: ghosts::Ghosts,
+    /// A ghost set was given since the last neighbour stage: rebuild the list.
+    rebuild_due: bool,
     /// Pair histories brought by particles that moved here, for the next rebuild.
     arrived: Vec<ghosts::PairHistory>,
     /// Groups, by row.
@@ -131,6 +133,7 @@ impl ContactState {
             ids: Vec::new(),
             local: 0,
             ghosts: ghosts::Ghosts::default(),
+            rebuild_due: false,
             arrived: Vec::new(),
             group: Vec::new(),
             radius: Vec::new(),

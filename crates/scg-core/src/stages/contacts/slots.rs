@@ -11,7 +11,7 @@ use glam::DVec3;
 use super::ContactState;
 use crate::components::*;
 use crate::physics::contact::lanes::HertzMindlin;
-use crate::physics::contact::pair::{Bodies, PairContact, PairParams, PairsMut};
+use crate::physics::contact::pair::{Bodies, PairContact, PairParams, PairsMut, Rows};
 use crate::physics::contact::tangential::HertzPair;
 use crate::stages::table::columns;
 use crate::state::{ContactResolution, SimClock, Tally};
@@ -353,7 +353,7 @@ fn list_touching(
         let (i, j) = (ij.map(|p| p[0] as usize), ij.map(|p| p[1] as usize));
         // SAFETY (here and below): every index of `i` and `j` is below `rows`, checked
         // just above.
-        let row = |k: usize| unsafe { b.pos.as_ptr().add(k) } as *const f64;
+        let row = |k: usize| unsafe { b.pos.ptr(k) };
         let radius = |k: usize| unsafe { *b.radius.get_unchecked(k) };
         // SAFETY: each pointer addresses a DVec3 (three f64); four shifts are 12 f64.
         let mut d = unsafe { V4::gather(j.map(row)) - V4::gather(i.map(row)) };
@@ -495,33 +495,19 @@ pub fn particle_contact_forces(
         Velocity::peel_slice(vs),
         AngularVelocity::peel_slice(ws),
     );
-    // Ghost rows (a decomposed run) after the table's: the states of this step.
+    // Ghost rows (a decomposed run) after the table's: the states of this step, read in
+    // place after the table's.
     let g = &st.ghosts;
     assert_eq!(
         st.ids[n..],
         g.ids[..],
         "the ghosts changed after the neighbour stage"
     );
-    let joined: Option<[Vec<DVec3>; 3]> = (!g.is_empty()).then(|| {
-        [
-            [xs, &g.pos].concat(),
-            [vs, &g.vel].concat(),
-            [ws, &g.omega].concat(),
-        ]
-    });
-    let bodies = match &joined {
-        Some([x, v, w]) => Bodies {
-            pos: x,
-            vel: v,
-            omega: w,
-            radius: &st.radius,
-        },
-        None => Bodies {
-            pos: xs,
-            vel: vs,
-            omega: ws,
-            radius: &st.radius,
-        },
+    let bodies = Bodies {
+        pos: Rows::new(xs, &g.pos),
+        vel: Rows::new(vs, &g.vel),
+        omega: Rows::new(ws, &g.omega),
+        radius: &st.radius,
     };
     // Few contacts last step: record the particles written, so the kick and the next
     // clear visit only those. Many: sum and clear every particle (no bookkeeping).

@@ -59,9 +59,9 @@ fn a_pair_past_the_particles_panics() {
     }
     let group = vec![0; n];
     let bodies = Bodies {
-        pos: &pos,
-        vel: &vel,
-        omega: &vel,
+        pos: (&pos).into(),
+        vel: (&vel).into(),
+        omega: (&vel).into(),
         radius: &radius,
     };
     let kernel = test_kernel(bodies, par, &group);
@@ -136,9 +136,9 @@ fn avx2_and_portable_slot_loops_agree_bit_for_bit() {
         }
         let group = vec![0; n];
         let bodies = Bodies {
-            pos: &pos,
-            vel: &vel,
-            omega: &omega,
+            pos: (&pos).into(),
+            vel: (&vel).into(),
+            omega: (&omega).into(),
             radius: &radius,
         };
         let kernel = test_kernel(bodies, par, &group);
