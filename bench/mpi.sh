@@ -19,8 +19,7 @@
 #   1x2        1 rank × 2 threads (the ordinary run)
 #   1x1        1 rank × 1 thread
 #   1x2 drv    1 rank × 2 threads through the decomposed driver (`mpirun -np 1` with
-#              SCG_MPI_COUNTS=/dev/null): its migration share is the local per-step cost
-#              of looking for leaving particles and digesting the ids, without any peer
+#              SCG_MPI_DRIVER=1): what the driver itself costs, without any peer
 #   2x1 slabs  `mpirun -np 2 scg run --threads 1` (slabs along the longest extent)
 #   2x1 ids    the same with SCG_MPI_DECOMP=ids (particles shared by id: nothing migrates)
 # Rate = particle-steps / wall time of the stepping loop (the `done:` line; summed over the
@@ -97,7 +96,7 @@ run() {
   case "$cfg" in
     1x2) $NICE "$SCG" run "$scene" --no-record --threads 2 "$@" >"$log" 2>&1 || true ;;
     1x1) $NICE "$SCG" run "$scene" --no-record --threads 1 "$@" >"$log" 2>&1 || true ;;
-    1x2drv) SCG_MPI_COUNTS=/dev/null $NICE "${MPIRUN[@]}" -x SCG_MPI_COUNTS -np 1 "$SCG" run "$scene" \
+    1x2drv) SCG_MPI_DRIVER=1 $NICE "${MPIRUN[@]}" -x SCG_MPI_DRIVER -np 1 "$SCG" run "$scene" \
       --no-record --threads 2 "$@" >"$log" 2>&1 || true ;;
     2x1slabs) $NICE "${MPIRUN[@]}" -np 2 "$SCG" run "$scene" --no-record --threads 1 "$@" >"$log" 2>&1 || true ;;
     2x1ids) SCG_MPI_DECOMP=ids $NICE "${MPIRUN[@]}" -x SCG_MPI_DECOMP -np 2 "$SCG" run "$scene" \
@@ -167,6 +166,7 @@ bench_scene() {
   local two
   two=$(python3 -c "print(max([float(x) for x in ['${best[2x1slabs]}', '${best[2x1ids]}'] if x != 'refused'] or [0]))")
   python3 -c "print('  ratio 2 ranks × 1 thread (best of slabs, ids) / 1 rank × 2 threads: ' + (f'{$two / ${best[1x2]}:.2f}' if $two > 0 else 'none (refused)'))"
+  python3 -c "print('  ratio 2 ranks × 1 thread (best of slabs, ids) / 1 rank × 1 thread: ' + (f'{$two / ${best[1x1]}:.2f}' if $two > 0 else 'none (refused)'))"
 }
 
 # A scene with particle contacts: as it is when 2 ranks in slabs take its contacts, else

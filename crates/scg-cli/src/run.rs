@@ -68,6 +68,13 @@ pub struct RunArgs {
     /// depth rate, impacts) as a legacy-VTK surface to FILE (ParaView).
     #[arg(long, value_name = "FILE")]
     pub erosion_vtk: Option<PathBuf>,
+    /// Over MPI ranks: every rank writes its own particles of every frame
+    /// (`<stem>.rank<k>.mcap`) and rank 0 the index `<stem>.mcap`, which `scg replay`
+    /// (`--verify`, `--rrd`, `--vtk`) and the analyses read as one recording; no rank
+    /// holds a whole frame, and no `.rrd` is written (`scg replay <stem>.mcap --rrd FILE`
+    /// makes one). On one rank, the ordinary recording.
+    #[arg(long)]
+    pub per_rank: bool,
 }
 
 impl Default for RunArgs {
@@ -88,6 +95,7 @@ impl Default for RunArgs {
             fates_csv: None,
             erosion_csv: None,
             erosion_vtk: None,
+            per_rank: false,
         }
     }
 }

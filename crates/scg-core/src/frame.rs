@@ -132,6 +132,10 @@ pub struct RunMeta {
     pub patches: Vec<PatchSurface>,
     /// Warnings from the scene check (`scg check`), logged as text.
     pub warnings: Vec<String>,
+    /// A recording written per MPI rank: the files of its parts, one per rank in rank
+    /// order, relative to this file's folder, each holding that rank's particles of every
+    /// frame; this file (the index) holds no frame. Empty otherwise.
+    pub parts: Vec<String>,
 }
 
 /// The wear of a run's walls (`[erosion]`), handed to the recorders once, at the end of

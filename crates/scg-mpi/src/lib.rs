@@ -55,8 +55,11 @@ pub fn main() -> i32 {
     };
     let comm = comm::Comm::new(universe.world());
     // One rank is the ordinary run, unless the per-step counts are asked for (the
-    // reference of the tests).
-    if comm.size() == 1 && std::env::var_os("SCG_MPI_COUNTS").is_none() {
+    // reference of the tests) or the driver itself (SCG_MPI_DRIVER=1: what it costs).
+    if comm.size() == 1
+        && std::env::var_os("SCG_MPI_COUNTS").is_none()
+        && std::env::var_os("SCG_MPI_DRIVER").is_none()
+    {
         return scg_cli::main();
     }
     let local: usize = std::env::var("OMPI_COMM_WORLD_LOCAL_SIZE")

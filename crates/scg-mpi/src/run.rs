@@ -238,6 +238,26 @@ impl Ranked<'_> {
         self.migrate()
     }
 
+    /// The frame to write here: this rank's own part of it (`per_rank`), or the whole
+    /// frame gathered on rank 0 (`None` on the others).
+    fn frame(
+        &mut self,
+        params: &RecordingParams,
+        per_rank: bool,
+    ) -> Option<scg_core::frame::Frame> {
+        if !per_rank {
+            return self.gather_frame(params);
+        }
+        let tally = self.sim.world.resource::<Tally>().clone();
+        Some(frame_from_rows(
+            self.sim.step_count(),
+            self.sim.time(),
+            params,
+            &tally,
+            self.sim.frame_rows(),
+        ))
+    }
+
     /// Gather the particles on rank 0; the frame there (`None` on the other ranks).
     fn gather_frame(&mut self, params: &RecordingParams) -> Option<scg_core::frame::Frame> {
         let tally = self.sim.world.resource::<Tally>().clone();
@@ -310,7 +330,19 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         }
         return EXIT_BAD_INPUT;
     }
-    // The recording stage is the driver's (gathered on rank 0), not the schedule's.
+    // Written per rank, a frame is never whole anywhere: the formats that need it are
+    // made from the set afterwards.
+    let per_rank = args.per_rank && comm.size() > 1 && record;
+    if per_rank && (args.vtk.is_some() || args.frames_csv.is_some()) {
+        if root {
+            eprintln!(
+                "error: --per-rank writes no whole frame, so no --vtk or --frames-csv during the run: make them from the recording with `scg replay <stem>.mcap --vtk DIR` (or --frames-csv DIR)"
+            );
+        }
+        return EXIT_BAD_INPUT;
+    }
+    // The recording stage is the driver's (gathered on rank 0, or each rank's own part
+    // with --per-rank), not the schedule's.
     let mut sim = scene.build(false);
     let Ckpt {
         every,
@@ -335,14 +367,20 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
     let mut sinks: Option<Box<dyn FrameSink>> = None;
     let mut paths = Vec::new();
     let mut made = Ok(());
-    if root && record {
+    if per_rank {
+        made = make_part_sink(&scene, &args, &report, &stem, comm, &mut paths)
+            .map(|s| sinks = Some(s));
+        if let Err((e, _)) = &made {
+            eprintln!("error: rank {}: {e}", comm.rank());
+        }
+    } else if root && record {
         made = make_sinks(&scene, &args, &report, &stem, &mut paths).map(|s| sinks = Some(s));
         if let Err((e, _)) = &made {
             eprintln!("error: {e}");
         }
     }
     if !all_ok(comm, made.is_ok()) {
-        // Rank 0 knows why; the others stop with the same status.
+        // The ranks that failed know why; the others stop with the same status.
         let code = match &made {
             Err((_, c)) => *c as u64,
             Ok(()) => 0,
@@ -423,7 +461,7 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         sink_err.is_none()
     };
     if record {
-        let f = r.gather_frame(&params);
+        let f = r.frame(&params, per_rank);
         write(f, &mut sinks);
     }
     // `SCG_MPI_COUNTS=FILE`: rank 0 writes the step, the particle count and an
@@ -515,7 +553,7 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         }
         if frame_due {
             let t = Instant::now();
-            let f = r.gather_frame(&params);
+            let f = r.frame(&params, per_rank);
             sink_failed |= !write(f, &mut sinks);
             times.record += t.elapsed();
         }
@@ -674,6 +712,45 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         return any_code as i32;
     }
     if interrupted { 130 } else { 0 }
+}
+
+/// The recorder of this rank's part of a recording written per rank
+/// (`<stem>.rank<k>.mcap`); rank 0 also writes the index `<stem>.mcap` naming the parts.
+/// `Err` holds the message and the exit status.
+fn make_part_sink(
+    scene: &scg_scene::Scene,
+    args: &RunArgs,
+    report: &scg_scene::check::Report,
+    stem: &str,
+    comm: &Comm,
+    paths: &mut Vec<std::path::PathBuf>,
+) -> Result<Box<dyn FrameSink>, (String, i32)> {
+    ensure_writable(&args.out).map_err(|e| (e, EXIT_BAD_INPUT))?;
+    let meta = scene.run_meta(report.messages());
+    let io = |e: scg_record::RecordError| (e.to_string(), 1);
+    let part = |k: usize| format!("{stem}.rank{k}.mcap");
+    if comm.rank() == 0 {
+        let index = args.out.join(format!("{stem}.mcap"));
+        let meta = RunMeta {
+            parts: (0..comm.size()).map(part).collect(),
+            ..meta.clone()
+        };
+        scg_record::McapSink::create(&index, &meta)
+            .and_then(|mut s| s.close())
+            .map_err(io)?;
+        paths.push(index);
+    }
+    let path = args.out.join(part(comm.rank()));
+    let sink = scg_record::McapSink::create(&path, &meta).map_err(io)?;
+    if comm.rank() == 0 {
+        paths.push(
+            args.out
+                .join(format!("{stem}.rank*.mcap ({} parts)", comm.size())),
+        );
+    }
+    Ok(Box::new(scg_record::Background::spawn(vec![Box::new(
+        sink,
+    )])))
 }
 
 /// The recorders of rank 0: one `.rrd`, one `.mcap` and the VTK/CSV frames asked for

@@ -166,6 +166,11 @@ pub const META_OUTLINES: &str = "outlines";
 /// optional, absent in older recordings).
 pub const META_SCENE_DIR: &str = "scene_dir";
 
+/// Metadata key: JSON array of the part files of a recording written per MPI rank
+/// (names relative to the index file's folder, in rank order); present only in such an
+/// index, which holds no frame ([`scg_core::frame::RunMeta::parts`]).
+pub const META_PARTS: &str = "parts";
+
 /// Colour (sRGB and alpha, 0–255) a boundary patch is drawn in, by role: walls grey and
 /// most translucent, outlets green, inlets blue, lost patches red.
 pub fn patch_color(role: &str) -> [u8; 4] {

@@ -27,6 +27,7 @@ pub mod layout;
 mod mcap_read;
 mod mcap_scene;
 mod mcap_write;
+mod parts;
 mod rrd_write;
 pub mod vtk;
 

@@ -14,8 +14,8 @@ use scg_core::frame::{Frame, GroupMeta, Outline, PatchSurface, RunMeta};
 
 use crate::layout::{
     EROSION_ATTACHMENT, FORMAT_VERSION, FieldType, GroupJson, META_CASE, META_DT, META_FORMAT,
-    META_GROUPS, META_OUTLINES, META_RECORD_EVERY, META_SCENE_DIR, META_SCG_VERSION, META_SEED,
-    META_WARNINGS, METADATA_NAME, OutlineJson, POINT_FIELD_FLUCTUATION, POINT_FIELDS,
+    META_GROUPS, META_OUTLINES, META_PARTS, META_RECORD_EVERY, META_SCENE_DIR, META_SCG_VERSION,
+    META_SEED, META_WARNINGS, METADATA_NAME, OutlineJson, POINT_FIELD_FLUCTUATION, POINT_FIELDS,
     SCENE_ATTACHMENT, StatsIn, TOPIC_PARTICLES, TOPIC_PATCHES, TOPIC_STATS,
 };
 use crate::{RecordError, Recording};
@@ -119,12 +119,17 @@ pub fn read_mcap(path: &Path) -> Result<Recording, RecordError> {
             _ => {}
         }
     }
-    Ok(Recording {
+    let rec = Recording {
         meta,
         frames,
         complete,
         wear: state.wear.take(),
-    })
+    };
+    if rec.meta.parts.is_empty() {
+        Ok(rec)
+    } else {
+        crate::parts::merge_parts(path, rec)
+    }
 }
 
 /// What a channel carries.
@@ -281,6 +286,10 @@ fn parse_meta(entries: &BTreeMap<String, String>) -> Result<RunMeta, String> {
         outlines: outlines.into_iter().map(Outline::from).collect(),
         patches: Vec::new(),
         warnings,
+        parts: match entries.get(META_PARTS) {
+            Some(text) => serde_json::from_str(text).map_err(|e| bad(META_PARTS, &e))?,
+            None => Vec::new(),
+        },
     })
 }
 

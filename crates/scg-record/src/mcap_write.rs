@@ -20,11 +20,11 @@ use crate::mcap_scene::{identity, patches_update, walls_update};
 
 use crate::layout::{
     EROSION_ATTACHMENT, FORMAT_VERSION, FRAME_ID, FieldType, GroupJson, META_CASE, META_DT,
-    META_FORMAT, META_GROUPS, META_OUTLINES, META_RECORD_EVERY, META_SCENE_DIR, META_SCG_VERSION,
-    META_SEED, META_WARNINGS, METADATA_NAME, OrderedValues, OutlineJson, POINT_FIELD_FLUCTUATION,
-    POINT_FIELDS, POINT_STRIDE, POINT_STRIDE_FLUCTUATION, SCENE_ATTACHMENT, SCENE_MEDIA_TYPE,
-    STATS_JSON_SCHEMA, STATS_SCHEMA_NAME, StatsOut, TOPIC_PARTICLES, TOPIC_PATCHES, TOPIC_STATS,
-    TOPIC_WALLS,
+    META_FORMAT, META_GROUPS, META_OUTLINES, META_PARTS, META_RECORD_EVERY, META_SCENE_DIR,
+    META_SCG_VERSION, META_SEED, META_WARNINGS, METADATA_NAME, OrderedValues, OutlineJson,
+    POINT_FIELD_FLUCTUATION, POINT_FIELDS, POINT_STRIDE, POINT_STRIDE_FLUCTUATION,
+    SCENE_ATTACHMENT, SCENE_MEDIA_TYPE, STATS_JSON_SCHEMA, STATS_SCHEMA_NAME, StatsOut,
+    TOPIC_PARTICLES, TOPIC_PATCHES, TOPIC_STATS, TOPIC_WALLS,
 };
 use crate::{RecordError, check_frame, commit_partial, partial_path};
 
@@ -131,7 +131,7 @@ fn to_json<T: serde::Serialize + ?Sized>(value: &T) -> Result<String, RecordErro
 fn meta_entries(meta: &RunMeta) -> Result<BTreeMap<String, String>, RecordError> {
     let groups: Vec<GroupJson> = meta.groups.iter().map(GroupJson::from).collect();
     let outlines: Vec<OutlineJson> = meta.outlines.iter().map(OutlineJson::from).collect();
-    Ok(BTreeMap::from([
+    let mut entries = BTreeMap::from([
         (META_FORMAT.to_owned(), FORMAT_VERSION.to_owned()),
         (META_SCG_VERSION.to_owned(), meta.scg_version.clone()),
         (META_CASE.to_owned(), meta.case.clone()),
@@ -143,7 +143,11 @@ fn meta_entries(meta: &RunMeta) -> Result<BTreeMap<String, String>, RecordError>
         (META_WARNINGS.to_owned(), to_json(&meta.warnings)?),
         (META_OUTLINES.to_owned(), to_json(&outlines)?),
         (META_SCENE_DIR.to_owned(), meta.scene_dir.clone()),
-    ]))
+    ]);
+    if !meta.parts.is_empty() {
+        entries.insert(META_PARTS.to_owned(), to_json(&meta.parts)?);
+    }
+    Ok(entries)
 }
 
 fn field((name, offset, ty): (&str, u32, FieldType)) -> PackedElementField {

@@ -243,6 +243,7 @@ impl Scene {
                 })
                 .collect(),
             scene_toml: self.source.clone(),
+            parts: Vec::new(),
             scene_dir: self.scene_dir(),
             outlines: self
                 .walls
