@@ -8,16 +8,19 @@
 //! What a rank holds only its share of: the particles (concatenated, in id order),
 //! particle-steps, drained and collision counts, the outlet's, patches', impulse walls'
 //! and collecting zones' logs (summed, or concatenated and sorted). The largest
-//! displacement is the largest over the ranks. Particle contacts (their pair histories)
-//! and collecting zones that wait are not merged yet: [`refusal`] names them.
+//! displacement is the largest over the ranks. Particle contacts: the touching pairs of
+//! every rank, each once, keyed by ids ([`merge_contacts`]), for the first neighbour
+//! stage after the restart to take up whatever the particles' new rows. Collecting zones
+//! that wait are not merged yet: [`refusal`] names them.
 
+use std::collections::BTreeMap;
+
+use glam::DVec3;
 use scg_core::checkpoint::Checkpoint;
+use scg_core::checkpoint::records::{ContactRecord, PairRecord};
 
 /// Why a scene's checkpoints cannot yet be written or read over ranks, if they cannot.
-pub fn refusal(scene: &scg_scene::Scene, contacts: bool) -> Option<&'static str> {
-    if contacts {
-        return Some("particle contacts (their pair histories are not merged over ranks yet)");
-    }
+pub fn refusal(scene: &scg_scene::Scene) -> Option<&'static str> {
     if scene.zones.iter().any(|z| z.collects_after > 0.0) {
         return Some(
             "collecting zones that wait (`collects_after`: who waits where is not merged over ranks yet)",
@@ -49,8 +52,11 @@ pub fn merge(mut parts: Vec<Checkpoint>) -> Option<Checkpoint> {
     if parts.is_empty() {
         return None;
     }
+    let contacts: Vec<Option<ContactRecord>> =
+        parts.iter_mut().map(|c| c.contacts.take()).collect();
     let rest = parts.split_off(1);
     let mut out = parts.pop()?;
+    out.contacts = merge_contacts(&contacts);
     let mut largest = f64::from_bits(out.displacement.0);
     for c in rest {
         out.particle_steps += c.particle_steps;
@@ -96,6 +102,60 @@ pub fn merge(mut parts: Vec<Checkpoint>) -> Option<Checkpoint> {
     }
     out.collect_inside.sort_unstable();
     Some(out)
+}
+
+/// The touching pairs of every rank's contact record (rows of its particles and its
+/// ghosts) as one record over their ids: each pair once (a pair across a cut is held by
+/// the two ranks of its particles, the same history seen from either), oriented from the
+/// lower id, the list to be rebuilt (no reference positions). Restored, by one rank or
+/// many, it is not the particle table's rows, so the first neighbour stage gathers the
+/// rows, rebuilds the list and gives each touching pair its history by the two ids
+/// (`ContactState::restore`). `None` without contacts.
+pub fn merge_contacts(parts: &[Option<ContactRecord>]) -> Option<ContactRecord> {
+    let first = parts.iter().flatten().next()?;
+    let mut touching: BTreeMap<(u32, u32), (DVec3, DVec3)> = BTreeMap::new();
+    let (mut builds, mut checks) = (0, 0);
+    for rec in parts.iter().flatten() {
+        builds = builds.max(rec.builds);
+        checks += rec.checks;
+        for p in rec.pairs.iter().filter(|p| p.touching) {
+            let (Some(&a), Some(&b)) = (rec.ids.get(p.i as usize), rec.ids.get(p.j as usize))
+            else {
+                continue;
+            };
+            let (key, history, shift) = if a < b {
+                ((a, b), p.history, p.shift)
+            } else {
+                ((b, a), -p.history, -p.shift)
+            };
+            touching.entry(key).or_insert((history, shift));
+        }
+    }
+    let mut ids: Vec<u32> = touching.keys().flat_map(|&(a, b)| [a, b]).collect();
+    ids.sort_unstable();
+    ids.dedup();
+    let row = |id: u32| ids.binary_search(&id).expect("an id of a pair") as u32;
+    let list_pairs: Vec<[u32; 2]> = touching.keys().map(|&(a, b)| [row(a), row(b)]).collect();
+    let pairs = (touching.values().zip(&list_pairs))
+        .map(|(&(history, shift), &[i, j])| PairRecord {
+            i,
+            j,
+            touching: true,
+            shift,
+            history,
+        })
+        .collect();
+    Some(ContactRecord {
+        list_pairs,
+        reference: Vec::new(),
+        builds,
+        checks,
+        drift_bound: 0.0,
+        pairs,
+        sparse: first.sparse,
+        active: touching.len(),
+        ids,
+    })
 }
 
 /// `c` as a rank other than 0 restores it: the counts and logs that are summed over the
@@ -162,5 +222,46 @@ mod tests {
         assert_eq!(s.patches.as_ref().unwrap(), &[vec![vec![0]], vec![vec![0]]]);
         assert_eq!(s.particles.len(), 3, "every rank restores every particle");
         assert!(merge(Vec::new()).is_none());
+    }
+
+    fn record(ids: &[u32], pairs: &[(u32, u32, bool, f64)]) -> ContactRecord {
+        ContactRecord {
+            ids: ids.to_vec(),
+            list_pairs: pairs.iter().map(|&(i, j, ..)| [i, j]).collect(),
+            reference: Vec::new(),
+            builds: 3,
+            checks: 1,
+            drift_bound: 0.0,
+            pairs: pairs
+                .iter()
+                .map(|&(i, j, touching, h)| PairRecord {
+                    i,
+                    j,
+                    touching,
+                    shift: DVec3::ZERO,
+                    history: DVec3::new(h, 0.0, 0.0),
+                })
+                .collect(),
+            sparse: true,
+            active: 1,
+        }
+    }
+
+    #[test]
+    fn touching_pairs_merge_once_by_ids() {
+        // Rank 0 holds 7 and 9 with ghost 4; rank 1 holds 4 with ghost 9. The pair
+        // (9, 4) crosses the cut: both hold it, seen from 9 on rank 0 and from 4 on
+        // rank 1 (opposite histories). (7, 9) is listed but not touching.
+        let a = record(&[7, 9, 4], &[(0, 1, false, 5.0), (1, 2, true, 2.0)]);
+        let b = record(&[4, 9], &[(0, 1, true, -2.0)]);
+        let m = merge_contacts(&[Some(a), None, Some(b)]).unwrap();
+        assert_eq!(m.ids, [4, 9]);
+        assert_eq!(m.list_pairs, [[0, 1]]);
+        assert_eq!(m.pairs.len(), 1);
+        assert_eq!(m.pairs[0].history.x, -2.0, "seen from the lower id, 4");
+        assert!(m.pairs[0].touching);
+        assert!(m.reference.is_empty(), "the list is rebuilt");
+        assert_eq!((m.builds, m.checks), (3, 2));
+        assert!(merge_contacts(&[None, None]).is_none());
     }
 }

@@ -6,7 +6,6 @@ use std::path::PathBuf;
 use scg_cli::EXIT_BAD_INPUT;
 use scg_cli::run::{RunArgs, recording_stem, set_suffix};
 use scg_core::Simulation;
-use scg_core::stages::contacts::ContactState;
 
 use super::{Ranked, all_ok};
 use crate::comm::{Comm, decode, encode};
@@ -36,8 +35,7 @@ pub(super) fn prepare(
         args.restart.is_some() || args.checkpoint_every.is_some() || args.checkpoint.is_some();
     if wanted
         && comm.size() > 1
-        && let Some(why) =
-            crate::checkpoint::refusal(scene, sim.world.get_resource::<ContactState>().is_some())
+        && let Some(why) = crate::checkpoint::refusal(scene)
     {
         if root {
             eprintln!(
