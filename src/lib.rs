@@ -74,5 +74,8 @@
 //! ```
 pub use scg_cli as cli;
 pub use scg_core as core;
+/// The decomposed driver over MPI ranks (feature `mpi`): `mpi::driver::Decomposed`.
+#[cfg(feature = "mpi")]
+pub use scg_mpi as mpi;
 pub use scg_record as record;
 pub use scg_scene as scene;

@@ -7,6 +7,8 @@ pub mod cost;
 pub mod distribution;
 pub mod erosion;
 pub mod fates;
+#[cfg(feature = "mpi")]
+pub mod mpi;
 pub mod points;
 pub mod replay;
 pub mod run;
@@ -115,6 +117,18 @@ pub const EXIT_BAD_INPUT: i32 = 2;
 
 /// Parse the process arguments and run; returns the exit status.
 pub fn main() -> i32 {
+    #[cfg(feature = "mpi")]
+    {
+        mpi::main()
+    }
+    #[cfg(not(feature = "mpi"))]
+    {
+        local_main()
+    }
+}
+
+/// [`main`] on this process alone (no MPI).
+pub fn local_main() -> i32 {
     main_with(&Launch {
         run: &run::run,
         points: &points::Local,

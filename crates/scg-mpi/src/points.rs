@@ -1,20 +1,6 @@
-//! The independent points of `scg cost` and `scg study` spread over the ranks: each rank
-//! runs its share ([`scg_cli::points::shares`], balanced by estimated cost) one after
-//! another, and rank 0 gathers every result and writes the outputs. The framing of the
-//! gathered results ([`pack`], [`unpack`]) is pure and tested without MPI.
-
-#[cfg(feature = "mpi")]
-use scg_cli::points::{Points, shares};
-
-#[cfg(feature = "mpi")]
-use crate::comm::Comm;
-
-/// [`scg_cli::points::Points`] over the ranks of `comm`.
-#[cfg(feature = "mpi")]
-pub struct RankPoints<'a> {
-    /// The ranks.
-    pub comm: &'a Comm,
-}
+//! The framing of the results of independent points (`scg cost`, `scg study`) gathered
+//! from the ranks ([`pack`], [`unpack`]): pure, tested without MPI (the command line's
+//! `RankPoints` uses it).
 
 /// One rank's results as one buffer: per job, its index and length (u64, little-endian)
 /// and its bytes.
@@ -49,29 +35,6 @@ pub fn unpack(n: usize, parts: &[Vec<u8>]) -> Option<Vec<Vec<u8>>> {
         }
     }
     out.into_iter().collect()
-}
-
-#[cfg(feature = "mpi")]
-impl Points for RankPoints<'_> {
-    fn map_bytes(
-        &self,
-        n: usize,
-        cost: &[f64],
-        job: &mut dyn FnMut(usize) -> Vec<u8>,
-    ) -> Option<Vec<Vec<u8>>> {
-        let share = &shares(n, cost, self.comm.size())[self.comm.rank()];
-        let mine: Vec<(usize, Vec<u8>)> = share.iter().map(|&i| (i, job(i))).collect();
-        let parts = self.comm.gather_bytes(&pack(&mine))?;
-        Some(unpack(n, &parts).expect("every point's result gathered once"))
-    }
-
-    fn processes(&self) -> usize {
-        self.comm.size()
-    }
-
-    fn writer(&self) -> bool {
-        self.comm.rank() == 0
-    }
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@ use common::{N_FRAMES, assert_frames_bit_equal, frames, meta};
 use foxglove::Decode;
 use foxglove::messages::PointCloud;
 use mcap::{MessageStream, Summary};
-use scg_core::frame::{Frame, FrameSink};
+use scg_core::frame::{Frame, FrameSink, RunMeta};
 use scg_record::layout::{
     METADATA_NAME, POINT_FIELDS, POINT_STRIDE, SCENE_ATTACHMENT, STATS_SCHEMA_NAME,
     TOPIC_PARTICLES, TOPIC_PATCHES, TOPIC_STATS,
@@ -374,4 +374,119 @@ fn empty_run() {
     assert!(rec.complete);
     assert!(rec.frames.is_empty());
     assert_eq!(rec.meta, meta());
+}
+
+/// A recording written per rank: three parts (each a rank's particles and counts of every
+/// frame) and an index naming them read as one recording, bit for bit the frames one rank
+/// writes (stats recomputed in id order, counts summed); an index with frames, parts at
+/// different steps and a missing part are errors naming the file.
+#[test]
+fn parts_named_by_an_index_read_as_one_recording() {
+    use scg_core::physics::scaling::sphere_mass;
+    use scg_core::stages::recording::{FrameRow, RecordingParams, frame_from_rows};
+    use scg_core::state::Tally;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let m = meta();
+    let params = RecordingParams {
+        every: m.record_every,
+        groups: m.groups.iter().map(|g| g.name.clone()).collect(),
+    };
+    let ng = params.groups.len();
+    let rows_of = |f: &Frame| -> Vec<FrameRow> {
+        (0..f.len())
+            .map(|i| FrameRow {
+                id: f.id[i],
+                group: f.group[i],
+                position: f.position[i],
+                velocity: f.velocity[i],
+                diameter: f.diameter[i],
+                density: f.density[i],
+                mass: sphere_mass(f.diameter[i], f.density[i]),
+                fluctuation: None,
+            })
+            .collect()
+    };
+    let tally = |k: u64, part: Option<u64>| {
+        let mut t = Tally::new(ng);
+        t.collisions = vec![0; ng];
+        for g in 0..ng as u64 {
+            // part p of 3 holds a third of each count
+            let (d, c) = (10 * k + g, 3 * k + g);
+            t.drained[g as usize] = part.map_or(3 * d, |_| d);
+            t.collisions[g as usize] = part.map_or(3 * c, |_| c);
+        }
+        t
+    };
+    let mut whole = Vec::new();
+    let mut parts: Vec<Vec<Frame>> = vec![Vec::new(); 3];
+    for (k, f) in frames().iter().enumerate() {
+        let rows = rows_of(f);
+        whole.push(frame_from_rows(
+            f.step,
+            f.time,
+            &params,
+            &tally(k as u64, None),
+            rows.clone(),
+        ));
+        for (p, part) in parts.iter_mut().enumerate() {
+            // a rank's rows in table order (reversed here), not sorted
+            let mine: Vec<FrameRow> = rows
+                .iter()
+                .rev()
+                .filter(|r| r.id % 3 == p as u32)
+                .cloned()
+                .collect();
+            part.push(frame_from_rows(
+                f.step,
+                f.time,
+                &params,
+                &tally(k as u64, Some(p as u64)),
+                mine,
+            ));
+        }
+    }
+    let names: Vec<String> = (0..3).map(|p| format!("run.rank{p}.mcap")).collect();
+    for (p, part) in parts.iter().enumerate() {
+        write(&dir.path().join(&names[p]), part, McapOptions::default());
+    }
+    let index = dir.path().join("run.mcap");
+    let idx_meta = RunMeta {
+        parts: names.clone(),
+        ..m.clone()
+    };
+    McapSink::create(&index, &idx_meta)
+        .and_then(|mut s| s.close())
+        .expect("index");
+    let rec = read_mcap(&index).expect("read the set");
+    assert!(rec.complete);
+    assert_eq!(rec.meta.parts, names);
+    assert_frames_bit_equal(&rec.frames, &whole);
+    assert!(whole.iter().any(|f| {
+        f.stats
+            .iter()
+            .any(|(k, v)| k.starts_with("collisions") && *v > 0.0)
+    }));
+
+    // A part at another step: an error naming the index.
+    let mut shifted = parts[1].clone();
+    shifted[2].step += 1;
+    write(
+        &dir.path().join(&names[1]),
+        &shifted,
+        McapOptions::default(),
+    );
+    let err = read_mcap(&index).expect_err("steps differ").to_string();
+    assert!(err.contains("run.mcap") && err.contains("step"), "{err}");
+    // A missing part: the reader's error names it.
+    std::fs::remove_file(dir.path().join(&names[1])).unwrap();
+    let err = read_mcap(&index).expect_err("part missing").to_string();
+    assert!(err.contains(&names[1]), "{err}");
+    // An index that holds frames.
+    let mut sink = McapSink::create(&index, &idx_meta).expect("index");
+    sink.write_frame(&whole[0]).expect("frame");
+    sink.finish().expect("finish");
+    let err = read_mcap(&index)
+        .expect_err("index with frames")
+        .to_string();
+    assert!(err.contains("holds frames"), "{err}");
 }

@@ -85,6 +85,7 @@ pub fn meta() -> RunMeta {
             "time step is close to the collision time".into(),
             "group `small`: α = 2.5 is large".into(),
         ],
+        parts: Vec::new(),
     }
 }
 

@@ -1,14 +1,14 @@
-//! Checkpoints of a decomposed run: the options checked, a restart restored on every rank,
-//! and one checkpoint written from all ranks ([`crate::checkpoint`]).
+//! Checkpoints of a decomposed run from the command line: the options checked, a restart
+//! restored on every rank ([`scg_mpi::driver::restore`]).
 
 use std::path::PathBuf;
 
-use scg_cli::EXIT_BAD_INPUT;
-use scg_cli::run::{RunArgs, recording_stem, set_suffix};
 use scg_core::Simulation;
+use scg_mpi::comm::Comm;
+use scg_mpi::driver::all_ok;
 
-use super::{Ranked, all_ok};
-use crate::comm::{Comm, decode, encode};
+use crate::EXIT_BAD_INPUT;
+use crate::run::{RunArgs, recording_stem, set_suffix};
 
 /// The checkpoint settings of a run, and the recordings' stem.
 pub(super) struct Ckpt {
@@ -35,7 +35,7 @@ pub(super) fn prepare(
         args.restart.is_some() || args.checkpoint_every.is_some() || args.checkpoint.is_some();
     if wanted
         && comm.size() > 1
-        && let Some(why) = crate::checkpoint::refusal(scene)
+        && let Some(why) = scg_mpi::checkpoint::refusal(scene)
     {
         if root {
             eprintln!(
@@ -45,7 +45,7 @@ pub(super) fn prepare(
         }
         return Err(EXIT_BAD_INPUT);
     }
-    let every = match scg_cli::run::checkpoint_interval(args.checkpoint_every, scene.dt) {
+    let every = match crate::run::checkpoint_interval(args.checkpoint_every, scene.dt) {
         Ok(e) => e,
         Err(e) => {
             if root {
@@ -55,12 +55,8 @@ pub(super) fn prepare(
         }
     };
     if let Some(path) = &args.restart {
-        let restored = scg_record::checkpoint::read_checkpoint(path).and_then(|mut c| {
-            if !root {
-                crate::checkpoint::strip_logs(&mut c);
-            }
-            sim.restore(&c)
-                .map_err(|e| format!("{}: {e}", path.display()))
+        let restored = scg_record::checkpoint::read_checkpoint(path).and_then(|c| {
+            scg_mpi::driver::restore(comm, sim, c).map_err(|e| format!("{}: {e}", path.display()))
         });
         if let Err(e) = &restored
             && root
@@ -91,24 +87,4 @@ pub(super) fn prepare(
         None => base,
     };
     Ok(Ckpt { every, path, stem })
-}
-
-impl Ranked<'_> {
-    /// Gather every rank's checkpoint on rank 0, merge them ([`crate::checkpoint::merge`])
-    /// and write the one file there (a collective; `Err` only on rank 0).
-    pub(super) fn write_checkpoint(
-        &mut self,
-        path: &std::path::Path,
-        scene: &scg_scene::Scene,
-    ) -> Result<(), String> {
-        let parts = self.comm.gather_bytes(&encode(&self.sim.checkpoint()));
-        let Some(parts) = parts else {
-            return Ok(());
-        };
-        let mut c = crate::checkpoint::merge(parts.iter().map(|b| decode(b)).collect())
-            .ok_or("no checkpoint to merge")?;
-        c.scene.clone_from(&scene.source);
-        c.scene_file = scene.absolute_file();
-        scg_record::checkpoint::write_checkpoint(path, &c)
-    }
 }

@@ -1,0 +1,273 @@
+//! `mpirun -np N scg run CASE`: the command line of a decomposed run — the options
+//! checked, the recorders made (rank 0's, or every rank's part with `--per-rank`), the
+//! run handed to [`scg_mpi::driver::Decomposed`] and its report printed.
+
+use std::io::Write;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use scg_core::frame::{FrameSink, RunMeta};
+use scg_core::stages::recording::RecordingParams;
+use scg_mpi::comm::Comm;
+use scg_mpi::driver::{CheckpointPlan, Decomposed, Decomposition, Options, all_ok};
+
+use super::checkpoints::{self, Ckpt};
+use crate::EXIT_BAD_INPUT;
+use crate::run::{RunArgs, ensure_writable, extra_sinks};
+
+/// Run `scg run` over the ranks of `comm`; returns the exit status (the same on every
+/// rank).
+pub fn run(comm: &Comm, args: RunArgs) -> i32 {
+    let root = comm.rank() == 0;
+    let (scene, report) = match crate::run::load_checked(&args, root) {
+        Ok(s) => s,
+        Err(code) => return code,
+    };
+    let record = !args.no_record;
+    if args.plan {
+        if root {
+            let sim = scene.build(record);
+            println!(
+                "schedule of scene `{}` ({} systems, on each of {} MPI ranks):",
+                scene.name,
+                sim.plan().systems.len(),
+                comm.size()
+            );
+            print!("{}", sim.plan().render());
+        }
+        return 0;
+    }
+    // What the one-rank run reports at its end from logs a rank holds only its share of:
+    // refused rather than reported from rank 0's share.
+    let per_rank = [
+        ("--summary-json", args.summary_json.is_some()),
+        ("--fates-csv", args.fates_csv.is_some()),
+        ("--erosion-csv", args.erosion_csv.is_some()),
+        ("--erosion-vtk", args.erosion_vtk.is_some()),
+        ("[erosion]", scene.erosion.is_some()),
+    ];
+    if comm.size() > 1
+        && let Some((what, _)) = per_rank.iter().find(|(_, on)| *on)
+    {
+        if root {
+            eprintln!(
+                "error: {what} is not yet gathered over MPI ranks ({} here): run with one rank",
+                comm.size()
+            );
+        }
+        return EXIT_BAD_INPUT;
+    }
+    // Written per rank, a frame is never whole anywhere: the formats that need it are
+    // made from the set afterwards.
+    let per_rank = args.per_rank && comm.size() > 1 && record;
+    if per_rank && (args.vtk.is_some() || args.frames_csv.is_some()) {
+        if root {
+            eprintln!(
+                "error: --per-rank writes no whole frame, so no --vtk or --frames-csv during the run: make them from the recording with `scg replay <stem>.mcap --vtk DIR` (or --frames-csv DIR)"
+            );
+        }
+        return EXIT_BAD_INPUT;
+    }
+    // The recording stage is the driver's (gathered on rank 0, or each rank's own part
+    // with --per-rank), not the schedule's.
+    let mut sim = scene.build(false);
+    let Ckpt {
+        every,
+        path: checkpoint_path,
+        stem,
+    } = match checkpoints::prepare(comm, &args, &scene, &mut sim) {
+        Ok(c) => c,
+        Err(code) => return code,
+    };
+    let by_id = std::env::var("SCG_MPI_DECOMP").as_deref() == Ok("ids");
+
+    // Sinks on rank 0; every rank learns whether they could be made.
+    let mut sinks: Option<Box<dyn FrameSink>> = None;
+    let mut paths = Vec::new();
+    let mut made = Ok(());
+    if per_rank {
+        made = make_part_sink(&scene, &args, &report, &stem, comm, &mut paths)
+            .map(|s| sinks = Some(s));
+        if let Err((e, _)) = &made {
+            eprintln!("error: rank {}: {e}", comm.rank());
+        }
+    } else if root && record {
+        made = make_sinks(&scene, &args, &report, &stem, &mut paths).map(|s| sinks = Some(s));
+        if let Err((e, _)) = &made {
+            eprintln!("error: {e}");
+        }
+    }
+    if !all_ok(comm, made.is_ok()) {
+        // The ranks that failed know why; the others stop with the same status.
+        let code = match &made {
+            Err((_, c)) => *c as u64,
+            Ok(()) => 0,
+        };
+        return comm.all_gather_u64(&[code]).into_iter().max().unwrap_or(1) as i32;
+    }
+
+    let how = match (by_id, std::env::var("SCG_MPI_AXIS").as_deref()) {
+        (true, _) => Decomposition::Ids,
+        (false, Ok("x")) => Decomposition::Slabs(Some(0)),
+        (false, Ok("y")) => Decomposition::Slabs(Some(1)),
+        (false, Ok("z")) => Decomposition::Slabs(Some(2)),
+        (false, _) => Decomposition::Slabs(None),
+    };
+    let mut d = match Decomposed::new(comm, sim, &scene, how) {
+        Ok(d) => d,
+        Err(e) => {
+            if root {
+                eprintln!("error: {e}");
+            }
+            return EXIT_BAD_INPUT;
+        }
+    };
+    let opts = Options {
+        recording: record.then(|| RecordingParams {
+            every: scene.record_every.max(1),
+            groups: scene.sim_config(true).groups,
+        }),
+        per_rank,
+        checkpoint: every.map(|every| CheckpointPlan {
+            every,
+            path: checkpoint_path.clone(),
+            scene: scene.source.clone(),
+            scene_file: scene.absolute_file(),
+        }),
+        count_every_step: std::env::var_os("SCG_MPI_COUNTS").is_some(),
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        let _ = signal_hook::flag::register(sig, Arc::clone(&stop));
+    }
+    let steps = scene.steps();
+    if root {
+        let n0 = scene.groups.iter().map(|g| g.count()).sum::<usize>();
+        eprintln!(
+            "running `{}` on {} MPI ranks × {} threads: {} particles, {} steps of {:.3e} s, particles {}",
+            scene.name,
+            comm.size(),
+            scg_core::exec::settings().team_size(),
+            n0,
+            steps,
+            scene.dt,
+            d.describe()
+        );
+    }
+    // `SCG_MPI_COUNTS=FILE`: rank 0 writes the step, the particle count and an
+    // order-independent digest of the ids after every step (tests: no particle lost or
+    // duplicated).
+    let mut counts_log = match std::env::var_os("SCG_MPI_COUNTS") {
+        Some(p) if root => match std::fs::File::create(&p) {
+            Ok(f) => Some(std::io::BufWriter::new(f)),
+            Err(e) => {
+                eprintln!("error: SCG_MPI_COUNTS {}: {e}", p.to_string_lossy());
+                None
+            }
+        },
+        _ => None,
+    };
+    let out = d.run(
+        steps,
+        &opts,
+        sinks.as_deref_mut().map(|s| s as &mut dyn FrameSink),
+        &stop,
+        counts_log.as_mut().map(|l| l as &mut dyn Write),
+    );
+    if let Some(mut log) = counts_log.take() {
+        let _ = log.flush();
+    }
+    let lines = d.report(&out);
+    let fin = sinks.as_mut().map_or(Ok(()), |s| s.finish());
+    for l in lines.iter().flatten() {
+        eprintln!("{l}");
+    }
+    if root {
+        for p in &paths {
+            eprintln!("wrote {}", p.display());
+        }
+        if let Some(n) = out.checkpointed {
+            eprintln!("checkpoint {} at step {n}", checkpoint_path.display());
+        }
+    }
+    if let Some(e) = &out.sink_error {
+        eprintln!("error: recorder failed on rank {}: {e}", comm.rank());
+    }
+    if let Err(e) = &fin {
+        eprintln!("error: rank {}: {e}", comm.rank());
+    }
+    let code = u64::from(out.failure.is_some() || out.sink_error.is_some() || fin.is_err());
+    let any_code = comm.all_gather_u64(&[code]).into_iter().max().unwrap_or(0);
+    if any_code != 0 {
+        return any_code as i32;
+    }
+    if out.interrupted { 130 } else { 0 }
+}
+
+/// The recorder of this rank's part of a recording written per rank
+/// (`<stem>.rank<k>.mcap`); rank 0 also writes the index `<stem>.mcap` naming the parts.
+/// `Err` holds the message and the exit status.
+fn make_part_sink(
+    scene: &scg_scene::Scene,
+    args: &RunArgs,
+    report: &scg_scene::check::Report,
+    stem: &str,
+    comm: &Comm,
+    paths: &mut Vec<std::path::PathBuf>,
+) -> Result<Box<dyn FrameSink>, (String, i32)> {
+    ensure_writable(&args.out).map_err(|e| (e, EXIT_BAD_INPUT))?;
+    let meta = scene.run_meta(report.messages());
+    let io = |e: scg_record::RecordError| (e.to_string(), 1);
+    let part = |k: usize| format!("{stem}.rank{k}.mcap");
+    if comm.rank() == 0 {
+        let index = args.out.join(format!("{stem}.mcap"));
+        let meta = RunMeta {
+            parts: (0..comm.size()).map(part).collect(),
+            ..meta.clone()
+        };
+        scg_record::McapSink::create(&index, &meta)
+            .and_then(|mut s| s.close())
+            .map_err(io)?;
+        paths.push(index);
+    }
+    let path = args.out.join(part(comm.rank()));
+    let sink = scg_record::McapSink::create(&path, &meta).map_err(io)?;
+    if comm.rank() == 0 {
+        paths.push(
+            args.out
+                .join(format!("{stem}.rank*.mcap ({} parts)", comm.size())),
+        );
+    }
+    Ok(Box::new(scg_record::Background::spawn(vec![Box::new(
+        sink,
+    )])))
+}
+
+/// The recorders of rank 0: one `.rrd`, one `.mcap` and the VTK/CSV frames asked for
+/// (one writer thread). `Err` holds the message and the exit status.
+fn make_sinks(
+    scene: &scg_scene::Scene,
+    args: &RunArgs,
+    report: &scg_scene::check::Report,
+    stem: &str,
+    paths: &mut Vec<std::path::PathBuf>,
+) -> Result<Box<dyn FrameSink>, (String, i32)> {
+    ensure_writable(&args.out).map_err(|e| (e, EXIT_BAD_INPUT))?;
+    let stem = stem.to_string();
+    let meta = scene.run_meta(report.messages());
+    let rrd = args.out.join(format!("{stem}.rrd"));
+    let mcap = args.out.join(format!("{stem}.mcap"));
+    let io = |e: scg_record::RecordError| (e.to_string(), 1);
+    let mut sinks: Vec<Box<dyn FrameSink>> = vec![
+        Box::new(scg_record::RrdSink::create(&rrd, &meta).map_err(io)?),
+        Box::new(scg_record::McapSink::create(&mcap, &meta).map_err(io)?),
+    ];
+    sinks.extend(
+        extra_sinks(&args.vtk, &args.frames_csv, &RunMeta { case: stem, ..meta }).map_err(io)?,
+    );
+    paths.push(rrd);
+    paths.push(mcap);
+    paths.extend(args.vtk.iter().cloned());
+    paths.extend(args.frames_csv.iter().cloned());
+    Ok(Box::new(scg_record::Background::spawn(sinks)))
+}

@@ -1,0 +1,716 @@
+//! The decomposed driver: one simulation over the ranks of an MPI communicator, beside
+//! the single-rank [`Simulation`] — what `mpirun -np N scg run CASE` runs, and what a
+//! library user calls ([`Decomposed::new`], [`Decomposed::run`]).
+//!
+//! Every rank builds the whole scene, keeps the particles of its share (slabs along one
+//! axis, [`crate::decomp::Slabs`], or shared by a hash of their id) and runs the
+//! ordinary step on them with its thread team. Every rank runs every feeder from the
+//! scene's seed and spawns only the particles it owns (`SpawnOwner`), so no rank scans
+//! its particles for strangers after a feed.
+//!
+//! With particle contacts (slabs) the run follows LAMMPS's pattern ([`crate::ghosts`]):
+//! between two *rebuilds* the particle sets and the ghost sets are fixed; each step only
+//! forwards the ghosts' x, v, ω along fixed row lists, with the step's flags (failures,
+//! interrupts, whether a rank needs a rebuild) riding on those messages when every
+//! rank's peers are all the others (else one small collective). A rebuild is decided
+//! collectively after a step where some rank's particle moved more than half the skin
+//! since its list was built or some rank's particle table changed (a particle fed,
+//! drained): then the particles that left their slab migrate with their whole state and
+//! their touching pairs' histories, the slabs are cut again if the counts drifted apart
+//! (the fullest over [`REBALANCE_TOLERANCE`] × the mean, at most every
+//! [`REBALANCE_MIN_STEPS`] steps), and every rank gets its new ghost set. A particle
+//! strays at most half the skin beyond its slab between rebuilds, which the ghost halo
+//! (its radius, the largest radius and the whole skin) covers.
+//!
+//! Without particle contacts nothing depends on where a particle is held: the ranks meet
+//! only every [`MIGRATE_EVERY`] steps (migration and the balance check) and where a
+//! frame, a checkpoint or the end is due; shared by id they never migrate.
+//!
+//! Frames are gathered on rank 0 (sorted by id: the bits of one rank), or written by
+//! every rank for its own particles ([`Options::per_rank`]; `scg_record::read_mcap`
+//! merges the parts). Checkpoints are gathered and merged into one file in the
+//! single-rank format ([`crate::checkpoint`]), which restarts on any number of ranks
+//! ([`restore`]).
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use scg_core::checkpoint::{Checkpoint, ParticleRecord};
+use scg_core::components::ParticleId;
+use scg_core::frame::FrameSink;
+use scg_core::stages::contacts::ContactState;
+use scg_core::stages::contacts::ghosts::Due;
+use scg_core::stages::feeder::SpawnOwner;
+use scg_core::stages::recording::{FrameRow, RecordingParams, frame_from_rows};
+use scg_core::state::Tally;
+use scg_core::{SimError, Simulation};
+use serde::{Deserialize, Serialize};
+
+use crate::comm::{Comm, decode, encode};
+use crate::decomp::{Owners, Slabs, longest_axis, merge_tally, needs_rebalance};
+use crate::ghosts::Halo;
+
+/// How a decomposed run shares its particles.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Decomposition {
+    /// Slabs along an axis (0, 1, 2), or along the longest extent of the initial
+    /// particles (`None`), cut at the quantiles of their coordinates; in a periodic box
+    /// the slabs wrap round it.
+    Slabs(Option<usize>),
+    /// By a hash of the particle id: nothing migrates (refused with particle contacts).
+    Ids,
+}
+
+/// Where and how often a decomposed run writes its checkpoint.
+#[derive(Clone, Debug)]
+pub struct CheckpointPlan {
+    /// Steps between checkpoints (one is also written at the end and when interrupted).
+    pub every: u64,
+    /// The file.
+    pub path: PathBuf,
+    /// The scene's text, stored in the checkpoint.
+    pub scene: String,
+    /// The scene file's absolute path (its folder resolves relative paths on a restart).
+    pub scene_file: String,
+}
+
+/// What [`Decomposed::run`] does besides stepping.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    /// Record a frame every `every` steps (and the initial one) into the sink.
+    pub recording: Option<RecordingParams>,
+    /// Each rank writes its own particles of every frame into its own sink (else the
+    /// frames are gathered on rank 0, whose sink writes them).
+    pub per_rank: bool,
+    /// Checkpoints.
+    pub checkpoint: Option<CheckpointPlan>,
+    /// Write the step, the particle count and an order-independent id digest after
+    /// every step into the counts log (rank 0; a collective every step, for tests).
+    pub count_every_step: bool,
+}
+
+/// How a run ended (the same on every rank, but the sink's error).
+#[derive(Clone, Debug, Default)]
+pub struct Outcome {
+    /// Steps done.
+    pub steps: u64,
+    /// Stopped by the stop flag.
+    pub interrupted: bool,
+    /// The first failure over the ranks (a step, a checkpoint).
+    pub failure: Option<String>,
+    /// This rank's recorder failed.
+    pub sink_error: Option<String>,
+    /// The step of the last checkpoint written.
+    pub checkpointed: Option<u64>,
+    /// Wall time of the stepping loop, s.
+    pub wall: f64,
+}
+
+/// Whether every rank is fine (`ok` on this one); a collective.
+pub fn all_ok(comm: &Comm, ok: bool) -> bool {
+    comm.all_gather_u64(&[u64::from(!ok)])
+        .iter()
+        .all(|&f| f == 0)
+}
+
+/// Restore checkpoint `c` (written by a decomposed run on any number of ranks, or by one
+/// rank) into `sim` on every rank: the whole of it, rank 0 with the logs and counts so
+/// far, the others from zero ([`crate::checkpoint::strip_logs`]); each keeps its share of
+/// the particles when [`Decomposed::new`] splits them.
+pub fn restore(comm: &Comm, sim: &mut Simulation, mut c: Checkpoint) -> Result<(), String> {
+    if comm.rank() != 0 {
+        crate::checkpoint::strip_logs(&mut c);
+    }
+    sim.restore(&c)
+}
+
+/// The slabs are cut again when the fullest rank holds more than this many times the
+/// mean count.
+pub const REBALANCE_TOLERANCE: f64 = 1.2;
+
+/// Steps at least between two rebalances (each gathers every position on every rank).
+pub const REBALANCE_MIN_STEPS: u64 = 100;
+
+/// Steps between the migrations of a run without particle contacts (slabs): nothing
+/// there depends on which rank holds a particle, so a migration only keeps the slabs'
+/// counts near the balance the rebalance check looks at, and its scan of every particle
+/// (≈ 12 ns each) costs ≈ 0.1 ns per particle-step at this interval.
+pub const MIGRATE_EVERY: u64 = 100;
+
+/// The flags of a sync point: this rank's step failed.
+const FAILED: u64 = 1;
+/// … its recorder failed (rank 0).
+const SINK_FAILED: u64 = 1 << 1;
+/// … it was asked to stop (SIGINT, SIGTERM).
+const STOP: u64 = 1 << 2;
+/// … it needs a rebuild: a new ghost set, after a migration (contacts).
+const REBUILD: u64 = 1 << 3;
+/// … its particle table changed since the last rebuild: its rows cannot be forwarded.
+const STALE: u64 = 1 << 4;
+
+/// The message of a failed step.
+fn step_failure(e: SimError) -> String {
+    match e {
+        SimError::NonFinite(n) => n.to_string(),
+        e => e.to_string(),
+    }
+}
+
+/// What a rank sends to rank 0 for a frame.
+#[derive(Serialize, Deserialize)]
+struct FramePart {
+    rows: Vec<FrameRow>,
+    drained: Vec<u64>,
+    collisions: Vec<u64>,
+}
+
+/// Wall time of the parts of a decomposed step, on one rank.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Times {
+    compute: Duration,
+    ghosts: Duration,
+    migrate: Duration,
+    record: Duration,
+    rebalance: Duration,
+}
+
+/// One simulation decomposed over the ranks of a communicator: this rank's share of the
+/// particles and what the decomposition keeps between steps.
+pub struct Decomposed<'c> {
+    comm: &'c Comm,
+    /// This rank's simulation: the whole scene's clock, feeders and flow, its share of
+    /// the particles.
+    pub sim: Simulation,
+    owners: Owners,
+    /// Particles migrated in so far.
+    pub migrated: u64,
+    /// Slab rebalances so far.
+    pub rebalances: u64,
+    /// Fed particles spawned here up to the last rebuild.
+    kept_at_rebuild: u64,
+    /// The ghosts of a run with contacts.
+    halo: Halo,
+    /// Particle contacts over slabs (ghosts, rebuilds).
+    contacts: bool,
+    /// Shared by id (no migration).
+    by_id: bool,
+    /// The slab axis.
+    axis: usize,
+    /// Step of the last rebalance.
+    last_rebalance: u64,
+    /// Wall time of the parts of the steps, here.
+    times: Times,
+}
+
+impl<'c> Decomposed<'c> {
+    fn me(&self) -> usize {
+        self.comm.rank()
+    }
+
+    /// The particles held here and an order-independent digest of their ids (a sum of
+    /// SplitMix64 hashes, so that a lost or duplicated particle changes it).
+    fn id_digest(&mut self) -> (u64, u64) {
+        let mut q = self.sim.world.query::<&ParticleId>();
+        q.iter(&self.sim.world).fold((0, 0), |(n, h), id| {
+            (
+                n + 1,
+                h.wrapping_add(crate::decomp::splitmix64(u64::from(id.0))),
+            )
+        })
+    }
+
+    /// Take out the particles that left this rank's slab, by owner.
+    fn leaving(&mut self) -> Vec<Vec<ParticleRecord>> {
+        let (me, owners) = (self.me(), &self.owners);
+        let leaving = self
+            .sim
+            .extract_particles(|id, x| owners.owner(id, x) != me);
+        let mut out: Vec<Vec<ParticleRecord>> = vec![Vec::new(); self.comm.size()];
+        for p in leaving {
+            out[owners.owner(p.id, p.spec.position)].push(p);
+        }
+        out
+    }
+
+    /// Send `out[r]` to rank r and take in what the others send here (a collective).
+    /// With contacts, the particles' touching pairs' histories go with them.
+    fn deliver(&mut self, out: &[Vec<ParticleRecord>]) -> Result<(), String> {
+        let send: Vec<Vec<u8>> = crate::ghosts::migrants(&self.sim, out)
+            .iter()
+            .map(encode)
+            .collect();
+        for part in self.comm.all_to_all_bytes(&send) {
+            self.migrated += crate::ghosts::arrive(&mut self.sim, decode(&part))? as u64;
+        }
+        Ok(())
+    }
+
+    /// Move the particles that left this rank's slab to their owners (a collective).
+    fn migrate(&mut self) -> Result<(), String> {
+        let out = self.leaving();
+        self.deliver(&out)
+    }
+
+    /// Make the feeders spawn only the particles this rank owns (every rank draws them
+    /// all, from the same seed).
+    fn own_feeds(&mut self) {
+        let (owners, me) = (self.owners.clone(), self.me());
+        let kept = self
+            .sim
+            .world
+            .get_resource::<SpawnOwner>()
+            .map_or(0, |o| o.kept);
+        self.sim.world.insert_resource(SpawnOwner {
+            keep: Arc::new(move |id, x| owners.owner(id, x) == me),
+            kept,
+        });
+    }
+
+    /// Fed particles spawned here so far.
+    fn kept(&self) -> u64 {
+        self.sim
+            .world
+            .get_resource::<SpawnOwner>()
+            .map_or(0, |o| o.kept)
+    }
+
+    /// A rebuild (a collective): migrate the particles that left their slab, cut the
+    /// slabs again when the counts drifted apart (at most every
+    /// [`REBALANCE_MIN_STEPS`]), and give every rank its new ghost set.
+    fn rebuild(&mut self) -> Result<(), String> {
+        let t = Instant::now();
+        self.migrate()?;
+        let held = self.sim.particle_count() as u64;
+        let counts = self.comm.all_gather_u64(&[held]);
+        self.times.migrate += t.elapsed();
+        let n = self.sim.step_count();
+        if n >= self.last_rebalance + REBALANCE_MIN_STEPS
+            && needs_rebalance(&counts, REBALANCE_TOLERANCE)
+        {
+            self.last_rebalance = n;
+            let t = Instant::now();
+            self.rebalance()?;
+            self.times.rebalance += t.elapsed();
+        }
+        if self.contacts {
+            let t = Instant::now();
+            self.halo.regather(self.comm, &mut self.sim, &self.owners);
+            self.times.ghosts += t.elapsed();
+        }
+        self.kept_at_rebuild = self.kept();
+        Ok(())
+    }
+
+    /// Cut the slabs again at the quantiles of all positions and migrate.
+    fn rebalance(&mut self) -> Result<(), String> {
+        let Owners::Slabs(slabs) = &self.owners else {
+            return Ok(());
+        };
+        let (axis, period) = (slabs.axis, slabs.period);
+        let mine: Vec<f64> = self
+            .sim
+            .frame_rows()
+            .iter()
+            .map(|r| r.position[axis])
+            .collect();
+        let all: Vec<f64> = self
+            .comm
+            .all_gather_bytes(&encode(&mine))
+            .iter()
+            .flat_map(|b| decode::<Vec<f64>>(b))
+            .collect();
+        self.owners = Owners::Slabs(Slabs::balanced(axis, self.comm.size(), &all, period));
+        self.own_feeds();
+        self.rebalances += 1;
+        self.migrate()
+    }
+
+    /// The frame to write here: this rank's own part of it (`per_rank`), or the whole
+    /// frame gathered on rank 0 (`None` on the others).
+    fn frame(
+        &mut self,
+        params: &RecordingParams,
+        per_rank: bool,
+    ) -> Option<scg_core::frame::Frame> {
+        if !per_rank {
+            return self.gather_frame(params);
+        }
+        let tally = self.sim.world.resource::<Tally>().clone();
+        Some(frame_from_rows(
+            self.sim.step_count(),
+            self.sim.time(),
+            params,
+            &tally,
+            self.sim.frame_rows(),
+        ))
+    }
+
+    /// Gather the particles on rank 0; the frame there (`None` on the other ranks).
+    fn gather_frame(&mut self, params: &RecordingParams) -> Option<scg_core::frame::Frame> {
+        let tally = self.sim.world.resource::<Tally>().clone();
+        let part = FramePart {
+            rows: self.sim.frame_rows(),
+            drained: tally.drained.clone(),
+            collisions: tally.collisions.clone(),
+        };
+        let parts = self.comm.gather_bytes(&encode(&part))?;
+        let mut rows = Vec::new();
+        let mut tallies = Vec::new();
+        for b in &parts {
+            let p: FramePart = decode(b);
+            rows.extend(p.rows);
+            let mut t = tally.clone();
+            t.drained = p.drained;
+            t.collisions = p.collisions;
+            tallies.push(t);
+        }
+        let merged = merge_tally(&tallies).unwrap_or(tally);
+        Some(frame_from_rows(
+            self.sim.step_count(),
+            self.sim.time(),
+            params,
+            &merged,
+            rows,
+        ))
+    }
+    /// Gather every rank's checkpoint on rank 0, merge them ([`crate::checkpoint::merge`])
+    /// and write the one file there (a collective; `Err` only on rank 0).
+    fn write_checkpoint(&mut self, plan: &CheckpointPlan) -> Result<(), String> {
+        let parts = self.comm.gather_bytes(&encode(&self.sim.checkpoint()));
+        let Some(parts) = parts else {
+            return Ok(());
+        };
+        let mut c = crate::checkpoint::merge(parts.iter().map(|b| decode(b)).collect())
+            .ok_or("no checkpoint to merge")?;
+        c.scene.clone_from(&plan.scene);
+        c.scene_file.clone_from(&plan.scene_file);
+        scg_record::checkpoint::write_checkpoint(&plan.path, &c)
+    }
+}
+
+impl<'c> Decomposed<'c> {
+    /// Split `sim` (built from `scene` on every rank, or restored) over the ranks of
+    /// `comm` as `how` says: each rank keeps its share of the particles. A collective.
+    /// Errors (the same on every rank): particle contacts shared by id.
+    pub fn new(
+        comm: &'c Comm,
+        mut sim: Simulation,
+        scene: &scg_scene::Scene,
+        how: Decomposition,
+    ) -> Result<Self, String> {
+        let contacts = sim.world.get_resource::<ContactState>().is_some();
+        if how == Decomposition::Ids && contacts {
+            return Err(format!(
+                "{}: particle contacts over MPI ranks need slabs (SCG_MPI_DECOMP=ids shares them by id): run with one rank or without SCG_MPI_DECOMP=ids",
+                scene.file
+            ));
+        }
+        let rows = sim.frame_rows();
+        let axis = match how {
+            Decomposition::Slabs(Some(a)) => a.min(2),
+            _ => longest_axis(rows.iter().map(|r| glam::DVec3::from_array(r.position))),
+        };
+        let coords: Vec<f64> = rows.iter().map(|r| r.position[axis]).collect();
+        // Periodic contacts: the slabs wrap round the box along their axis.
+        let period = sim
+            .world
+            .get_resource::<ContactState>()
+            .and_then(|c| c.params.periodic)
+            .map(|b| b.lengths[axis]);
+        let owners = match how {
+            Decomposition::Ids => Owners::Ids(comm.size()),
+            Decomposition::Slabs(_) => {
+                Owners::Slabs(Slabs::balanced(axis, comm.size(), &coords, period))
+            }
+        };
+        let me = comm.rank();
+        drop(sim.extract_particles(|id, x| owners.owner(id, x) != me));
+        let last_rebalance = sim.step_count();
+        let mut d = Decomposed {
+            comm,
+            sim,
+            owners,
+            migrated: 0,
+            rebalances: 0,
+            kept_at_rebuild: 0,
+            halo: Halo::new(scene),
+            contacts: contacts && how != Decomposition::Ids,
+            by_id: how == Decomposition::Ids,
+            axis,
+            last_rebalance,
+            times: Times::default(),
+        };
+        d.own_feeds();
+        Ok(d)
+    }
+
+    /// How the particles are shared, in words ("in slabs along x", "by id").
+    pub fn describe(&self) -> String {
+        if self.by_id {
+            "by id (no migration)".to_string()
+        } else {
+            format!("in slabs along {}", ["x", "y", "z"][self.axis])
+        }
+    }
+
+    /// Step up to step `steps` (a collective). Frames go to `sink` (rank 0's, or every
+    /// rank's with [`Options::per_rank`]); `stop` (set by a signal handler) stops every
+    /// rank at the next sync point, after a last checkpoint; `counts` receives the
+    /// per-step counts on rank 0 ([`Options::count_every_step`]).
+    pub fn run(
+        &mut self,
+        steps: u64,
+        opts: &Options,
+        mut sink: Option<&mut dyn FrameSink>,
+        stop: &AtomicBool,
+        mut counts: Option<&mut dyn Write>,
+    ) -> Outcome {
+        let comm = self.comm;
+        let mut out = Outcome::default();
+        let mut failure: Option<String> = None;
+        let mut sink_failed = false;
+        let t0 = Instant::now();
+        let write = |frame: Option<scg_core::frame::Frame>,
+                     sink: &mut Option<&mut dyn FrameSink>,
+                     err: &mut Option<String>| {
+            if let (Some(f), Some(s)) = (frame, sink.as_mut())
+                && err.is_none()
+                && let Err(e) = s.write_frame(&f)
+            {
+                *err = Some(e);
+            }
+            err.is_none()
+        };
+        let start = self.sim.step_count();
+        let record = opts.recording.as_ref();
+        if let Some(params) = record {
+            let f = self.frame(params, opts.per_rank);
+            write(f, &mut sink, &mut out.sink_error);
+        }
+        let every = opts.checkpoint.as_ref().map(|c| c.every.max(1));
+        let mut n = start;
+        loop {
+            let frame_due = record.is_some_and(|p| n > start && n.is_multiple_of(p.every));
+            let ckpt_due = every.is_some_and(|e| n > start && (n.is_multiple_of(e) || n >= steps));
+            let migrate_due = !self.by_id && (n - start).is_multiple_of(MIGRATE_EVERY);
+            let sync = self.contacts
+                || opts.count_every_step
+                || frame_due
+                || ckpt_due
+                || migrate_due
+                || n >= steps;
+            if !sync {
+                self.step(&mut failure);
+                n += 1;
+                continue;
+            }
+            // The sync point after step n: every rank's flags (failures, interrupts,
+            // whether it needs a rebuild); with contacts they travel with the forwarded
+            // ghost states when the peers are all the ranks.
+            let t = Instant::now();
+            let mut flags = (u64::from(failure.is_some()) * FAILED)
+                | (u64::from(sink_failed) * SINK_FAILED)
+                | (u64::from(stop.load(Ordering::Relaxed)) * STOP);
+            if self.contacts {
+                match scg_core::stages::contacts::ghosts::rebuild_due_here(&mut self.sim.world) {
+                    Due::Table => flags |= REBUILD | STALE,
+                    Due::Moved => flags |= REBUILD,
+                    Due::No => {}
+                }
+                if self.kept() != self.kept_at_rebuild || n == start {
+                    flags |= REBUILD | STALE;
+                }
+            }
+            let any = if self.contacts && self.halo.reaches_all() {
+                let any = self.halo.forward(comm, &mut self.sim, flags, STALE);
+                self.times.ghosts += t.elapsed();
+                any
+            } else {
+                let any = comm.all_gather_u64(&[flags]).iter().fold(0, |a, f| a | f);
+                self.times.migrate += t.elapsed();
+                if self.contacts && any & REBUILD == 0 {
+                    let t = Instant::now();
+                    self.halo.forward(comm, &mut self.sim, 0, STALE);
+                    self.times.ghosts += t.elapsed();
+                }
+                any
+            };
+            if opts.count_every_step {
+                let (held, ids) = self.id_digest();
+                let all = comm.all_gather_u64(&[held, ids]);
+                if let Some(log) = counts.as_mut()
+                    && n > start
+                {
+                    let total: u64 = all.chunks(2).map(|c| c[0]).sum();
+                    let digest = all.chunks(2).fold(0u64, |a, c| a.wrapping_add(c[1]));
+                    let _ = writeln!(log, "{n} {total} {digest}");
+                }
+            }
+            if any & (FAILED | SINK_FAILED) != 0 {
+                break;
+            }
+            if frame_due && let Some(params) = record {
+                let t = Instant::now();
+                let f = self.frame(params, opts.per_rank);
+                sink_failed |= !write(f, &mut sink, &mut out.sink_error);
+                self.times.record += t.elapsed();
+            }
+            // A checkpoint at every multiple of the interval, at the end and when
+            // interrupted (a collective: every rank's share gathered and merged on rank 0).
+            if let Some(plan) = &opts.checkpoint
+                && (ckpt_due || (any & STOP != 0 && n > start))
+            {
+                let t = Instant::now();
+                let saved = self.write_checkpoint(plan);
+                self.times.record += t.elapsed();
+                if let Err(e) = &saved {
+                    failure = Some(e.clone());
+                }
+                if !all_ok(comm, saved.is_ok()) {
+                    failure.get_or_insert_with(|| "a checkpoint failed on rank 0".into());
+                    break;
+                }
+                out.checkpointed = Some(n);
+            }
+            if any & STOP != 0 {
+                out.interrupted = true;
+                break;
+            }
+            if n >= steps {
+                break;
+            }
+            if ((self.contacts && any & REBUILD != 0) || (!self.contacts && migrate_due))
+                && let Err(e) = self.rebuild()
+            {
+                failure = Some(e);
+            }
+            self.step(&mut failure);
+            n += 1;
+        }
+        out.wall = t0.elapsed().as_secs_f64();
+        out.steps = self.sim.step_count();
+        let fails: Vec<Option<String>> = comm
+            .all_gather_bytes(&encode(&failure))
+            .iter()
+            .map(|b| decode(b))
+            .collect();
+        out.failure = fails.iter().flatten().next().cloned();
+        out
+    }
+
+    /// One step here unless a step failed before (the rank then only keeps the others
+    /// company up to the next sync point).
+    fn step(&mut self, failure: &mut Option<String>) {
+        let t = Instant::now();
+        if failure.is_none()
+            && let Err(e) = self.sim.step()
+        {
+            *failure = Some(step_failure(e));
+        }
+        self.times.compute += t.elapsed();
+    }
+
+    /// The run's report lines on rank 0 (`None` on the others; a collective): the rate,
+    /// the shares of the step time, per rank the times, migrations and particles held,
+    /// and with contacts the ghosts and list builds.
+    pub fn report(&mut self, out: &Outcome) -> Option<Vec<String>> {
+        let comm = self.comm;
+        let ps: u64 = comm
+            .all_gather_u64(&[self.sim.particle_steps()])
+            .iter()
+            .sum();
+        let held = self.sim.particle_count() as u64;
+        let t = self.times;
+        let per_rank = comm.all_gather_u64(&[
+            t.compute.as_nanos() as u64,
+            t.ghosts.as_nanos() as u64,
+            t.migrate.as_nanos() as u64,
+            t.record.as_nanos() as u64,
+            t.rebalance.as_nanos() as u64,
+            self.migrated,
+            held,
+        ]);
+        let (builds, build_time) = self
+            .sim
+            .world
+            .get_resource::<ContactState>()
+            .map_or((0, 0), |c| {
+                (c.list.builds, c.list.build_time.as_nanos() as u64)
+            });
+        let ghost_stats = comm.all_gather_u64(&[
+            t.ghosts.as_nanos() as u64,
+            self.halo.received,
+            builds,
+            build_time,
+        ]);
+        if comm.rank() != 0 {
+            return None;
+        }
+        let mut lines = Vec::new();
+        let wall = out.wall;
+        lines.push(match &out.failure {
+            None => format!(
+                "{} {} steps (t = {:.6} s) in {wall:.3} s on {} ranks: {:.3e} particle-steps/s, {} slab rebalances",
+                if out.interrupted {
+                    "interrupted after"
+                } else {
+                    "done:"
+                },
+                out.steps,
+                self.sim.time(),
+                comm.size(),
+                ps as f64 / wall.max(1e-12),
+                self.rebalances
+            ),
+            Some(e) => format!("error: run stopped at step {}: {e}", out.steps),
+        });
+        let share = crate::timing::time_shares(&per_rank);
+        lines.push(format!(
+            "share of the step time (all ranks): compute {:.1} %, ghost exchange {:.1} %, migration {:.1} %, recording (gather) {:.1} %, rebalance {:.1} %",
+            100.0 * share[0],
+            100.0 * share[1],
+            100.0 * share[2],
+            100.0 * share[3],
+            100.0 * share[4]
+        ));
+        lines.push(
+            "time per rank (s): compute, ghost exchange, migration, recording (gather), rebalance; particles migrated in, held at the end:".into(),
+        );
+        for (k, c) in per_rank.chunks(crate::timing::FIELDS).enumerate() {
+            let s = |ns: u64| ns as f64 * 1e-9;
+            lines.push(format!(
+                "  rank {k:<4} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3}   {:>9} {:>9}",
+                s(c[0]),
+                s(c[1]),
+                s(c[2]),
+                s(c[3]),
+                s(c[4]),
+                c[5],
+                c[6]
+            ));
+        }
+        let h = &self.halo;
+        if h.exchanges > 0 {
+            lines.push(format!(
+                "ghosts: {} sets given (rebuilds), states forwarded on {} steps",
+                h.exchanges, h.forwards
+            ));
+            lines.push(
+                "ghost exchange per rank (s; ghosts held per step on average; neighbour-list builds, their time in s):".into(),
+            );
+            for (k, c) in ghost_stats.chunks(4).enumerate() {
+                lines.push(format!(
+                    "  rank {k:<4} {:>9.3}   {:>9.1}   {:>9} {:>9.3}",
+                    c[0] as f64 * 1e-9,
+                    c[1] as f64 / (h.exchanges + h.forwards).max(1) as f64,
+                    c[2],
+                    c[3] as f64 * 1e-9
+                ));
+            }
+        }
+        Some(lines)
+    }
+}
