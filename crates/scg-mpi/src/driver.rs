@@ -44,14 +44,15 @@ use scg_core::frame::FrameSink;
 use scg_core::stages::contacts::ContactState;
 use scg_core::stages::contacts::ghosts::Due;
 use scg_core::stages::feeder::SpawnOwner;
-use scg_core::stages::recording::{FrameRow, RecordingParams, frame_from_rows};
-use scg_core::state::Tally;
+use scg_core::stages::recording::RecordingParams;
 use scg_core::{SimError, Simulation};
-use serde::{Deserialize, Serialize};
 
 use crate::comm::{Comm, decode, encode};
-use crate::decomp::{Owners, Slabs, longest_axis, merge_tally, needs_rebalance};
+use crate::decomp::{Owners, Slabs, longest_axis, needs_rebalance};
 use crate::ghosts::Halo;
+
+mod output;
+mod report;
 
 /// How a decomposed run shares its particles.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -157,14 +158,6 @@ fn step_failure(e: SimError) -> String {
         SimError::NonFinite(n) => n.to_string(),
         e => e.to_string(),
     }
-}
-
-/// What a rank sends to rank 0 for a frame.
-#[derive(Serialize, Deserialize)]
-struct FramePart {
-    rows: Vec<FrameRow>,
-    drained: Vec<u64>,
-    collisions: Vec<u64>,
 }
 
 /// Wall time of the parts of a decomposed step, on one rank.
@@ -326,68 +319,6 @@ impl<'c> Decomposed<'c> {
         self.own_feeds();
         self.rebalances += 1;
         self.migrate()
-    }
-
-    /// The frame to write here: this rank's own part of it (`per_rank`), or the whole
-    /// frame gathered on rank 0 (`None` on the others).
-    fn frame(
-        &mut self,
-        params: &RecordingParams,
-        per_rank: bool,
-    ) -> Option<scg_core::frame::Frame> {
-        if !per_rank {
-            return self.gather_frame(params);
-        }
-        let tally = self.sim.world.resource::<Tally>().clone();
-        Some(frame_from_rows(
-            self.sim.step_count(),
-            self.sim.time(),
-            params,
-            &tally,
-            self.sim.frame_rows(),
-        ))
-    }
-
-    /// Gather the particles on rank 0; the frame there (`None` on the other ranks).
-    fn gather_frame(&mut self, params: &RecordingParams) -> Option<scg_core::frame::Frame> {
-        let tally = self.sim.world.resource::<Tally>().clone();
-        let part = FramePart {
-            rows: self.sim.frame_rows(),
-            drained: tally.drained.clone(),
-            collisions: tally.collisions.clone(),
-        };
-        let parts = self.comm.gather_bytes(&encode(&part))?;
-        let mut rows = Vec::new();
-        let mut tallies = Vec::new();
-        for b in &parts {
-            let p: FramePart = decode(b);
-            rows.extend(p.rows);
-            let mut t = tally.clone();
-            t.drained = p.drained;
-            t.collisions = p.collisions;
-            tallies.push(t);
-        }
-        let merged = merge_tally(&tallies).unwrap_or(tally);
-        Some(frame_from_rows(
-            self.sim.step_count(),
-            self.sim.time(),
-            params,
-            &merged,
-            rows,
-        ))
-    }
-    /// Gather every rank's checkpoint on rank 0, merge them ([`crate::checkpoint::merge`])
-    /// and write the one file there (a collective; `Err` only on rank 0).
-    fn write_checkpoint(&mut self, plan: &CheckpointPlan) -> Result<(), String> {
-        let parts = self.comm.gather_bytes(&encode(&self.sim.checkpoint()));
-        let Some(parts) = parts else {
-            return Ok(());
-        };
-        let mut c = crate::checkpoint::merge(parts.iter().map(|b| decode(b)).collect())
-            .ok_or("no checkpoint to merge")?;
-        c.scene.clone_from(&plan.scene);
-        c.scene_file.clone_from(&plan.scene_file);
-        scg_record::checkpoint::write_checkpoint(&plan.path, &c)
     }
 }
 
@@ -611,106 +542,5 @@ impl<'c> Decomposed<'c> {
             *failure = Some(step_failure(e));
         }
         self.times.compute += t.elapsed();
-    }
-
-    /// The run's report lines on rank 0 (`None` on the others; a collective): the rate,
-    /// the shares of the step time, per rank the times, migrations and particles held,
-    /// and with contacts the ghosts and list builds.
-    pub fn report(&mut self, out: &Outcome) -> Option<Vec<String>> {
-        let comm = self.comm;
-        let ps: u64 = comm
-            .all_gather_u64(&[self.sim.particle_steps()])
-            .iter()
-            .sum();
-        let held = self.sim.particle_count() as u64;
-        let t = self.times;
-        let per_rank = comm.all_gather_u64(&[
-            t.compute.as_nanos() as u64,
-            t.ghosts.as_nanos() as u64,
-            t.migrate.as_nanos() as u64,
-            t.record.as_nanos() as u64,
-            t.rebalance.as_nanos() as u64,
-            self.migrated,
-            held,
-        ]);
-        let (builds, build_time) = self
-            .sim
-            .world
-            .get_resource::<ContactState>()
-            .map_or((0, 0), |c| {
-                (c.list.builds, c.list.build_time.as_nanos() as u64)
-            });
-        let ghost_stats = comm.all_gather_u64(&[
-            t.ghosts.as_nanos() as u64,
-            self.halo.received,
-            builds,
-            build_time,
-        ]);
-        if comm.rank() != 0 {
-            return None;
-        }
-        let mut lines = Vec::new();
-        let wall = out.wall;
-        lines.push(match &out.failure {
-            None => format!(
-                "{} {} steps (t = {:.6} s) in {wall:.3} s on {} ranks: {:.3e} particle-steps/s, {} slab rebalances",
-                if out.interrupted {
-                    "interrupted after"
-                } else {
-                    "done:"
-                },
-                out.steps,
-                self.sim.time(),
-                comm.size(),
-                ps as f64 / wall.max(1e-12),
-                self.rebalances
-            ),
-            Some(e) => format!("error: run stopped at step {}: {e}", out.steps),
-        });
-        let share = crate::timing::time_shares(&per_rank);
-        lines.push(format!(
-            "share of the step time (all ranks): compute {:.1} %, ghost exchange {:.1} %, migration {:.1} %, recording (gather) {:.1} %, rebalance {:.1} %",
-            100.0 * share[0],
-            100.0 * share[1],
-            100.0 * share[2],
-            100.0 * share[3],
-            100.0 * share[4]
-        ));
-        lines.push(
-            "time per rank (s): compute, ghost exchange, migration, recording (gather), rebalance; particles migrated in, held at the end:".into(),
-        );
-        for (k, c) in per_rank.chunks(crate::timing::FIELDS).enumerate() {
-            let s = |ns: u64| ns as f64 * 1e-9;
-            lines.push(format!(
-                "  rank {k:<4} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3}   {:>9} {:>9}",
-                s(c[0]),
-                s(c[1]),
-                s(c[2]),
-                s(c[3]),
-                s(c[4]),
-                c[5],
-                c[6]
-            ));
-        }
-        let h = &self.halo;
-        if h.exchanges > 0 {
-            lines.push(format!(
-                "ghosts: {} sets given (rebuilds), states forwarded on {} steps",
-                h.exchanges, h.forwards
-            ));
-            lines.push(
-                "ghost exchange per rank (s; ghosts held per step on average; neighbour-list builds, their time in s):".into(),
-            );
-            for (k, c) in ghost_stats.chunks(4).enumerate() {
-                lines.push(format!(
-                    "  rank {k:<4} {:>9.3}   {:>9.1}   {:>9} {:>9.3}",
-                    c[0] as f64 * 1e-9,
-                    c[1] as f64 / (h.exchanges + h.forwards).max(1) as f64,
-                    c[2],
-                    c[3] as f64 * 1e-9
-                ));
-            }
-        }
-        Some(lines)
     }
 }
