@@ -952,9 +952,12 @@ fn ghosts_follow_the_whole(forward: bool) -> usize {
                 table_states(&mut h.world, &order, &mut states[k]);
             }
             for k in 0..2 {
-                let s = &states[1 - k];
+                let s: Vec<[f64; 9]> = states[1 - k]
+                    .chunks_exact(72)
+                    .map(bytemuck::pod_read_unaligned)
+                    .collect();
                 let col = |c: usize| -> Vec<DVec3> {
-                    s.chunks_exact(9)
+                    s.iter()
                         .map(|w| DVec3::new(w[c], w[c + 1], w[c + 2]))
                         .collect()
                 };

@@ -191,8 +191,8 @@ mod exchange {
         all_peers: bool,
     }
 
-    /// What a forward message starts with: the sender's flags, and whether states follow.
-    const HEADER: usize = 2;
+    /// What a forward message starts with: the sender's flags (a little-endian u64).
+    const HEADER: usize = 8;
 
     impl Halo {
         /// The ghosts of a run of `scene`.
@@ -294,49 +294,42 @@ mod exchange {
                 .send
                 .iter()
                 .map(|rows| {
-                    let mut words = vec![f64::from_bits(flags), 0.0];
+                    let mut bytes = Vec::with_capacity(HEADER + 72 * rows.len());
+                    bytes.extend_from_slice(&flags.to_le_bytes());
                     if flags & stale == 0 {
-                        words[1] = 1.0;
-                        table_states(&mut sim.world, rows, &mut words);
+                        table_states(&mut sim.world, rows, &mut bytes);
                     }
-                    bytemuck::cast_slice(&words).to_vec()
+                    bytes
                 })
                 .collect();
             let got = comm.exchange_with(&self.with, &msgs);
             let mut any = flags;
             for part in &got {
-                any |= u64::from_le_bytes(part[..8].try_into().expect("a flag word"));
+                any |= u64::from_le_bytes(part[..HEADER].try_into().expect("a flag word"));
             }
             if any & stale != 0 {
                 return any;
             }
-            let n: usize = self.recv.iter().sum();
-            let (mut x, mut v, mut w) = (
-                Vec::with_capacity(n),
-                Vec::with_capacity(n),
-                Vec::with_capacity(n),
-            );
+            let mut st = sim.world.resource_mut::<ContactState>();
+            let (x, v, w) = st.ghost_states_mut();
+            let mut at = 0;
             for (part, &count) in got.iter().zip(&self.recv) {
-                let words: Vec<f64> = part
-                    .chunks_exact(8)
-                    .map(|b| f64::from_le_bytes(b.try_into().expect("eight bytes")))
-                    .collect();
                 assert!(
-                    words.len() == HEADER + 9 * count,
-                    "a peer forwarded {} states for {count} ghosts",
-                    (words.len() - HEADER) / 9
+                    part.len() == HEADER + 72 * count,
+                    "a peer forwarded {} bytes of states for {count} ghosts",
+                    part.len() - HEADER
                 );
-                for s in words[HEADER..].chunks_exact(9) {
-                    x.push(glam::DVec3::new(s[0], s[1], s[2]));
-                    v.push(glam::DVec3::new(s[3], s[4], s[5]));
-                    w.push(glam::DVec3::new(s[6], s[7], s[8]));
+                for s in part[HEADER..].chunks_exact(72) {
+                    let s: [f64; 9] = bytemuck::pod_read_unaligned(s);
+                    x[at] = glam::DVec3::new(s[0], s[1], s[2]);
+                    v[at] = glam::DVec3::new(s[3], s[4], s[5]);
+                    w[at] = glam::DVec3::new(s[6], s[7], s[8]);
+                    at += 1;
                 }
             }
+            assert_eq!(at, x.len(), "forwarded states for another ghost set");
             self.forwards += 1;
-            self.received += n as u64;
-            sim.world
-                .resource_mut::<ContactState>()
-                .forward_ghosts(&x, &v, &w);
+            self.received += at as u64;
             any
         }
     }

@@ -154,24 +154,25 @@ pub fn table_rows_indexed_where(
 }
 
 /// The position (m), velocity (m/s) and angular velocity (rad/s) of table rows `rows`, as
-/// nine f64 per row (x, v, ω), appended to `out`: the states a driver forwards to
-/// the ghosts of its particles elsewhere.
+/// nine f64 per row (x, v, ω) in native byte order, appended to `out`: the states a
+/// driver forwards to the ghosts of its particles elsewhere (read back with
+/// `bytemuck::pod_read_unaligned::<[f64; 9]>`).
 ///
 /// # Panics
 /// When a row is past the table.
-pub fn table_states(world: &mut World, rows: &[u32], out: &mut Vec<f64>) {
+pub fn table_states(world: &mut World, rows: &[u32], out: &mut Vec<u8>) {
     let mut qs = world.query::<(&Position, &Velocity, &AngularVelocity)>();
     let q = qs.query(world);
     let Some((xs, vs, ws)) = crate::stages::table::columns(&q) else {
         assert!(rows.is_empty(), "ghost rows of an empty table");
         return;
     };
-    out.reserve(9 * rows.len());
+    out.reserve(72 * rows.len());
     for &k in rows {
         let k = k as usize;
-        for v in [xs[k].0, vs[k].0, ws[k].0] {
-            out.extend_from_slice(&v.to_array());
-        }
+        let (x, v, w) = (xs[k].0, vs[k].0, ws[k].0);
+        let s: [f64; 9] = [x.x, x.y, x.z, v.x, v.y, v.z, w.x, w.y, w.z];
+        out.extend_from_slice(bytemuck::bytes_of(&s));
     }
 }
 
@@ -248,6 +249,14 @@ impl ContactState {
         g.pos.copy_from_slice(pos);
         g.vel.copy_from_slice(vel);
         g.omega.copy_from_slice(omega);
+    }
+
+    /// The ghost rows' positions (m), velocities (m/s) and angular velocities (rad/s), to
+    /// be given the states of the coming step in place (what
+    /// [`ContactState::forward_ghosts`] does from slices).
+    pub fn ghost_states_mut(&mut self) -> (&mut [DVec3], &mut [DVec3], &mut [DVec3]) {
+        let g = &mut self.ghosts;
+        (&mut g.pos, &mut g.vel, &mut g.omega)
     }
 
     /// The ghost rows of the coming (or last) step.
