@@ -273,9 +273,12 @@ impl<'c> Decomposed<'c> {
     /// A rebuild (a collective): migrate the particles that left their slab, cut the
     /// slabs again when the counts drifted apart (at most every
     /// [`REBALANCE_MIN_STEPS`]), and give every rank its new ghost set.
+    ///
+    /// Every rank takes part in every collective of it even after an error here (a
+    /// particle that could not be inserted), which is returned at the end.
     fn rebuild(&mut self) -> Result<(), String> {
         let t = Instant::now();
-        self.migrate()?;
+        let mut result = self.migrate();
         let held = self.sim.particle_count() as u64;
         let counts = self.comm.all_gather_u64(&[held]);
         self.times.migrate += t.elapsed();
@@ -285,7 +288,8 @@ impl<'c> Decomposed<'c> {
         {
             self.last_rebalance = n;
             let t = Instant::now();
-            self.rebalance()?;
+            let balanced = self.rebalance();
+            result = result.and(balanced);
             self.times.rebalance += t.elapsed();
         }
         if self.contacts {
@@ -294,7 +298,7 @@ impl<'c> Decomposed<'c> {
             self.times.ghosts += t.elapsed();
         }
         self.kept_at_rebuild = self.kept();
-        Ok(())
+        result
     }
 
     /// Cut the slabs again at the quantiles of all positions and migrate.
