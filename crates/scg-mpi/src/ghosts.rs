@@ -1,40 +1,44 @@
-//! Ghost particles: particle contacts over slabs (issue 19).
+//! Ghost particles: particle contacts over slabs (issues 19 and 39).
 //!
 //! # Design
 //!
-//! Before each step (so before the neighbour and force stages, which come first in a
-//! step: nothing moves a particle between the end of one step, the migration, and the
-//! force stage of the next), every rank sends each other rank a copy of its particles
-//! whose coordinate along the slab axis lies within the *halo* h = r + r_max + skin of
-//! that rank's slab (r its radius, r_max the largest radius of the scene's groups after
-//! coarse graining, [`largest_radius`], the skin the scene's Verlet skin): one
-//! point-to-point message to each rank whose slab lies within 2·r_max + skin of its own
-//! ([`peers`]; empty ones too, so that each rank knows what to wait for). A pair closer
-//! than r_i + r_j + skin has its two coordinates closer than either particle's h, so
-//! every pair the one-rank list would hold between a particle of this slab and one of
-//! another is listed here, local–ghost. The copies ("ghosts": id, group,
-//! radius, mass, position, velocity, ω — what the pair kernel reads) are sorted by id
-//! and handed to [`ContactState::set_ghosts`]; the contact stage appends them after the
-//! table's rows, lists the local–local and local–ghost pairs (never ghost–ghost),
-//! computes them and kicks its own particles only. Ghosts are not entities: they are
-//! never integrated, recorded, counted, drained or fed. A contact started between a
-//! local particle and a ghost is counted by each rank for its own particle's group, so
-//! the summed collision counts are one rank's.
+//! LAMMPS's pattern. At a *rebuild* (decided collectively by the driver, `driver.rs`:
+//! some rank's particle moved more than half the skin since its list was built, or some
+//! rank's particle table changed), after the migration, every rank sends each *peer* (a
+//! rank whose slab lies within 2·r_max + skin of its own, [`peers`]; empty messages too)
+//! a whole copy of its particles whose coordinate along the slab axis lies within the
+//! *halo* h = r + r_max + skin of that peer's slab (r its radius, r_max the largest
+//! radius of the scene's groups after coarse graining, [`largest_radius`]): id, group,
+//! radius, mass, x, v, ω, what the pair kernel reads (`Halo::regather`, feature
+//! `mpi`). The receiver appends them, peer by peer, after its table's rows
+//! ([`ContactState::set_ghosts`]), and its list is rebuilt. Between rebuilds the sets are fixed: each step, before the
+//! forces, every rank sends the same peers the x, v, ω of the same particles, in the same
+//! order, 72 bytes each, and they go straight into the ghost rows (`Halo::forward`);
+//! the list is not rebuilt. A pair closer than r_i + r_j + skin at the rebuild has its
+//! two coordinates closer than either particle's h, so every pair the one-rank list would
+//! hold between a particle of this slab and one of another is listed, local–ghost; and
+//! as long as no particle moved half the skin, no pair outside the list can touch. A
+//! particle strays up to half the skin beyond its slab meanwhile (it migrates at the
+//! next rebuild); its ghost copies follow it.
+//!
+//! The contact stage lists the local–local and local–ghost pairs (never ghost–ghost),
+//! computes them and kicks its own particles only; ghosts are not entities, so they are
+//! never integrated, recorded, counted, drained or fed. A pair across a cut is computed
+//! by both of its ranks (no force is sent back), and a contact started across it is
+//! counted by each rank for its own particle's group, so the summed collision counts are
+//! one rank's.
 //!
 //! In a periodic box the slabs wrap round it along their axis ([`Slabs::period`]): the
 //! coordinates are taken in [0, P), the first and last slabs meet at the box's side, and
 //! a particle within its halo of a slab across that side is sent to it (at its own,
 //! unwrapped position: the pair list and kernel take the minimum image).
 //!
-//! The list is rebuilt when the table's ids or the ghost ids change, and otherwise on the
-//! exact displacement check, run every step while there are ghosts (their displacement
-//! is not the local integrator's bound). A local–ghost pair's tangential history is
-//! carried over rebuilds by the two ids like any other; each of the two ranks keeps its
-//! own copy of it, both computed from the same inputs. When a particle migrates, the
-//! histories of its touching pairs travel with it in the migration message
-//! ([`Migrants`]) and the next rebuild on the new rank takes them up
-//! ([`ContactState::receive_histories`]) for the pairs it did not carry already; its
-//! wall history, ω and mesh cell are in its [`ParticleRecord`].
+//! A local–ghost pair's tangential history is carried over list rebuilds by the two ids
+//! like any other; each of the two ranks keeps its own copy of it, both computed from the
+//! same inputs. When a particle migrates, the histories of its touching pairs travel with
+//! it in the migration message ([`Migrants`]) and the next rebuild on the new rank takes
+//! them up ([`ContactState::receive_histories`]) for the pairs it did not carry already;
+//! its wall history, ω and mesh cell are in its [`ParticleRecord`].
 //!
 //! # Bits
 //!
@@ -50,9 +54,9 @@
 //!
 //! # Cost
 //!
-//! Two things a single rank does not do: the exchange every step (latency-bound) and
-//! more list rebuilds (whenever a particle enters or leaves a halo or migrates); the
-//! numbers and what would cut them are in docs/scaling.md.
+//! Per step one point-to-point message each way with each peer (latency, ≈ 18 ns per
+//! ghost on this machine); at rebuilds the migration and the whole sets. The numbers
+//! and the model: docs/scaling.md.
 //!
 //! [`ContactState::set_ghosts`]: scg_core::stages::contacts::ContactState::set_ghosts
 //! [`ContactState::receive_histories`]: scg_core::stages::contacts::ContactState::receive_histories

@@ -2,8 +2,11 @@
 //! `scg-mpi`), that this process's particles may touch.
 //!
 //! The contact arrays of [`ContactState`] hold the particle table's rows (`local` of
-//! them) followed by the ghost rows the driver set with [`ContactState::set_ghosts`]
-//! before the step. The neighbour list is built over both, without ghost–ghost pairs;
+//! them) followed by the ghost rows the driver gave with [`ContactState::set_ghosts`] (a
+//! new set: the list is rebuilt) and whose states it updates before each step with
+//! [`ContactState::forward_ghosts`] or [`ContactState::ghost_states_mut`] (the list is
+//! kept: the driver gives a new set before any particle, here or there, moved half the
+//! skin, which [`rebuild_due_here`] tells it for this process's particles). The neighbour list is built over both, without ghost–ghost pairs;
 //! the force stage computes the local–local and local–ghost pairs; the kicks apply to the
 //! local rows only, so a ghost is never integrated, recorded, counted, drained or fed
 //! (it is not in the particle table at all). A local–ghost pair's tangential history
