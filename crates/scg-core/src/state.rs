@@ -250,14 +250,6 @@ impl StepDisplacement {
         self.reported.store(reported, Ordering::Relaxed);
     }
 
-    /// The largest displacement of the step so far, m, if an integrator reported one
-    /// (what [`StepDisplacement::take`] would return, without resetting).
-    pub fn peek(&self) -> Option<f64> {
-        let reported = self.reported.load(Ordering::Relaxed);
-        let bits = self.max2_bits.load(Ordering::Relaxed);
-        reported.then(|| f64::from_bits(bits).sqrt())
-    }
-
     /// The largest displacement of the step, m, if an integrator reported one; resets.
     pub fn take(&self) -> Option<f64> {
         let reported = self.reported.swap(false, Ordering::Relaxed);

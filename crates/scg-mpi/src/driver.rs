@@ -162,7 +162,7 @@ fn step_failure(e: SimError) -> String {
 
 /// Wall time of the parts of a decomposed step, on one rank.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Times {
+struct Times {
     compute: Duration,
     ghosts: Duration,
     migrate: Duration,

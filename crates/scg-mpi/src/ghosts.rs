@@ -167,7 +167,9 @@ mod exchange {
     use scg_core::Simulation;
     use scg_core::checkpoint::ParticleRecord;
     use scg_core::stages::contacts::ContactState;
-    use scg_core::stages::contacts::ghosts::{Ghosts, table_rows_indexed_where, table_states};
+    use scg_core::stages::contacts::ghosts::{
+        Ghosts, STATE_BYTES, table_rows_indexed_where, table_states,
+    };
 
     use super::{Migrants, ghost_targets, peers, reach};
     use crate::comm::{Comm, decode, encode};
@@ -298,7 +300,7 @@ mod exchange {
                 .send
                 .iter()
                 .map(|rows| {
-                    let mut bytes = Vec::with_capacity(HEADER + 72 * rows.len());
+                    let mut bytes = Vec::with_capacity(HEADER + STATE_BYTES * rows.len());
                     bytes.extend_from_slice(&flags.to_le_bytes());
                     if flags & stale == 0 {
                         table_states(&mut sim.world, rows, &mut bytes);
@@ -315,23 +317,20 @@ mod exchange {
                 return any;
             }
             let mut st = sim.world.resource_mut::<ContactState>();
-            let (x, v, w) = st.ghost_states_mut();
             let mut at = 0;
             for (part, &count) in got.iter().zip(&self.recv) {
                 assert!(
-                    part.len() == HEADER + 72 * count,
+                    part.len() == HEADER + STATE_BYTES * count,
                     "a peer forwarded {} bytes of states for {count} ghosts",
                     part.len() - HEADER
                 );
-                for s in part[HEADER..].chunks_exact(72) {
-                    let s: [f64; 9] = bytemuck::pod_read_unaligned(s);
-                    x[at] = glam::DVec3::new(s[0], s[1], s[2]);
-                    v[at] = glam::DVec3::new(s[3], s[4], s[5]);
-                    w[at] = glam::DVec3::new(s[6], s[7], s[8]);
-                    at += 1;
-                }
+                at = st.put_ghost_states(at, &part[HEADER..]);
             }
-            assert_eq!(at, x.len(), "forwarded states for another ghost set");
+            assert_eq!(
+                at,
+                st.ghosts().len(),
+                "forwarded states for another ghost set"
+            );
             self.forwards += 1;
             self.received += at as u64;
             any

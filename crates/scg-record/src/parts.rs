@@ -3,13 +3,12 @@
 //! its rank's counts), and [`merge_parts`] joins frame k of every part into the frame one
 //! rank would have written: the particles of all parts sorted by id, the counts summed,
 //! and the stats recomputed in id order (bit for bit those of one rank: a particle's
-//! simulated mass is `sphere_mass` of its recorded diameter and density).
+//! simulated mass is `sphere_mass` of its recorded diameter and density: `rows_of_frame`).
 
 use std::path::Path;
 
 use scg_core::frame::Frame;
-use scg_core::physics::scaling::sphere_mass;
-use scg_core::stages::recording::{FrameRow, RecordingParams, frame_from_rows};
+use scg_core::stages::recording::{RecordingParams, frame_from_rows, rows_of_frame};
 use scg_core::state::Tally;
 use scg_core::stats::Stat;
 
@@ -94,18 +93,7 @@ fn merge_frame(parts: &[&Frame], params: &RecordingParams) -> Frame {
                 tally.collisions[i] += stat(f, &Stat::Collisions(g).key()).unwrap_or(0.0) as u64;
             }
         }
-        for i in 0..f.len() {
-            rows.push(FrameRow {
-                id: f.id[i],
-                group: f.group[i],
-                position: f.position[i],
-                velocity: f.velocity[i],
-                diameter: f.diameter[i],
-                density: f.density[i],
-                mass: sphere_mass(f.diameter[i], f.density[i]),
-                fluctuation: f.fluctuation.get(i).copied(),
-            });
-        }
+        rows.extend(rows_of_frame(f));
     }
     let first = parts.first();
     frame_from_rows(

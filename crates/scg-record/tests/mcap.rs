@@ -382,8 +382,7 @@ fn empty_run() {
 /// different steps and a missing part are errors naming the file.
 #[test]
 fn parts_named_by_an_index_read_as_one_recording() {
-    use scg_core::physics::scaling::sphere_mass;
-    use scg_core::stages::recording::{FrameRow, RecordingParams, frame_from_rows};
+    use scg_core::stages::recording::{FrameRow, RecordingParams, frame_from_rows, rows_of_frame};
     use scg_core::state::Tally;
     let dir = tempfile::tempdir().expect("tempdir");
     let m = meta();
@@ -392,20 +391,6 @@ fn parts_named_by_an_index_read_as_one_recording() {
         groups: m.groups.iter().map(|g| g.name.clone()).collect(),
     };
     let ng = params.groups.len();
-    let rows_of = |f: &Frame| -> Vec<FrameRow> {
-        (0..f.len())
-            .map(|i| FrameRow {
-                id: f.id[i],
-                group: f.group[i],
-                position: f.position[i],
-                velocity: f.velocity[i],
-                diameter: f.diameter[i],
-                density: f.density[i],
-                mass: sphere_mass(f.diameter[i], f.density[i]),
-                fluctuation: None,
-            })
-            .collect()
-    };
     let tally = |k: u64, part: Option<u64>| {
         let mut t = Tally::new(ng);
         t.collisions = vec![0; ng];
@@ -420,7 +405,7 @@ fn parts_named_by_an_index_read_as_one_recording() {
     let mut whole = Vec::new();
     let mut parts: Vec<Vec<Frame>> = vec![Vec::new(); 3];
     for (k, f) in frames().iter().enumerate() {
-        let rows = rows_of(f);
+        let rows = rows_of_frame(f);
         whole.push(frame_from_rows(
             f.step,
             f.time,

@@ -39,7 +39,7 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
     }
     // What the one-rank run reports at its end from logs a rank holds only its share of:
     // refused rather than reported from rank 0's share.
-    let per_rank = [
+    let gathered_logs = [
         ("--summary-json", args.summary_json.is_some()),
         ("--fates-csv", args.fates_csv.is_some()),
         ("--erosion-csv", args.erosion_csv.is_some()),
@@ -47,7 +47,7 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         ("[erosion]", scene.erosion.is_some()),
     ];
     if comm.size() > 1
-        && let Some((what, _)) = per_rank.iter().find(|(_, on)| *on)
+        && let Some((what, _)) = gathered_logs.iter().find(|(_, on)| *on)
     {
         if root {
             eprintln!(

@@ -165,23 +165,6 @@ impl NeighbourList {
         false
     }
 
-    /// Whether [`NeighbourList::needs_rebuild_of`] would say so with `drift` more (m),
-    /// changing nothing: the particle count differs from `rows`, or the bound on the
-    /// drift exceeds skin/2 and so does some particle's exact displacement.
-    pub fn would_rebuild(&self, pos: &[DVec3], rows: usize, drift: Option<f64>) -> bool {
-        if rows != self.reference.len() || pos.len() > rows || self.builds == 0 {
-            return true;
-        }
-        let half = 0.5 * self.skin;
-        if self.drift_bound + drift.unwrap_or(f64::INFINITY) <= half {
-            return false;
-        }
-        let d2 = crate::exec::par::par_max_zip(pos, &self.reference[..pos.len()], |x, r| {
-            (*x - *r).length_squared()
-        });
-        d2.is_nan() || d2 > half * half
-    }
-
     /// Rebuild if needed (see [`NeighbourList::needs_rebuild`]); returns true when it
     /// rebuilt.
     pub fn update(&mut self, pos: &[DVec3], radius: &[f64], drift: Option<f64>) -> bool {

@@ -142,6 +142,25 @@ pub fn frame_from_rows(
     fr
 }
 
+/// The rows of a recorded frame, in its order: what [`frame_from_rows`] makes it from
+/// again, bit for bit (a particle's simulated mass is
+/// [`crate::physics::scaling::sphere_mass`] of its simulated diameter and density, as at
+/// spawn).
+pub fn rows_of_frame(f: &Frame) -> Vec<FrameRow> {
+    (0..f.len())
+        .map(|i| FrameRow {
+            id: f.id[i],
+            group: f.group[i],
+            position: f.position[i],
+            velocity: f.velocity[i],
+            diameter: f.diameter[i],
+            density: f.density[i],
+            mass: crate::physics::scaling::sphere_mass(f.diameter[i], f.density[i]),
+            fluctuation: f.fluctuation.get(i).copied(),
+        })
+        .collect()
+}
+
 /// Record a frame when the step is a multiple of `every`.
 pub fn record_frame(
     clock: Res<SimClock>,

@@ -4,9 +4,10 @@
 //! The contact arrays of [`ContactState`] hold the particle table's rows (`local` of
 //! them) followed by the ghost rows the driver gave with [`ContactState::set_ghosts`] (a
 //! new set: the list is rebuilt) and whose states it updates before each step with
-//! [`ContactState::forward_ghosts`] or [`ContactState::ghost_states_mut`] (the list is
-//! kept: the driver gives a new set before any particle, here or there, moved half the
-//! skin, which [`rebuild_due_here`] tells it for this process's particles). The neighbour list is built over both, without ghost–ghost pairs;
+//! [`ContactState::put_ghost_states`] (the list is kept: the driver gives a new set
+//! before any particle, here or there, moved half the skin, which [`rebuild_due_here`]
+//! tells it for this process's particles). The neighbour list is built over both,
+//! without ghost–ghost pairs;
 //! the force stage computes the local–local and local–ghost pairs; the kicks apply to the
 //! local rows only, so a ghost is never integrated, recorded, counted, drained or fed
 //! (it is not in the particle table at all). A local–ghost pair's tangential history
@@ -24,6 +25,7 @@ use serde::{Deserialize, Serialize};
 
 use super::ContactState;
 use crate::components::*;
+use crate::state::StepDisplacement;
 
 /// Rows of particles as the pair kernel reads them: the ghost rows a driver hands to
 /// [`ContactState::set_ghosts`] (also the rows a driver picks them from, see
@@ -156,10 +158,13 @@ pub fn table_rows_indexed_where(
     (rows, g)
 }
 
+/// Bytes of one forwarded state ([`table_states`], [`ContactState::put_ghost_states`]).
+pub const STATE_BYTES: usize = 72;
+
 /// The position (m), velocity (m/s) and angular velocity (rad/s) of table rows `rows`, as
 /// nine f64 per row (x, v, ω) in native byte order, appended to `out`: the states a
-/// driver forwards to the ghosts of its particles elsewhere (read back with
-/// `bytemuck::pod_read_unaligned::<[f64; 9]>`).
+/// driver forwards to the ghosts of its particles elsewhere
+/// ([`ContactState::put_ghost_states`] reads them).
 ///
 /// # Panics
 /// When a row is past the table.
@@ -170,7 +175,7 @@ pub fn table_states(world: &mut World, rows: &[u32], out: &mut Vec<u8>) {
         assert!(rows.is_empty(), "ghost rows of an empty table");
         return;
     };
-    out.reserve(72 * rows.len());
+    out.reserve(STATE_BYTES * rows.len());
     for &k in rows {
         let k = k as usize;
         let (x, v, w) = (xs[k].0, vs[k].0, ws[k].0);
@@ -192,23 +197,35 @@ pub enum Due {
 }
 
 /// Whether this process's part of a decomposed run needs a new ghost set before its next
-/// step (asked between steps; changes nothing). The driver gives every process a new
-/// set when any of them says so; ghosts are checked by their owners, never here. A feed
-/// and a drain in the same step leave the count alone: the driver counts its feeds.
+/// step (asked between steps). The driver gives every process a new set when any of them
+/// says so; ghosts are checked by their owners, never here. A feed and a drain in the
+/// same step leave the count alone: the driver counts its feeds.
+///
+/// This is the next neighbour stage's displacement check, done now: it takes the last
+/// step's displacement into the list's bound (the stage then finds nothing more to add),
+/// so the exact check, when the bound passes half the skin, runs once a step.
 pub fn rebuild_due_here(world: &mut World) -> Due {
-    let peek = world.resource::<crate::state::StepDisplacement>().peek();
-    let mut qs = world.query::<&Position>();
-    let q = qs.query(world);
-    let pos: &[Position] = crate::stages::table::columns(&q).unwrap_or_default();
-    let pos = <Position as bytemuck::TransparentWrapper<DVec3>>::peel_slice(pos);
-    let st = world.resource::<ContactState>();
-    if pos.len() != st.local || !st.arrived.is_empty() {
-        Due::Table
-    } else if st.list.would_rebuild(pos, st.ids.len(), peek) {
-        Due::Moved
-    } else {
-        Due::No
-    }
+    let drift = world.resource::<StepDisplacement>().take();
+    let due = world.resource_scope(|world, mut st: Mut<ContactState>| {
+        let mut qs = world.query::<&Position>();
+        let q = qs.query(world);
+        let pos: &[Position] = crate::stages::table::columns(&q).unwrap_or_default();
+        let pos = <Position as bytemuck::TransparentWrapper<DVec3>>::peel_slice(pos);
+        if pos.len() != st.local || !st.arrived.is_empty() {
+            return Due::Table;
+        }
+        let rows = st.ids.len();
+        if st.list.needs_rebuild_of(pos, rows, drift) {
+            Due::Moved
+        } else {
+            Due::No
+        }
+    });
+    // Nothing moves before the neighbour stage: it adds no displacement to the bound.
+    let disp = world.resource::<StepDisplacement>();
+    disp.record(0.0);
+    disp.mark_reported();
+    due
 }
 
 /// The tangential history of one touching pair, keyed by its particles' ids, as seen
@@ -236,30 +253,30 @@ impl ContactState {
         self.rebuild_due = true;
     }
 
-    /// Give the ghost rows of the set last given ([`ContactState::set_ghosts`]) their
-    /// states for the coming step: positions (m), velocities (m/s) and angular
-    /// velocities (rad/s), row for row. The list is not rebuilt: the driver guarantees
-    /// that no ghost moved more than half the skin since the set was given.
+    /// Give ghost rows `at..` of the set last given ([`ContactState::set_ghosts`]) the
+    /// states in `bytes` for the coming step, as [`table_states`] writes them
+    /// ([`STATE_BYTES`] a row: x in m, v in m/s, ω in rad/s); returns the row after the
+    /// last one written. The list is not rebuilt: the driver guarantees that no ghost
+    /// moved more than half the skin since the set was given.
     ///
     /// # Panics
-    /// When a slice's length differs from the ghost count.
-    pub fn forward_ghosts(&mut self, pos: &[DVec3], vel: &[DVec3], omega: &[DVec3]) {
-        let g = &mut self.ghosts;
+    /// When `bytes` is not whole states or they run past the ghost rows.
+    pub fn put_ghost_states(&mut self, at: usize, bytes: &[u8]) -> usize {
         assert!(
-            pos.len() == g.len() && vel.len() == g.len() && omega.len() == g.len(),
-            "forwarded ghost states for another ghost set"
+            bytes.len().is_multiple_of(STATE_BYTES),
+            "forwarded states of {} bytes",
+            bytes.len()
         );
-        g.pos.copy_from_slice(pos);
-        g.vel.copy_from_slice(vel);
-        g.omega.copy_from_slice(omega);
-    }
-
-    /// The ghost rows' positions (m), velocities (m/s) and angular velocities (rad/s), to
-    /// be given the states of the coming step in place (what
-    /// [`ContactState::forward_ghosts`] does from slices).
-    pub fn ghost_states_mut(&mut self) -> (&mut [DVec3], &mut [DVec3], &mut [DVec3]) {
         let g = &mut self.ghosts;
-        (&mut g.pos, &mut g.vel, &mut g.omega)
+        let end = at + bytes.len() / STATE_BYTES;
+        assert!(end <= g.len(), "forwarded states for another ghost set");
+        for (k, s) in (at..end).zip(bytes.chunks_exact(STATE_BYTES)) {
+            let s: [f64; 9] = bytemuck::pod_read_unaligned(s);
+            g.pos[k] = DVec3::new(s[0], s[1], s[2]);
+            g.vel[k] = DVec3::new(s[3], s[4], s[5]);
+            g.omega[k] = DVec3::new(s[6], s[7], s[8]);
+        }
+        end
     }
 
     /// The ghost rows of the coming (or last) step.

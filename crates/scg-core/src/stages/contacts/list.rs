@@ -30,7 +30,7 @@ use crate::state::{SimClock, StepDisplacement};
 ///
 /// Ghost rows ([`super::ghosts`]) follow the table's rows: the list is rebuilt when a
 /// driver gives a ghost set ([`ContactState::set_ghosts`]), not when it forwards their
-/// states ([`ContactState::forward_ghosts`]), and it holds no ghost–ghost pair.
+/// states ([`ContactState::put_ghost_states`]), and it holds no ghost–ghost pair.
 pub fn maintain_neighbour_list(
     mut state: ResMut<ContactState>,
     clock: Res<SimClock>,
