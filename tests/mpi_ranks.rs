@@ -37,8 +37,17 @@ fn scg_cmd(ranks: usize, mpirun: bool) -> Command {
     c
 }
 
+/// The environment of a decomposition named `how`: `x`, `y` or `z` slabs along that axis
+/// (`SCG_MPI_AXIS`), else `SCG_MPI_DECOMP` (`auto`, `slabs`, `bisection`, `ids`).
+fn decomposed<'c>(cmd: &'c mut Command, how: &str) -> &'c mut Command {
+    match how {
+        "x" | "y" | "z" => cmd.env("SCG_MPI_AXIS", how).env("SCG_MPI_DECOMP", "slabs"),
+        _ => cmd.env_remove("SCG_MPI_AXIS").env("SCG_MPI_DECOMP", how),
+    }
+}
+
 /// Run `scg run` on `ranks` ranks (1: without mpirun) into `out`; returns stderr. `axis`
-/// is `SCG_MPI_AXIS`, or `ids` for `SCG_MPI_DECOMP=ids`.
+/// is the decomposition ([`decomposed`]).
 fn run(ranks: usize, axis: &str, case: &str, set: &[&str], out: &Path) -> String {
     run_file(ranks, axis, &format!("cases/{case}.toml"), set, out)
 }
@@ -55,13 +64,7 @@ fn run_file(ranks: usize, axis: &str, file: &str, set: &[&str], out: &Path) -> S
         args.push("--set".into());
         args.push(s.to_string());
     }
-    let o = scg_cmd(ranks, ranks > 1)
-        .args(&args)
-        .env("SCG_MPI_AXIS", axis)
-        .env(
-            "SCG_MPI_DECOMP",
-            if axis == "ids" { "ids" } else { "slabs" },
-        )
+    let o = decomposed(scg_cmd(ranks, ranks > 1).args(&args), axis)
         .output()
         .expect("mpirun (OpenMPI) on the PATH");
     let err = String::from_utf8_lossy(&o.stderr).into_owned();
@@ -191,6 +194,13 @@ fn cyclone_feeders_and_mesh_flow_are_bit_identical_on_3_ranks() {
 }
 
 #[test]
+fn cyclone_in_bisection_boxes_is_bit_identical_on_4_ranks() {
+    // Boxes by recursive bisection, cut again as the fed particles spread (they start
+    // on nobody's): the particles swirl through the boxes.
+    same_bits("cyclone", "bisection", &["duration=0.2"], &[4]);
+}
+
+#[test]
 fn cyclone_shared_by_id_is_bit_identical_on_2_and_4_ranks() {
     // `SCG_MPI_DECOMP=ids`: fed particles kept by the rank their id hashes to.
     same_bits("cyclone", "ids", &["duration=0.2"], &[2, 4]);
@@ -267,14 +277,10 @@ fn a_4_rank_recording_written_per_rank_replays_and_verifies_as_one() {
     assert!(vtus >= reference.len(), "{vtus} VTK files");
 }
 
-/// `scg run ARGS…` on `ranks` ranks (1: without mpirun), slabs along `axis`; returns
-/// stderr.
+/// `scg run ARGS…` on `ranks` ranks (1: without mpirun), decomposed as `axis` says
+/// ([`decomposed`]); returns stderr.
 fn run_args(ranks: usize, axis: &str, args: &[String]) -> String {
-    let o = scg_cmd(ranks, ranks > 1)
-        .arg("run")
-        .args(args)
-        .env("SCG_MPI_AXIS", axis)
-        .env("SCG_MPI_DECOMP", "slabs")
+    let o = decomposed(scg_cmd(ranks, ranks > 1).arg("run").args(args), axis)
         .output()
         .expect("mpirun (OpenMPI) on the PATH");
     let err = String::from_utf8_lossy(&o.stderr).into_owned();
@@ -517,6 +523,12 @@ fn contact_runs(
             .filter_map(|l| l.split_whitespace().nth(3)?.parse::<f64>().ok())
             .sum();
         assert!(ghosts > 1.0, "{stem} on {n} ranks: no ghosts: {report}");
+        if axis == "bisection" {
+            assert!(
+                report.contains(&format!("in {n} boxes by recursive bisection")),
+                "{report}"
+            );
+        }
         all.push((format!("{n} ranks"), read(&out)));
     }
     for (name, frames) in all {
@@ -548,16 +560,28 @@ fn contact_runs(
 fn settling_bed_with_contacts_agrees_with_one_rank_on_2_and_4_ranks() {
     // The golden scene: 150 particles settle into a cup and 200 more are fed on top, a
     // dense bed of Hertz–Mindlin contacts with friction and rolling friction, cut into
-    // slabs across the bed (x), 9 634 steps (25 ms; about 13 s for the five runs). The force sums run in another order than
-    // on one rank (scg-mpi's ghosts module), so the last bits differ and the contacts'
-    // chaos amplifies them (about ×100 per 1000 steps here).
+    // slabs across the bed (x), 9 634 steps (25 ms; about 13 s for the five runs). The
+    // force sums run in another order than on one rank (scg-mpi's ghosts module), so
+    // the last bits differ and the contacts' chaos amplifies them (about ×100 per 1000
+    // steps here).
+    settling_bed("x", &[2, 4]);
+}
+
+/// The same bed on 4 ranks in boxes by recursive bisection (cuts along x and y: each
+/// box touches three others, one of them only along the cup's axis).
+#[test]
+fn settling_bed_with_contacts_agrees_with_one_rank_in_4_bisection_boxes() {
+    settling_bed("bisection", &[4]);
+}
+
+fn settling_bed(how: &str, ranks_run: &[usize]) {
     let (frames, runs) = contact_runs(
         "tests/fixtures/golden.toml",
         "golden",
-        "x",
+        how,
         &["record_every=1000", "duration=0.025"],
         &["seed=12"],
-        &[2, 4],
+        ranks_run,
     );
     let cup = 4.0e-3;
     let (control, ranks) = runs.split_first().unwrap();
@@ -571,7 +595,7 @@ fn settling_bed_with_contacts_agrees_with_one_rank_on_2_and_4_ranks() {
             .max()
             .unwrap()
     };
-    for (n, r) in [2, 4].iter().zip(ranks) {
+    for (n, r) in ranks_run.iter().zip(ranks) {
         // Before the chaos has grown (step 2000, over 1000 contacts started, among them
         // contacts across the slabs): every particle where one rank has it, to 1 nm. A
         // missing or wrong ghost moves its partner by the overlap (µm) at once.
@@ -661,7 +685,7 @@ fn contacts_are_refused_when_shared_by_id() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(
-        err.contains("particle contacts over MPI ranks need slabs"),
+        err.contains("particle contacts over MPI ranks need regions"),
         "{err}"
     );
 }
@@ -886,8 +910,7 @@ fn counts(ranks: usize, axis: &str, case: &str, set: &[&str], log: &Path) -> (St
     for s in set {
         cmd.args(["--set", s]);
     }
-    let o = cmd
-        .env("SCG_MPI_AXIS", axis)
+    let o = decomposed(&mut cmd, axis)
         .env("SCG_MPI_COUNTS", log)
         .output()
         .expect("mpirun (OpenMPI) on the PATH");

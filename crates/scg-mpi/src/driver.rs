@@ -2,24 +2,25 @@
 //! the single-rank [`Simulation`] — what `mpirun -np N scg run CASE` runs, and what a
 //! library user calls ([`Decomposed::new`], [`Decomposed::run`]).
 //!
-//! Every rank builds the whole scene, keeps the particles of its share (slabs along one
-//! axis, [`crate::decomp::Slabs`], or shared by a hash of their id) and runs the
+//! Every rank builds the whole scene, keeps the particles of its share (its region:
+//! slabs along one axis or boxes by recursive bisection, [`crate::decomp::regions`]; or
+//! shared by a hash of their id) and runs the
 //! ordinary step on them with its thread team. Every rank runs every feeder from the
 //! scene's seed and spawns only the particles it owns (`SpawnOwner`), so no rank scans
 //! its particles for strangers after a feed.
 //!
-//! With particle contacts (slabs) the run follows LAMMPS's pattern ([`crate::ghosts`]):
+//! With particle contacts (regions) the run follows LAMMPS's pattern ([`crate::ghosts`]):
 //! between two *rebuilds* the particle sets and the ghost sets are fixed; each step only
 //! forwards the ghosts' x, v, ω along fixed row lists, with the step's flags (failures,
 //! interrupts, whether a rank needs a rebuild) riding on those messages when every
 //! rank's peers are all the others (else one small collective). A rebuild is decided
 //! collectively after a step where some rank's particle moved more than half the skin
 //! since its list was built or some rank's particle table changed (a particle fed,
-//! drained): then the particles that left their slab migrate with their whole state and
-//! their touching pairs' histories, the slabs are cut again if the counts drifted apart
+//! drained): then the particles that left their region migrate with their whole state and
+//! their touching pairs' histories, the regions are cut again if the counts drifted apart
 //! (the fullest over [`REBALANCE_TOLERANCE`] × the mean, at most every
 //! [`REBALANCE_MIN_STEPS`] steps), and every rank gets its new ghost set. A particle
-//! strays at most half the skin beyond its slab between rebuilds, which the ghost halo
+//! strays at most half the skin beyond its region between rebuilds, which the ghost halo
 //! (its radius, the largest radius and the whole skin) covers.
 //!
 //! Without particle contacts nothing depends on where a particle is held: the ranks meet
@@ -48,7 +49,7 @@ use scg_core::stages::recording::RecordingParams;
 use scg_core::{SimError, Simulation};
 
 use crate::comm::{Comm, decode, encode};
-use crate::decomp::{Owners, Slabs, longest_axis, needs_rebalance};
+use crate::decomp::{Owners, Regions, Shape, longest_axis, needs_rebalance};
 use crate::ghosts::Halo;
 
 mod output;
@@ -61,6 +62,12 @@ pub enum Decomposition {
     /// particles (`None`), cut at the quantiles of their coordinates; in a periodic box
     /// the slabs wrap round it.
     Slabs(Option<usize>),
+    /// Boxes by recursive coordinate bisection ([`crate::decomp::regions`]).
+    Bisection,
+    /// With particle contacts, slabs or bisection, whichever puts fewer particles in the
+    /// ghost halos (decided again at every rebalance; slabs on 2 ranks, where the two
+    /// are the same); without, slabs along the longest extent.
+    Auto,
     /// By a hash of the particle id: nothing migrates (refused with particle contacts).
     Ids,
 }
@@ -128,15 +135,15 @@ pub fn restore(comm: &Comm, sim: &mut Simulation, mut c: Checkpoint) -> Result<(
     sim.restore(&c)
 }
 
-/// The slabs are cut again when the fullest rank holds more than this many times the
+/// The regions are cut again when the fullest rank holds more than this many times the
 /// mean count.
 pub const REBALANCE_TOLERANCE: f64 = 1.2;
 
 /// Steps at least between two rebalances (each gathers every position on every rank).
 pub const REBALANCE_MIN_STEPS: u64 = 100;
 
-/// Steps between the migrations of a run without particle contacts (slabs): nothing
-/// there depends on which rank holds a particle, so a migration only keeps the slabs'
+/// Steps between the migrations of a run without particle contacts (regions): nothing
+/// there depends on which rank holds a particle, so a migration only keeps the regions'
 /// counts near the balance the rebalance check looks at, and its scan of every particle
 /// (≈ 12 ns each) costs ≈ 0.1 ns per particle-step at this interval.
 pub const MIGRATE_EVERY: u64 = 100;
@@ -180,18 +187,22 @@ pub struct Decomposed<'c> {
     owners: Owners,
     /// Particles migrated in so far.
     pub migrated: u64,
-    /// Slab rebalances so far.
+    /// Rebalances (regions cut again) so far.
     pub rebalances: u64,
     /// Fed particles spawned here up to the last rebuild.
     kept_at_rebuild: u64,
     /// The ghosts of a run with contacts.
     halo: Halo,
-    /// Particle contacts over slabs (ghosts, rebuilds).
+    /// Particle contacts over regions (ghosts, rebuilds).
     contacts: bool,
     /// Shared by id (no migration).
     by_id: bool,
-    /// The slab axis.
-    axis: usize,
+    /// How the regions are cut at a rebalance.
+    shape: Shape,
+    /// Per axis the periodic box's length, m (contacts in a periodic box).
+    period: [Option<f64>; 3],
+    /// The ghost halo the shapes are compared by ([`Shape::Auto`]), m.
+    halo_reach: f64,
     /// Step of the last rebalance.
     last_rebalance: u64,
     /// Wall time of the parts of the steps, here.
@@ -215,7 +226,7 @@ impl<'c> Decomposed<'c> {
         })
     }
 
-    /// Take out the particles that left this rank's slab, by owner.
+    /// Take out the particles that left this rank's region, by owner.
     fn leaving(&mut self) -> Vec<Vec<ParticleRecord>> {
         let (me, owners) = (self.me(), &self.owners);
         let leaving = self
@@ -241,7 +252,7 @@ impl<'c> Decomposed<'c> {
         Ok(())
     }
 
-    /// Move the particles that left this rank's slab to their owners (a collective).
+    /// Move the particles that left this rank's region to their owners (a collective).
     fn migrate(&mut self) -> Result<(), String> {
         let out = self.leaving();
         self.deliver(&out)
@@ -270,8 +281,8 @@ impl<'c> Decomposed<'c> {
             .map_or(0, |o| o.kept)
     }
 
-    /// A rebuild (a collective): migrate the particles that left their slab, cut the
-    /// slabs again when the counts drifted apart (at most every
+    /// A rebuild (a collective): migrate the particles that left their region, cut the
+    /// regions again when the counts drifted apart (at most every
     /// [`REBALANCE_MIN_STEPS`]), and give every rank its new ghost set.
     ///
     /// Every rank takes part in every collective of it even after an error here (a
@@ -294,6 +305,7 @@ impl<'c> Decomposed<'c> {
         }
         if self.contacts {
             let t = Instant::now();
+            self.sim.sort_particles_by_id();
             self.halo.regather(self.comm, &mut self.sim, &self.owners);
             self.times.ghosts += t.elapsed();
         }
@@ -301,25 +313,26 @@ impl<'c> Decomposed<'c> {
         result
     }
 
-    /// Cut the slabs again at the quantiles of all positions and migrate.
+    /// Cut the regions again at the quantiles of all positions and migrate.
     fn rebalance(&mut self) -> Result<(), String> {
-        let Owners::Slabs(slabs) = &self.owners else {
+        if !matches!(self.owners, Owners::Regions(_)) {
             return Ok(());
-        };
-        let (axis, period) = (slabs.axis, slabs.period);
-        let mine: Vec<f64> = self
-            .sim
-            .frame_rows()
-            .iter()
-            .map(|r| r.position[axis])
-            .collect();
-        let all: Vec<f64> = self
+        }
+        let mine: Vec<[f64; 3]> = self.sim.frame_rows().iter().map(|r| r.position).collect();
+        let all: Vec<glam::DVec3> = self
             .comm
             .all_gather_bytes(&encode(&mine))
             .iter()
-            .flat_map(|b| decode::<Vec<f64>>(b))
+            .flat_map(|b| decode::<Vec<[f64; 3]>>(b))
+            .map(glam::DVec3::from_array)
             .collect();
-        self.owners = Owners::Slabs(Slabs::balanced(axis, self.comm.size(), &all, period));
+        self.owners = Owners::Regions(Regions::balanced(
+            self.shape,
+            self.comm.size(),
+            &all,
+            self.period,
+            self.halo_reach,
+        ));
         self.own_feeds();
         self.rebalances += 1;
         self.migrate()
@@ -339,30 +352,49 @@ impl<'c> Decomposed<'c> {
         let contacts = sim.world.get_resource::<ContactState>().is_some();
         if how == Decomposition::Ids && contacts {
             return Err(format!(
-                "{}: particle contacts over MPI ranks need slabs (SCG_MPI_DECOMP=ids shares them by id): run with one rank or without SCG_MPI_DECOMP=ids",
+                "{}: particle contacts over MPI ranks need regions (SCG_MPI_DECOMP=ids shares them by id): run with one rank or without SCG_MPI_DECOMP=ids",
                 scene.file
             ));
         }
-        let rows = sim.frame_rows();
-        let axis = match how {
-            Decomposition::Slabs(Some(a)) => a.min(2),
-            _ => longest_axis(rows.iter().map(|r| glam::DVec3::from_array(r.position))),
+        let xs: Vec<glam::DVec3> = (sim.frame_rows().iter())
+            .map(|r| glam::DVec3::from_array(r.position))
+            .collect();
+        // Slabs keep the axis of the initial particles' longest extent.
+        let shape = match how {
+            Decomposition::Slabs(Some(a)) => Shape::Slabs(a.min(2)),
+            Decomposition::Slabs(None) | Decomposition::Ids => {
+                Shape::Slabs(longest_axis(xs.iter().copied()))
+            }
+            Decomposition::Auto if !contacts => Shape::Slabs(longest_axis(xs.iter().copied())),
+            Decomposition::Auto => Shape::Auto,
+            Decomposition::Bisection => Shape::Bisection,
         };
-        let coords: Vec<f64> = rows.iter().map(|r| r.position[axis]).collect();
-        // Periodic contacts: the slabs wrap round the box along their axis.
-        let period = sim
-            .world
-            .get_resource::<ContactState>()
+        // Periodic contacts: the regions tile the box.
+        let state = sim.world.get_resource::<ContactState>();
+        let period = state
             .and_then(|c| c.params.periodic)
-            .map(|b| b.lengths[axis]);
+            .map_or([None; 3], |b| b.lengths.to_array().map(Some));
+        let halo = Halo::new(scene);
+        let halo_reach = state.map_or(0.0, |c| {
+            crate::ghosts::reach(halo.r_max, halo.r_max, c.list.skin)
+        });
         let owners = match how {
             Decomposition::Ids => Owners::Ids(comm.size()),
-            Decomposition::Slabs(_) => {
-                Owners::Slabs(Slabs::balanced(axis, comm.size(), &coords, period))
-            }
+            _ => Owners::Regions(Regions::balanced(
+                shape,
+                comm.size(),
+                &xs,
+                period,
+                halo_reach,
+            )),
         };
         let me = comm.rank();
         drop(sim.extract_particles(|id, x| owners.owner(id, x) != me));
+        if contacts {
+            // The rows of the particles kept, in the one-rank order (their neighbours'
+            // rows near theirs: `Simulation::sort_particles_by_id`).
+            sim.sort_particles_by_id();
+        }
         let last_rebalance = sim.step_count();
         let mut d = Decomposed {
             comm,
@@ -371,10 +403,12 @@ impl<'c> Decomposed<'c> {
             migrated: 0,
             rebalances: 0,
             kept_at_rebuild: 0,
-            halo: Halo::new(scene),
+            halo,
             contacts: contacts && how != Decomposition::Ids,
             by_id: how == Decomposition::Ids,
-            axis,
+            shape,
+            period,
+            halo_reach,
             last_rebalance,
             times: Times::default(),
         };
@@ -382,12 +416,23 @@ impl<'c> Decomposed<'c> {
         Ok(d)
     }
 
-    /// How the particles are shared, in words ("in slabs along x", "by id").
+    /// How the particles are shared, in words ("in slabs along x", "in 4 boxes by
+    /// recursive bisection (cuts along x, y)", "by id"), with why when the shape was
+    /// chosen ([`Decomposition::Auto`]).
     pub fn describe(&self) -> String {
-        if self.by_id {
-            "by id (no migration)".to_string()
-        } else {
-            format!("in slabs along {}", ["x", "y", "z"][self.axis])
+        match &self.owners {
+            Owners::Ids(_) => "by id (no migration)".to_string(),
+            Owners::Regions(r) if self.shape == Shape::Auto => format!(
+                "{} (auto: fewer particles within {:.3e} m of another rank's region than {})",
+                r.describe(),
+                self.halo_reach,
+                if r.slab_axis().is_some() {
+                    "by bisection, or as many"
+                } else {
+                    "in slabs"
+                }
+            ),
+            Owners::Regions(r) => r.describe(),
         }
     }
 

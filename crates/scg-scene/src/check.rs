@@ -22,12 +22,14 @@ mod mesh;
 mod overlaps;
 mod render;
 mod slip;
+mod speeds;
 mod zones;
 
 pub use dt::auto_dt;
 use mesh::mesh_flow_findings;
 pub use overlaps::initial_overlaps;
 pub use render::render;
+pub use speeds::{EXACT_DIFFERENCES, largest_difference, particle_contact_time};
 
 /// Derived quantities of one group.
 #[derive(Clone, Debug, PartialEq)]
@@ -334,53 +336,6 @@ fn group_report(scene: &Scene, g: &crate::Group) -> GroupReport {
         density_ratio: ratio,
         contact_time,
     }
-}
-
-/// Shortest particle–particle contact time over all pairs of groups (the stiffest pair),
-/// s, when the scene declares `[contacts]`: Hertz t_c with m*, R* of the pair at the
-/// approach speed known before the run (the largest difference of the two groups' initial
-/// and feeding velocities, or the faster group's `known_speed` when those agree), or
-/// the linear law's t_c. The run measures the real approach speeds.
-pub fn particle_contact_time(scene: &Scene) -> Option<f64> {
-    let c = scene.contacts?;
-    let e_eff = c.material.effective_modulus();
-    type Known = (f64, f64, Option<f64>, Vec<DVec3>);
-    let gs: Vec<Known> = scene
-        .groups
-        .iter()
-        .map(|g| {
-            let s = coarse_grain(g.law, g.alpha, g.min_diameter(), g.density);
-            let r = group_report(scene, g);
-            let vs = group_velocities(scene, g)
-                .into_iter()
-                .map(|p| p.1)
-                .collect();
-            (s.mass(), 0.5 * s.diameter, known_speed(scene, r.tau, g), vs)
-        })
-        .collect();
-    let mut tc = f64::INFINITY;
-    for (i, a) in gs.iter().enumerate() {
-        for b in &gs[i..] {
-            let m = scg_core::physics::contact::normal::effective(a.0, b.0);
-            let r = scg_core::physics::contact::normal::effective(a.1, b.1);
-            let mut v: f64 = 0.0;
-            for u in &a.3 {
-                for w in &b.3 {
-                    v = v.max((*u - *w).length());
-                }
-            }
-            if v == 0.0 {
-                v = a.2.unwrap_or(0.0).max(b.2.unwrap_or(0.0));
-            }
-            let t = match c.law {
-                NormalLaw::Hertz { .. } if v > 0.0 => hertz_contact_time(m, r, e_eff, v),
-                NormalLaw::Hertz { .. } => f64::INFINITY,
-                NormalLaw::Linear { stiffness, zeta } => linear_contact_time(m, stiffness, zeta),
-            };
-            tc = tc.min(t);
-        }
-    }
-    tc.is_finite().then_some(tc)
 }
 
 /// Stokes number of paper eq. 1: St = 4√π·n·ρ_p·d̄⁴·|u_r| / (18·μ), with n the number

@@ -79,7 +79,15 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         Ok(c) => c,
         Err(code) => return code,
     };
-    let by_id = std::env::var("SCG_MPI_DECOMP").as_deref() == Ok("ids");
+    let how = match decomposition_from_env() {
+        Ok(h) => h,
+        Err(e) => {
+            if root {
+                eprintln!("error: {e}");
+            }
+            return EXIT_BAD_INPUT;
+        }
+    };
 
     // Sinks on rank 0; every rank learns whether they could be made.
     let mut sinks: Option<Box<dyn FrameSink>> = None;
@@ -106,13 +114,6 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         return comm.all_gather_u64(&[code]).into_iter().max().unwrap_or(1) as i32;
     }
 
-    let how = match (by_id, std::env::var("SCG_MPI_AXIS").as_deref()) {
-        (true, _) => Decomposition::Ids,
-        (false, Ok("x")) => Decomposition::Slabs(Some(0)),
-        (false, Ok("y")) => Decomposition::Slabs(Some(1)),
-        (false, Ok("z")) => Decomposition::Slabs(Some(2)),
-        (false, _) => Decomposition::Slabs(None),
-    };
     let mut d = match Decomposed::new(comm, sim, &scene, how) {
         Ok(d) => d,
         Err(e) => {
@@ -270,4 +271,30 @@ fn make_sinks(
     paths.extend(args.vtk.iter().cloned());
     paths.extend(args.frames_csv.iter().cloned());
     Ok(Box::new(scg_record::Background::spawn(sinks)))
+}
+
+/// The decomposition the environment asks for: `SCG_MPI_DECOMP` = `auto` (the default),
+/// `slabs`, `bisection` or `ids`; `SCG_MPI_AXIS` = `x`, `y` or `z` the slab axis (slabs).
+/// Any other value is an error naming the variable and the value.
+fn decomposition_from_env() -> Result<Decomposition, String> {
+    let var = |k: &str| std::env::var(k).ok();
+    let axis = match var("SCG_MPI_AXIS").as_deref() {
+        None => None,
+        Some("x") => Some(0),
+        Some("y") => Some(1),
+        Some("z") => Some(2),
+        Some(v) => return Err(format!("SCG_MPI_AXIS = {v:?}: expected x, y or z")),
+    };
+    match (var("SCG_MPI_DECOMP").as_deref(), axis) {
+        (None | Some("auto"), None) => Ok(Decomposition::Auto),
+        (None | Some("auto") | Some("slabs"), a) => Ok(Decomposition::Slabs(a)),
+        (Some("bisection"), None) => Ok(Decomposition::Bisection),
+        (Some("ids"), None) => Ok(Decomposition::Ids),
+        (Some(d @ ("bisection" | "ids")), Some(_)) => Err(format!(
+            "SCG_MPI_AXIS is for slabs, not SCG_MPI_DECOMP = {d:?}"
+        )),
+        (Some(v), _) => Err(format!(
+            "SCG_MPI_DECOMP = {v:?}: expected auto, slabs, bisection or ids"
+        )),
+    }
 }

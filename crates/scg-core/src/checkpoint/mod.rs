@@ -143,6 +143,25 @@ impl Simulation {
         Ok(())
     }
 
+    /// Put the particle table in id order (rows by ascending id; nothing when it is):
+    /// the order a single-rank run keeps its placed and fed particles in until some
+    /// leave, and so the neighbour locality of its rows. A decomposed run calls it after
+    /// its particles changed hands: a rank's rows are else scattered by the swaps that
+    /// fill the rows of the particles that left, and the contact stage's sums cover
+    /// the particles of a pair's rows far apart (measured on the dense bed: the kicks
+    /// 2.4× slower). Changes the rows alone, and so, with particle contacts, the order
+    /// a particle's pair forces are summed in (the list is rebuilt, histories by id).
+    pub fn sort_particles_by_id(&mut self) {
+        let mut q = self.world.query::<&ParticleId>();
+        let ids: Vec<u32> = q.iter(&self.world).map(|id| id.0).collect();
+        if ids.is_sorted() {
+            return;
+        }
+        let mut perm: Vec<u32> = (0..ids.len() as u32).collect();
+        perm.sort_unstable_by_key(|&i| ids[i as usize]);
+        crate::stages::table::reorder_particles(&mut self.world, &perm, |_| true);
+    }
+
     /// Number of particles.
     pub fn particle_count(&mut self) -> usize {
         let mut q = self.world.query::<&ParticleId>();

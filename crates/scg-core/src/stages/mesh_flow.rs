@@ -23,14 +23,13 @@ use glam::DVec3;
 use super::carrier::CarrierModifier;
 use super::erosion::{ErosionLog, Impact};
 use super::outlet::{OutletLog, OutletPart, remove_departed};
-use super::table::{bypass, columns_mut};
+use super::table::{bypass, columns_mut, reorder_particles};
 use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
 use crate::components::*;
 use crate::exec::par::for_each_piece_heavy;
 use crate::physics::carrier::{Body, Carrier, Scheme, WithOffset, advance};
 use crate::physics::flow::Fluid;
 use crate::physics::mesh_flow::{MeshFlow, PatchInteraction, PatchRole, hint, land};
-use crate::spawn::{LayoutComponent, LayoutVisitor, Role, visit_layout};
 use crate::state::{Health, Motion, SimClock, StepDisplacement, Tally};
 use crate::step::{StepBuilder, StepSet, StepSystem};
 
@@ -410,46 +409,14 @@ pub(crate) fn add_sort(b: &mut StepBuilder) {
 /// unsorted run's (tested).
 ///
 /// # Panics
-/// When the particles carry a component this system does not know (one added to the
-/// particle layout without adding it here): it stops before moving anything.
+/// When the particles carry a component the layout does not know
+/// ([`reorder_particles`]): it stops before moving anything.
 pub fn sort_by_cell(world: &mut World) {
     let step = world.resource::<SimClock>().step;
     let every = world.resource::<MeshFlowState>().spec.sort_every;
     if every == 0 || (step != 1 && !step.is_multiple_of(every)) {
         return;
     }
-    // Every component of the particle layout, checked against the table's.
-    struct Ids<'a>(&'a mut World, Vec<bevy_ecs::component::ComponentId>);
-    impl LayoutVisitor for Ids<'_> {
-        fn visit<T: LayoutComponent>(&mut self, _: Role) {
-            let id = self.0.register_component::<T>();
-            self.1.push(id);
-        }
-    }
-    let mut ids = Ids(world, Vec::new());
-    visit_layout(&mut ids);
-    let known = ids.1;
-    let layouts = world
-        .archetypes()
-        .iter()
-        .filter(|a| !a.is_empty() && a.contains(known[0]))
-        .count();
-    assert!(
-        layouts <= 1,
-        "sort_by_cell: the particles have {layouts} component layouts (scg keeps one)"
-    );
-    let unknown: Vec<String> = world
-        .archetypes()
-        .iter()
-        .filter(|a| !a.is_empty() && a.contains(known[0]))
-        .flat_map(|a| a.components().iter().copied())
-        .filter(|c| !known.contains(c))
-        .filter_map(|c| world.components().get_name(c).map(|n| n.to_string()))
-        .collect();
-    assert!(
-        unknown.is_empty(),
-        "sort_by_cell does not know the particle components {unknown:?}"
-    );
     let mut q = world.query::<(&ParticleId, Option<&CellHint>)>();
     let keys: Vec<(u32, u32)> = q
         .iter(world)
@@ -460,47 +427,13 @@ pub fn sort_by_cell(world: &mut World) {
     }
     let mut perm: Vec<u32> = (0..keys.len() as u32).collect();
     perm.sort_unstable_by_key(|&i| keys[i as usize]);
-    // Every column of the layout (the start's fluid velocity only where it is kept).
-    struct Permute<'a> {
-        world: &'a mut World,
-        perm: &'a [u32],
-        keep_start: bool,
-    }
-    impl LayoutVisitor for Permute<'_> {
-        fn visit<T: LayoutComponent>(&mut self, _: Role) {
-            if self.keep_start
-                || std::any::TypeId::of::<T>() != std::any::TypeId::of::<FlowAtCentre>()
-            {
-                permute::<T>(self.world, self.perm);
-            }
-        }
-    }
+    // The start's fluid velocity only where it is kept.
     let keep_start = keeps_start(
         world.resource::<Motion>(),
         world.get_resource::<CarrierModifier>(),
     );
-    visit_layout(&mut Permute {
-        world,
-        perm: &perm,
-        keep_start,
-    });
-}
-
-/// Row i of the particles' `T` column takes the value of row `perm[i]` (no effect when
-/// the particles have no `T`). Queries visit the one particle table in row order.
-fn permute<T: Component<Mutability = bevy_ecs::component::Mutable> + Clone>(
-    world: &mut World,
-    perm: &[u32],
-) {
-    let mut q = world.query_filtered::<&mut T, With<ParticleId>>();
-    let old: Vec<T> = q.iter(world).cloned().collect();
-    if old.len() != perm.len() {
-        return;
-    }
-    for (i, mut x) in q.iter_mut(world).enumerate() {
-        x.bypass_change_detection()
-            .clone_from(&old[perm[i] as usize]);
-    }
+    let flow_at_centre = std::any::TypeId::of::<FlowAtCentre>();
+    reorder_particles(world, &perm, |t| keep_start || t != flow_at_centre);
 }
 
 /// Particles that left through each patch, per group (resource of a mesh flow):

@@ -25,18 +25,25 @@ impl Decomposed<'_> {
             self.migrated,
             held,
         ]);
-        let (builds, build_time) = self
+        let (builds, build_time, pairs, touching) = self
             .sim
             .world
             .get_resource::<ContactState>()
-            .map_or((0, 0), |c| {
-                (c.list.builds, c.list.build_time.as_nanos() as u64)
+            .map_or((0, 0, 0, 0), |c| {
+                (
+                    c.list.builds,
+                    c.list.build_time.as_nanos() as u64,
+                    c.list.pairs.len() as u64,
+                    c.active as u64,
+                )
             });
         let ghost_stats = comm.all_gather_u64(&[
             t.ghosts.as_nanos() as u64,
             self.halo.received,
             builds,
             build_time,
+            pairs,
+            touching,
         ]);
         if comm.rank() != 0 {
             return None;
@@ -45,7 +52,7 @@ impl Decomposed<'_> {
         let wall = out.wall;
         lines.push(match &out.failure {
             None => format!(
-                "{} {} steps (t = {:.6} s) in {wall:.3} s on {} ranks: {:.3e} particle-steps/s, {} slab rebalances",
+                "{} {} steps (t = {:.6} s) in {wall:.3} s on {} ranks: {:.3e} particle-steps/s, {} rebalances",
                 if out.interrupted {
                     "interrupted after"
                 } else {
@@ -59,6 +66,9 @@ impl Decomposed<'_> {
             ),
             Some(e) => format!("error: run stopped at step {}: {e}", out.steps),
         });
+        if self.rebalances > 0 {
+            lines.push(format!("particles at the end {}", self.describe()));
+        }
         let share = crate::timing::time_shares(&per_rank);
         lines.push(format!(
             "share of the step time (all ranks): compute {:.1} %, ghost exchange {:.1} %, migration {:.1} %, recording (gather) {:.1} %, rebalance {:.1} %",
@@ -91,15 +101,17 @@ impl Decomposed<'_> {
                 h.exchanges, h.forwards
             ));
             lines.push(
-                "ghost exchange per rank (s; ghosts held per step on average; neighbour-list builds, their time in s):".into(),
+                "ghost exchange per rank (s; ghosts held per step on average; neighbour-list builds, their time in s; pairs listed, in contact at the end):".into(),
             );
-            for (k, c) in ghost_stats.chunks(4).enumerate() {
+            for (k, c) in ghost_stats.chunks(6).enumerate() {
                 lines.push(format!(
-                    "  rank {k:<4} {:>9.3}   {:>9.1}   {:>9} {:>9.3}",
+                    "  rank {k:<4} {:>9.3}   {:>9.1}   {:>9} {:>9.3}   {:>9} {:>9}",
                     c[0] as f64 * 1e-9,
                     c[1] as f64 / (h.exchanges + h.forwards).max(1) as f64,
                     c[2],
-                    c[3] as f64 * 1e-9
+                    c[3] as f64 * 1e-9,
+                    c[4],
+                    c[5]
                 ));
             }
         }

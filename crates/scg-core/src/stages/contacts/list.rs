@@ -63,7 +63,7 @@ pub fn maintain_neighbour_list(
         st.list.build(&all_pos, &st.radius);
         drop_ghost_pairs(st);
         carry_history(st, &all_pos, touching, None);
-        st.slots = layout_slots(&st.list.pairs, st.ids.len());
+        st.slots = layout_slots(&st.list.pairs, st.ids.len(), st.local);
         return;
     }
     let touching = touching_pairs(st);
@@ -72,7 +72,7 @@ pub fn maintain_neighbour_list(
     st.list.build(&all_pos, &st.radius);
     drop_ghost_pairs(st);
     carry_history(st, &all_pos, touching, Some(&old_ids));
-    st.slots = layout_slots(&st.list.pairs, st.ids.len());
+    st.slots = layout_slots(&st.list.pairs, st.ids.len(), st.local);
 }
 
 /// Drop the ghost–ghost pairs from a list just built (with i < j they are the last
@@ -236,7 +236,7 @@ impl ContactState {
                 .collect(),
         };
         self.slots = if current {
-            layout_slots(&self.list.pairs, n)
+            layout_slots(&self.list.pairs, n, n)
         } else {
             Vec::new()
         };

@@ -44,6 +44,10 @@ const LIST_BLOCK: usize = 64;
 
 /// One slot of the force accumulation: a fixed range of the pair list whose forces are
 /// summed, in pair order, into per-particle arrays covering particles `base..base+len`.
+/// Ghost rows (a decomposed run: rows from `local` on) are never covered: their owner
+/// computes the pair too and kicks them, so only the local side of a local–ghost pair is
+/// summed (else every slot holding one would stretch to the ghost rows at the end of the
+/// table, and every particle be covered by every slot).
 /// Invariant between steps: the arrays are zero except where the last step wrote
 /// (`touched`, or anywhere when `dirty`) and the kicks did not zero what they read
 /// (the rows below `consumed`).
@@ -53,6 +57,8 @@ pub(super) struct Slot {
     pub(super) pairs: std::ops::Range<usize>,
     /// First particle index covered.
     pub(super) base: usize,
+    /// The first ghost row: the pairs' j from here on are not summed.
+    local: usize,
     /// Summed force (N) and torque (N·m) per covered particle.
     pub(super) sums: Vec<[DVec3; 2]>,
     /// Covered particles written this step (sparse steps), global indices.
@@ -212,6 +218,9 @@ impl Slot {
     ) {
         use core::arch::x86_64::*;
         for (k, row) in [(i, out.on_i(l)), (j, out.on_j(l))] {
+            if k >= self.local {
+                continue;
+            }
             let s: &mut [DVec3; 2] = &mut self.sums[k - self.base];
             let s = s as *mut [DVec3; 2] as *mut f64;
             // SAFETY: `s` addresses six f64 (two `repr(C)` DVec3) and `row` six f64.
@@ -241,17 +250,20 @@ impl Slot {
     #[inline(always)]
     fn credit(&mut self, c: &PairContact, hertz: &HertzPair, k: &Kernel, sparse: bool) {
         let (i, j) = (c.i as usize, c.j as usize);
-        let (li, lj) = (i - self.base, j - self.base);
+        let li = i - self.base;
         let si = &mut self.sums[li];
         si[0] += c.force;
         si[1] += c.torque_i;
-        let sj = &mut self.sums[lj];
-        sj[0] -= c.force;
-        sj[1] += c.torque_j;
+        if j < self.local {
+            let sj = &mut self.sums[j - self.base];
+            sj[0] -= c.force;
+            sj[1] += c.torque_j;
+        }
         self.active += 1;
         if sparse {
-            for (l, r) in [(li, i), (lj, j)] {
-                if !self.marked[l] {
+            for r in [i, j] {
+                let l = r - self.base;
+                if r < self.local && !self.marked[l] {
                     self.marked[l] = true;
                     self.touched.push(r as u32);
                 }
@@ -414,10 +426,12 @@ fn list_touching(
     m
 }
 
-/// Cut `pairs` (sorted by i, with i < j) into slots: as many as the pair count gives (at
-/// most [`MAX_SLOTS`]), halved while their arrays together would cover more than
-/// max(4·n, 2²⁰) particles (particles stored far from their neighbours in index order).
-pub(super) fn layout_slots(pairs: &[[u32; 2]], n: usize) -> Vec<Slot> {
+/// Cut `pairs` (sorted by i, with i < j, i below `local`) into slots: as many as the
+/// pair count gives (at most [`MAX_SLOTS`]), halved while their arrays together would
+/// cover more than max(4·n, 2²⁰) particles (particles stored far from their neighbours in
+/// index order). A slot covers its pairs' rows below `local` (the table's; the ghost rows
+/// after them are not summed, [`Slot`]).
+pub(super) fn layout_slots(pairs: &[[u32; 2]], n: usize, local: usize) -> Vec<Slot> {
     if pairs.is_empty() {
         return Vec::new();
     }
@@ -432,7 +446,7 @@ pub(super) fn layout_slots(pairs: &[[u32; 2]], n: usize) -> Vec<Slot> {
                 let base = pairs[p0][0] as usize;
                 let top = pairs[p0..p1]
                     .iter()
-                    .map(|p| p[1] as usize)
+                    .map(|&[i, j]| if (j as usize) < local { j } else { i } as usize)
                     .max()
                     .unwrap_or(base);
                 (p0..p1, base, top - base + 1)
@@ -445,6 +459,7 @@ pub(super) fn layout_slots(pairs: &[[u32; 2]], n: usize) -> Vec<Slot> {
                 .map(|(range, base, len)| Slot {
                     pairs: range,
                     base,
+                    local,
                     sums: vec![[DVec3::ZERO; 2]; len],
                     marked: vec![false; len],
                     ..Default::default()

@@ -142,11 +142,11 @@ fn avx2_and_portable_slot_loops_agree_bit_for_bit() {
             radius: &radius,
         };
         let kernel = test_kernel(bodies, par, &group);
-        let run = |avx: bool| {
-            let mut slots = layout_slots(&list, n);
+        let run = |avx: bool, local: usize, list: &[[u32; 2]], pairs: &PairArrays| {
+            let mut slots = layout_slots(list, n, local);
             let mut ps = pairs.clone();
             let slot = &mut slots[0];
-            let mut view = ps.view(&list, slot.pairs.clone());
+            let mut view = ps.view(list, slot.pairs.clone());
             if avx {
                 #[cfg(target_arch = "x86_64")]
                 if std::arch::is_x86_feature_detected!("avx2") {
@@ -159,19 +159,45 @@ fn avx2_and_portable_slot_loops_agree_bit_for_bit() {
             slot.run_portable(&mut view, &kernel, 1, sparse);
             Some((slot.sums.clone(), ps))
         };
-        let portable = run(false).unwrap();
+        let bits = |v: &[[DVec3; 2]]| -> Vec<u64> {
+            v.iter()
+                .flatten()
+                .flat_map(|x| x.to_array().map(f64::to_bits))
+                .collect()
+        };
+        let portable = run(false, n, &list, &pairs).unwrap();
         assert!(portable.0.iter().any(|f| f[0] != DVec3::ZERO));
         // more than two listing blocks, so that touching pairs are carried over
         assert!(list.len() > 2 * LIST_BLOCK, "{} pairs", list.len());
-        if let Some(avx) = run(true) {
-            let bits = |v: &[[DVec3; 2]]| -> Vec<u64> {
-                v.iter()
-                    .flatten()
-                    .flat_map(|x| x.to_array().map(f64::to_bits))
-                    .collect()
-            };
+        if let Some(avx) = run(true, n, &list, &pairs) {
             assert_eq!(bits(&portable.0), bits(&avx.0));
             assert_eq!(portable.1, avx.1);
+        }
+        // The last 100 rows as ghosts (a decomposed run, whose list has no ghost–ghost
+        // pairs): the slot covers the table's rows only, and their sums are the same
+        // bits (only the ghosts' sides dropped).
+        let local = n - 100;
+        let keep: Vec<usize> = (0..list.len())
+            .filter(|&k| (list[k][0] as usize) < local)
+            .collect();
+        let sub = |ps: &PairArrays| PairArrays {
+            touching: keep.iter().map(|&k| ps.touching[k]).collect(),
+            shift: Vec::new(),
+            state: keep.iter().map(|&k| ps.state[k]).collect(),
+        };
+        let local_list: Vec<[u32; 2]> = keep.iter().map(|&k| list[k]).collect();
+        assert!(local_list.iter().any(|p| p[1] as usize >= local));
+        for avx in [false, true] {
+            if let Some((sums, ps)) = run(avx, local, &local_list, &sub(&pairs)) {
+                assert!(sums.len() <= local, "avx {avx}");
+                assert_eq!(bits(&sums), bits(&portable.0[..sums.len()]), "avx {avx}");
+                assert!(
+                    portable.0[sums.len()..local]
+                        .iter()
+                        .all(|r| r[0] == DVec3::ZERO)
+                );
+                assert_eq!(ps, sub(&portable.1));
+            }
         }
     }
 }
