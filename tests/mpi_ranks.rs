@@ -990,3 +990,66 @@ fn no_particle_lost_or_duplicated_over_10k_classifier_steps_with_contacts_on_4_r
         "{sets} ghost sets, {forwarded} steps forwarded: {report}"
     );
 }
+
+/// The tables a run ends with from logs each rank holds its share of, merged on rank 0:
+/// the elbow (fed sand rebounding and wearing the bend, `[erosion]`) on 3 ranks writes
+/// one rank's `--fates-csv` and `--summary-json` (but for the wall time and the thread
+/// count) and its `--erosion-csv` to rounding (a face's impacts summed rank by rank).
+#[test]
+fn end_tables_over_3_ranks_are_one_ranks() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = |n: usize| -> [PathBuf; 3] {
+        ["fates.csv", "summary.json", "erosion.csv"].map(|f| dir.path().join(format!("{n}-{f}")))
+    };
+    let mut got = Vec::new();
+    for n in [1, 3] {
+        let [fates, summary, erosion] = files(n);
+        let args: Vec<String> = [
+            repo("cases/elbow.toml").display().to_string(),
+            "--no-record".into(),
+            "--set".into(),
+            "duration=0.05".into(),
+            "--fates-csv".into(),
+            fates.display().to_string(),
+            "--summary-json".into(),
+            summary.display().to_string(),
+            "--erosion-csv".into(),
+            erosion.display().to_string(),
+        ]
+        .into();
+        let report = run_args(n, "auto", &args);
+        assert!(report.contains("erosion (finnie"), "{report}");
+        let read = |p: &Path| std::fs::read_to_string(p).unwrap();
+        got.push((read(&fates), read(&summary), read(&erosion)));
+        if n > 1 {
+            assert!(migrated(&report) > 0, "{report}");
+        }
+    }
+    let (one, three) = (&got[0], &got[1]);
+    assert!(one.0.lines().count() > 3, "{}", one.0);
+    assert_eq!(one.0, three.0, "fates");
+    let json = |t: &str| {
+        let mut v: serde_json::Value = serde_json::from_str(t).unwrap();
+        for k in ["wall_s", "particle_steps_per_s", "threads"] {
+            v.as_object_mut().unwrap().remove(k);
+        }
+        v
+    };
+    assert_eq!(json(&one.1), json(&three.1), "summary");
+    let (a, b): (Vec<&str>, Vec<&str>) = (one.2.lines().collect(), three.2.lines().collect());
+    assert!(a.len() > 100, "{} eroded faces", a.len());
+    assert_eq!(a.len(), b.len());
+    let mut differ = 0;
+    for (x, y) in a.iter().zip(&b) {
+        for (p, q) in x.split(',').zip(y.split(',')) {
+            match (p.parse::<f64>(), q.parse::<f64>()) {
+                (Ok(p), Ok(q)) => {
+                    assert!((p - q).abs() <= 1e-12 * p.abs().max(q.abs()), "{x}\n{y}");
+                    differ += usize::from(p != q);
+                }
+                _ => assert_eq!(p, q),
+            }
+        }
+    }
+    eprintln!("erosion CSV: {differ} values differ in their last bits");
+}

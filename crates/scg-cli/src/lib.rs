@@ -14,6 +14,7 @@ pub mod replay;
 pub mod run;
 mod stem;
 pub mod study;
+pub mod tables;
 
 use std::path::PathBuf;
 

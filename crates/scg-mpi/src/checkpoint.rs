@@ -2,12 +2,12 @@
 //! clock, feeders and streams every rank shares) merged into one, in the single-rank
 //! format ([`merge`]): a decomposed run writes one file that restarts on any number of
 //! ranks, one included. On a restart every rank restores the whole checkpoint and keeps
-//! the particles of its slab; rank 0 keeps the logs and counts, the others start theirs
+//! the particles of its region; rank 0 keeps the logs and counts, the others start theirs
 //! from zero ([`strip_logs`]), so that the sums over the ranks stay the run's.
 //!
 //! What a rank holds only its share of: the particles (concatenated, in id order),
 //! particle-steps, drained and collision counts, the outlet's, patches', impulse walls'
-//! and collecting zones' logs (summed, or concatenated and sorted). The largest
+//! and collecting zones' logs, the erosion log (summed, or concatenated and sorted). The largest
 //! displacement is the largest over the ranks. Particle contacts: the touching pairs of
 //! every rank, each once, keyed by ids ([`merge_contacts`]), for the first neighbour
 //! stage after the restart to take up whatever the particles' new rows. Collecting zones
@@ -17,7 +17,7 @@ use std::collections::BTreeMap;
 
 use glam::DVec3;
 use scg_core::checkpoint::Checkpoint;
-use scg_core::checkpoint::records::{ContactRecord, PairRecord};
+use scg_core::checkpoint::records::{ContactRecord, ErosionRecord, PairRecord};
 
 /// Why a scene's checkpoints cannot yet be written or read over ranks, if they cannot.
 pub fn refusal(scene: &scg_scene::Scene) -> Option<&'static str> {
@@ -90,6 +90,9 @@ pub fn merge(mut parts: Vec<Checkpoint>) -> Option<Checkpoint> {
             }
         }
         out.collect_inside.extend(c.collect_inside);
+        if let (Some(a), Some(b)) = (out.erosion.as_mut(), c.erosion.as_ref()) {
+            merge_erosion(a, b);
+        }
     }
     out.displacement.0 = largest.to_bits();
     out.particles.sort_by_key(|p| p.id);
@@ -102,6 +105,27 @@ pub fn merge(mut parts: Vec<Checkpoint>) -> Option<Checkpoint> {
     }
     out.collect_inside.sort_unstable();
     Some(out)
+}
+
+/// Rank `b`'s erosion log added into `a`: per face the impacts and sums added (in rank
+/// order: a face worn on several ranks sums its impacts in another order than one rank
+/// does, equal to rounding), per particle the volumes added (a particle that migrated
+/// wore walls on each rank it was on); both in key order, as one rank keeps them.
+pub fn merge_erosion(a: &mut ErosionRecord, b: &ErosionRecord) {
+    let mut faces: BTreeMap<(u32, u32), (u64, [f64; 5])> = a.0.drain(..).collect();
+    for &(k, (n, sums)) in &b.0 {
+        let f = faces.entry(k).or_insert((0, [0.0; 5]));
+        f.0 += n;
+        for (x, y) in f.1.iter_mut().zip(sums) {
+            *x += y;
+        }
+    }
+    a.0 = faces.into_iter().collect();
+    let mut by: BTreeMap<u32, f64> = a.1.drain(..).collect();
+    for &(id, v) in &b.1 {
+        *by.entry(id).or_insert(0.0) += v;
+    }
+    a.1 = by.into_iter().collect();
 }
 
 /// The touching pairs of every rank's contact record (rows of its particles and its
@@ -180,6 +204,10 @@ pub fn strip_logs(c: &mut Checkpoint) {
         z.iter_mut().flatten().for_each(Vec::clear);
     }
     c.collect_inside.clear();
+    if let Some(e) = c.erosion.as_mut() {
+        e.0.clear();
+        e.1.clear();
+    }
 }
 
 #[cfg(test)]
@@ -245,6 +273,35 @@ mod tests {
             sparse: true,
             active: 1,
         }
+    }
+
+    #[test]
+    fn erosion_logs_add_by_face_and_particle() {
+        let mut a: ErosionRecord = (
+            vec![
+                ((u32::MAX, 4), (2, [1.0, 2.0, 0.0, 0.0, 0.0])),
+                ((0, 1), (1, [0.5; 5])),
+            ],
+            vec![(3, 1e-9), (8, 2e-9)],
+        );
+        let b: ErosionRecord = (
+            vec![((0, 0), (1, [1.0; 5])), ((u32::MAX, 4), (3, [1.0; 5]))],
+            vec![(8, 1e-9), (5, 4e-9)],
+        );
+        merge_erosion(&mut a, &b);
+        assert_eq!(
+            a.0,
+            vec![
+                ((0, 0), (1, [1.0; 5])),
+                ((0, 1), (1, [0.5; 5])),
+                ((u32::MAX, 4), (5, [2.0, 3.0, 1.0, 1.0, 1.0])),
+            ]
+        );
+        assert_eq!(a.1, vec![(3, 1e-9), (5, 4e-9), (8, 3e-9)]);
+        let mut c = part(&[0], 0, 0, 0.0);
+        c.erosion = Some(b);
+        strip_logs(&mut c);
+        assert_eq!(c.erosion, Some((vec![], vec![])));
     }
 
     #[test]

@@ -37,26 +37,6 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         }
         return 0;
     }
-    // What the one-rank run reports at its end from logs a rank holds only its share of:
-    // refused rather than reported from rank 0's share.
-    let gathered_logs = [
-        ("--summary-json", args.summary_json.is_some()),
-        ("--fates-csv", args.fates_csv.is_some()),
-        ("--erosion-csv", args.erosion_csv.is_some()),
-        ("--erosion-vtk", args.erosion_vtk.is_some()),
-        ("[erosion]", scene.erosion.is_some()),
-    ];
-    if comm.size() > 1
-        && let Some((what, _)) = gathered_logs.iter().find(|(_, on)| *on)
-    {
-        if root {
-            eprintln!(
-                "error: {what} is not yet gathered over MPI ranks ({} here): run with one rank",
-                comm.size()
-            );
-        }
-        return EXIT_BAD_INPUT;
-    }
     // Written per rank, a frame is never whole anywhere: the formats that need it are
     // made from the set afterwards.
     let per_rank = args.per_rank && comm.size() > 1 && record;
@@ -168,6 +148,7 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
         },
         _ => None,
     };
+    let particle_steps0 = d.sim.particle_steps();
     let out = d.run(
         steps,
         &opts,
@@ -191,13 +172,15 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
             eprintln!("checkpoint {} at step {n}", checkpoint_path.display());
         }
     }
+    let tables = end_tables(comm, &mut d, &scene, &args, &out, particle_steps0);
     if let Some(e) = &out.sink_error {
         eprintln!("error: recorder failed on rank {}: {e}", comm.rank());
     }
     if let Err(e) = &fin {
         eprintln!("error: rank {}: {e}", comm.rank());
     }
-    let code = u64::from(out.failure.is_some() || out.sink_error.is_some() || fin.is_err());
+    let code =
+        u64::from(out.failure.is_some() || out.sink_error.is_some() || fin.is_err() || !tables);
     let any_code = comm.all_gather_u64(&[code]).into_iter().max().unwrap_or(0);
     if any_code != 0 {
         return any_code as i32;
@@ -297,4 +280,51 @@ fn decomposition_from_env() -> Result<Decomposition, String> {
             "SCG_MPI_DECOMP = {v:?}: expected auto, slabs, bisection or ids"
         )),
     }
+}
+
+/// The tables and files a one-rank run ends with from logs and particles each rank holds
+/// its share of (`--summary-json`, `--fates-csv`, `[erosion]` and its files): when asked
+/// for, every rank's state is merged on rank 0 as a checkpoint is
+/// ([`Decomposed::gather_whole`]: every particle on one node, once), rank 0's simulation
+/// takes it (the run is over) and prints and writes them as one rank does. A collective;
+/// false when a file could not be written (rank 0).
+fn end_tables(
+    comm: &Comm,
+    d: &mut Decomposed,
+    scene: &scg_scene::Scene,
+    args: &RunArgs,
+    out: &scg_mpi::driver::Outcome,
+    particle_steps0: u64,
+) -> bool {
+    let asked = args.summary_json.is_some()
+        || args.fates_csv.is_some()
+        || args.erosion_csv.is_some()
+        || args.erosion_vtk.is_some()
+        || scene.erosion.is_some();
+    if !asked {
+        return true;
+    }
+    let run_steps: u64 = comm
+        .all_gather_u64(&[d.sim.particle_steps() - particle_steps0])
+        .iter()
+        .sum();
+    let Some(whole) = d.gather_whole() else {
+        return true;
+    };
+    if let Err(e) = d.sim.restore(&whole) {
+        eprintln!("error: the merged state of the ranks: {e}");
+        return false;
+    }
+    let Some((fates, by_mass)) = crate::tables::end_tables(scene, args, &mut d.sim) else {
+        return false;
+    };
+    let run = crate::tables::RunFigures {
+        steps: out.steps,
+        dt: scene.dt,
+        time: d.sim.time(),
+        particle_steps: run_steps,
+        wall_s: out.wall,
+        threads: scg_core::exec::settings().team_size() * comm.size(),
+    };
+    crate::tables::write_summary(scene, args, &mut d.sim, &fates, &by_mass, &run)
 }

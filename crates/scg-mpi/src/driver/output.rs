@@ -1,6 +1,7 @@
 //! What a decomposed run writes: frames (gathered on rank 0, or each rank's own part)
 //! and the one checkpoint merged from every rank's.
 
+use scg_core::checkpoint::Checkpoint;
 use scg_core::stages::recording::{FrameRow, RecordingParams, frame_from_rows};
 use scg_core::state::Tally;
 use serde::{Deserialize, Serialize};
@@ -66,15 +67,22 @@ impl Decomposed<'_> {
             rows,
         ))
     }
-    /// Gather every rank's checkpoint on rank 0, merge them ([`crate::checkpoint::merge`])
+    /// Every rank's checkpoint gathered and merged on rank 0
+    /// ([`crate::checkpoint::merge`]): the whole run's state as one rank would hold it
+    /// (a collective; `None` on the other ranks). It holds every particle, on one node.
+    pub fn gather_whole(&mut self) -> Option<Checkpoint> {
+        let parts = self.comm.gather_bytes(&encode(&self.sim.checkpoint()))?;
+        crate::checkpoint::merge(parts.iter().map(|b| decode(b)).collect())
+    }
+
+    /// Gather every rank's checkpoint on rank 0, merge them ([`Self::gather_whole`])
     /// and write the one file there (a collective; `Err` only on rank 0).
     pub(super) fn write_checkpoint(&mut self, plan: &CheckpointPlan) -> Result<(), String> {
-        let parts = self.comm.gather_bytes(&encode(&self.sim.checkpoint()));
-        let Some(parts) = parts else {
+        if self.comm.rank() != 0 {
+            drop(self.gather_whole());
             return Ok(());
-        };
-        let mut c = crate::checkpoint::merge(parts.iter().map(|b| decode(b)).collect())
-            .ok_or("no checkpoint to merge")?;
+        }
+        let mut c = self.gather_whole().ok_or("no checkpoint to merge")?;
         c.scene.clone_from(&plan.scene);
         c.scene_file.clone_from(&plan.scene_file);
         scg_record::checkpoint::write_checkpoint(&plan.path, &c)
