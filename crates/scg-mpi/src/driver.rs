@@ -64,9 +64,9 @@ pub enum Decomposition {
     Slabs(Option<usize>),
     /// Boxes by recursive coordinate bisection ([`crate::decomp::regions`]).
     Bisection,
-    /// With particle contacts, slabs or bisection, whichever puts fewer particles in the
-    /// ghost halos (decided again at every rebalance; slabs on 2 ranks, where the two
-    /// are the same); without, slabs along the longest extent.
+    /// With particle contacts, slabs or bisection, whichever gives fewer ghost copies
+    /// (decided again at every rebalance; slabs on 2 ranks, where the two are the
+    /// same); without, slabs along the longest extent.
     Auto,
     /// By a hash of the particle id: nothing migrates (refused with particle contacts).
     Ids,
@@ -423,11 +423,16 @@ impl<'c> Decomposed<'c> {
         match &self.owners {
             Owners::Ids(_) => "by id (no migration)".to_string(),
             Owners::Regions(r) if self.shape == Shape::Auto => format!(
-                "{} (auto: fewer particles within {:.3e} m of another rank's region than {})",
+                "{} (auto: {} ghost copies within {:.3e} m than {})",
                 r.describe(),
+                if r.slab_axis().is_some() {
+                    "no more"
+                } else {
+                    "fewer"
+                },
                 self.halo_reach,
                 if r.slab_axis().is_some() {
-                    "by bisection, or as many"
+                    "by bisection"
                 } else {
                     "in slabs"
                 }
