@@ -457,6 +457,10 @@ impl<'c> Decomposed<'c> {
         let mut out = Outcome::default();
         let mut failure: Option<String> = None;
         let mut sink_failed = false;
+        // Every rank is ready (the scene built, its share kept) before the clock starts:
+        // else the first rank waits at the first sync for the last, and its wall time,
+        // the run's, counts the others' start-up.
+        all_ok(comm, true);
         let t0 = Instant::now();
         let write = |frame: Option<scg_core::frame::Frame>,
                      sink: &mut Option<&mut dyn FrameSink>,

@@ -115,8 +115,10 @@ pub fn ghost_targets(regions: &Regions, me: usize, x: DVec3, halo: f64, out: &mu
     if !x.is_finite() {
         return;
     }
-    let h2 = halo * halo;
-    out.extend((0..regions.ranks()).filter(|&q| q != me && regions.distance_squared(x, q) <= h2));
+    let (h2, w) = (halo * halo, regions.wrap(x));
+    out.extend(
+        (0..regions.ranks()).filter(|&q| q != me && regions.distance_squared_wrapped(w, q) <= h2),
+    );
 }
 
 /// The ranks whose region lies within `reach` of region `me` (other than `me`),

@@ -1,6 +1,7 @@
 //! Domain decomposition of scg runs over MPI ranks (issue 19).
 //!
-//! * [`decomp`] — slabs, ownership, balancing and the merging of what the ranks hold:
+//! * [`decomp`] — the ranks' regions (slabs or boxes by recursive bisection), ownership,
+//!   balancing and the merging of what the ranks hold:
 //!   pure, tested without MPI, always built;
 //! * `comm` and `driver` (feature `mpi`, rsmpi over the system's MPI) — the collectives
 //!   and the decomposed driver, `driver::Decomposed`: one simulation over the ranks, what
@@ -11,10 +12,10 @@
 //! Drag-only scenes give the same bits on any number of ranks: a step moves each particle
 //! from its own state alone, the fed particles are drawn identically on every rank, and
 //! rank 0 writes frames gathered and sorted by id. Particle contacts are decomposed with
-//! ghost particles ([`ghosts`]): copies of the neighbouring slabs' particles within the
+//! ghost particles ([`ghosts`]): copies of the neighbouring regions' particles within the
 //! contact reach plus the Verlet skin; such runs agree with one rank statistically, not
 //! bit for bit (the force sums run in row order, see [`ghosts`]). In a periodic box the
-//! slabs wrap round it along their axis. Contacts are refused with `SCG_MPI_DECOMP=ids`.
+//! regions tile it and meet across its sides. Contacts are refused with `SCG_MPI_DECOMP=ids`.
 //! A decomposed run writes one checkpoint in the single-rank format ([`checkpoint`]) and
 //! restarts from one on any number of ranks.
 

@@ -22,7 +22,7 @@ pub(super) struct Ckpt {
 
 /// Check the checkpoint options (refused over ranks for what [`crate::checkpoint::refusal`]
 /// names), and on a restart restore the whole checkpoint on every rank (rank 0 with the
-/// logs so far, the others from zero; each keeps its slab's particles later). A
+/// logs so far, the others from zero; each keeps its region's particles later). A
 /// collective; `Err` holds the exit status, the message printed on rank 0.
 pub(super) fn prepare(
     comm: &Comm,

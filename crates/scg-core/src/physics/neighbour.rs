@@ -344,8 +344,14 @@ impl NeighbourList {
         }
         // Cells as small as the cut-off allows (few candidates per particle even where the
         // particles crowd, e.g. against a wall), but at most about 4 per particle so a
-        // dilute cloud does not get a huge grid: edge ≥ (volume / 4·N)^(1/3).
-        let volume = extent.x.max(min_cell) * extent.y.max(min_cell) * extent.z.max(min_cell);
+        // dilute cloud does not get a huge grid: edge ≥ (volume / 4·N)^(1/3), the volume
+        // the particles occupy (in a periodic box, whose grid tiles the whole box, the
+        // slices of it they occupy: a rank of a decomposed run holds one region of it,
+        // and cells sized by the whole box would hold twice the candidates on 2 ranks).
+        let volume = match self.periodic {
+            Some(b) => occupied_volume(pos, &b).max(min_cell.powi(3)),
+            None => extent.x.max(min_cell) * extent.y.max(min_cell) * extent.z.max(min_cell),
+        };
         let edge_target = min_cell.max((volume / (4.0 * n as f64)).cbrt());
         // Much wider than the cut-off: an even cloud in a large box, or far-apart clusters
         // (told apart below, by how many particles share a cell).
@@ -482,6 +488,28 @@ impl NeighbourList {
         };
         Some((by_first(&in_blocks(n, pairs_of), n), kind))
     }
+}
+
+/// Slices a periodic box's grid is not wasted on: per axis the share of 64 slices that
+/// hold a particle (wrapped), the box's volume times the three shares, m³.
+fn occupied_volume(pos: &[DVec3], b: &PeriodicBox) -> f64 {
+    const SLICES: usize = 64;
+    let mut hit = [[false; SLICES]; 3];
+    let scale = DVec3::splat(SLICES as f64) / b.lengths;
+    for x in pos {
+        let k = (b.wrap(*x) * scale).floor();
+        for a in 0..3 {
+            if k[a].is_finite() {
+                hit[a][(k[a] as usize).min(SLICES - 1)] = true;
+            }
+        }
+    }
+    (0..3)
+        .map(|a| {
+            let occupied = hit[a].iter().filter(|&&h| h).count().max(1);
+            b.lengths[a] * occupied as f64 / SLICES as f64
+        })
+        .product()
 }
 
 /// Pairs listed particle by particle (each particle's pairs together, its j ascending), in

@@ -243,7 +243,9 @@ impl Regions {
     pub fn wrap(&self, x: DVec3) -> DVec3 {
         let mut w = x;
         for a in 0..3 {
+            // Most positions lie in the box already (they are wrapped only here).
             if let Some(p) = self.period[a]
+                && !(w[a] >= 0.0 && w[a] < p)
                 && w[a].is_finite()
             {
                 let c = w[a] - p * (w[a] / p).floor();
@@ -281,18 +283,28 @@ impl Regions {
     /// The squared distance from `x` to rank q's box, m², along each periodic axis to
     /// the nearest image.
     pub fn distance_squared(&self, x: DVec3, q: usize) -> f64 {
-        let x = self.wrap(x);
+        self.distance_squared_wrapped(self.wrap(x), q)
+    }
+
+    /// [`Regions::distance_squared`] of a position already wrapped ([`Regions::wrap`]).
+    #[inline]
+    pub fn distance_squared_wrapped(&self, x: DVec3, q: usize) -> f64 {
         let (lo, hi) = self.boxes[q];
-        (0..3)
-            .map(|a| {
-                let gap = |c: f64| (lo[a] - c).max(c - hi[a]).max(0.0);
-                let d = match self.period[a] {
-                    Some(p) => gap(x[a]).min(gap(x[a] - p)).min(gap(x[a] + p)),
-                    None => gap(x[a]),
-                };
-                d * d
-            })
-            .sum()
+        let mut d2 = 0.0;
+        for a in 0..3 {
+            let (l, h, c) = (lo[a], hi[a], x[a]);
+            if c >= l && c < h {
+                // Within the box's extent along a (always along an axis it spans).
+                continue;
+            }
+            let gap = |c: f64| (l - c).max(c - h).max(0.0);
+            let d = match self.period[a] {
+                Some(p) => gap(c).min(gap(c - p)).min(gap(c + p)),
+                None => gap(c),
+            };
+            d2 += d * d;
+        }
+        d2
     }
 
     /// The squared gap between the boxes of ranks q and r, m² (0 when they touch),
@@ -317,9 +329,9 @@ impl Regions {
         let h2 = halo * halo;
         xs.iter()
             .map(|&x| {
-                let me = self.owner(x);
+                let (me, w) = (self.owner(x), self.wrap(x));
                 (0..self.ranks())
-                    .filter(|&q| q != me && self.distance_squared(x, q) <= h2)
+                    .filter(|&q| q != me && self.distance_squared_wrapped(w, q) <= h2)
                     .count()
             })
             .sum()

@@ -150,3 +150,41 @@ fn far_apart_particles_stay_cheap() {
     l.build(&pos, &r);
     assert_eq!(l.pairs, vec![[0, 1]]);
 }
+
+/// A cloud filling half a periodic box (one rank's region of a decomposed run): its
+/// cells are sized by the half it occupies, not by the whole box (twice the candidates
+/// per particle on 2 ranks, measured: a rank's dilute-cloud build took as long as the
+/// whole cloud's on one rank), and the pairs are the brute-force ones.
+#[test]
+fn a_periodic_grid_is_sized_by_the_slices_the_particles_occupy() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let b = PeriodicBox::new(DVec3::new(0.4, 0.3, 0.2));
+    // x in [0, 0.2) and a sliver across the side, x in [0.39, 0.4) (ghosts).
+    let pos: Vec<DVec3> = (0..6000)
+        .map(|k| {
+            let x = if k % 20 == 0 {
+                0.39 + 0.01 * rng.random::<f64>()
+            } else {
+                0.2 * rng.random::<f64>()
+            };
+            DVec3::new(x, 0.3 * rng.random::<f64>(), 0.2 * rng.random::<f64>())
+        })
+        .collect();
+    let v = occupied_volume(&pos, &b);
+    let whole = 0.4 * 0.3 * 0.2;
+    // 32 slices of x below 0.2, and 62 and 63 across the side; y and z whole.
+    assert!((v - 34.0 / 64.0 * whole).abs() < 1e-12, "{v}");
+    let two = occupied_volume(&[DVec3::ZERO, DVec3::new(0.39, 0.29, 0.19)], &b);
+    assert!(
+        (two - whole * (2.0f64 / 64.0).powi(3)).abs() < 1e-15,
+        "{two}"
+    );
+    let radius = vec![0.002; pos.len()];
+    let mut list = NeighbourList::new(0.001, Some(b));
+    list.build(&pos, &radius);
+    assert_eq!(list.grid, GridKind::Dense);
+    let want = brute_force_pairs(&pos, &radius, 0.001, Some(&b));
+    assert!(want.len() > 100, "{} pairs", want.len());
+    assert_eq!(list.pairs, want);
+}
