@@ -690,47 +690,6 @@ fn contacts_are_refused_when_shared_by_id() {
     );
 }
 
-/// What the one-rank run reports from logs each rank holds only a share of is refused
-/// over two ranks, naming what (not reported from rank 0's share, nor ignored).
-#[test]
-fn per_rank_reports_are_refused_over_ranks() {
-    let dir = tempfile::tempdir().unwrap();
-    for (flag, set) in [
-        ("--summary-json", vec!["--summary-json", "x.json"]),
-        ("--fates-csv", vec!["--fates-csv", "x.csv"]),
-        (
-            "[erosion]",
-            vec![
-                "--set",
-                "erosion.model=\"finnie\"",
-                "--set",
-                "erosion.flow_stress=1e9",
-            ],
-        ),
-    ] {
-        let case = if flag == "[erosion]" {
-            "cases/squarebend.toml"
-        } else {
-            "cases/uniform.toml"
-        };
-        let o = scg_cmd(2, true)
-            .arg("run")
-            .arg(repo(case))
-            .arg("--no-record")
-            .args(&set)
-            .current_dir(dir.path())
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{flag}: {err}");
-        assert!(
-            err.contains(&format!("{flag} is not yet gathered over MPI ranks")),
-            "{err}"
-        );
-    }
-}
-
-/// Checkpoints over ranks do not yet cover particle contacts: refused naming them.
 /// Checkpoints with particle contacts over ranks: the classifier fed five times denser
 /// (binary contacts, 30-odd started by 4 ms, across the cuts too) checkpointed at 2 ms
 /// on 3 ranks and finished on 2, and on 2 and finished on 1: every frame after the

@@ -416,31 +416,6 @@ impl<'c> Decomposed<'c> {
         Ok(d)
     }
 
-    /// How the particles are shared, in words ("in slabs along x", "in 4 boxes by
-    /// recursive bisection (cuts along x, y)", "by id"), with why when the shape was
-    /// chosen ([`Decomposition::Auto`]).
-    pub fn describe(&self) -> String {
-        match &self.owners {
-            Owners::Ids(_) => "by id (no migration)".to_string(),
-            Owners::Regions(r) if self.shape == Shape::Auto => format!(
-                "{} (auto: {} ghost copies within {:.3e} m than {})",
-                r.describe(),
-                if r.slab_axis().is_some() {
-                    "no more"
-                } else {
-                    "fewer"
-                },
-                self.halo_reach,
-                if r.slab_axis().is_some() {
-                    "by bisection"
-                } else {
-                    "in slabs"
-                }
-            ),
-            Owners::Regions(r) => r.describe(),
-        }
-    }
-
     /// Step up to step `steps` (a collective). Frames go to `sink` (rank 0's, or every
     /// rank's with [`Options::per_rank`]); `stop` (set by a signal handler) stops every
     /// rank at the next sync point, after a last checkpoint; `counts` receives the

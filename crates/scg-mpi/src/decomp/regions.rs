@@ -30,6 +30,10 @@ pub enum Shape {
     Auto,
 }
 
+/// How [`Regions::grow`] places a cut: (the particles of the node, sorted along the axis
+/// on return; its first, middle and end rank) → (axis, coordinate).
+type ChooseCut<'a> = dyn FnMut(&mut [DVec3], usize, usize, usize) -> (usize, f64) + 'a;
+
 /// A node of the tree: ranks `first..end` are split at `mid`, the ranks below `mid`
 /// owning the coordinates `c < at` along `axis`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -70,7 +74,7 @@ impl Regions {
         let ranks = cuts.len() + 1;
         let mut r = Regions::empty(ranks, period);
         r.slab_axis = Some(axis);
-        r.grow(0, ranks, r.domain(), &mut |_, mid, _, _| {
+        r.grow(&mut [], (0, ranks), r.domain(), &mut |_, _, mid, _| {
             (axis, cuts[mid - 1])
         });
         r
@@ -102,7 +106,12 @@ impl Regions {
                 r.slab_axis = Some(a.min(2));
             }
             let mut pts = wrapped.clone();
-            r.split(&mut pts, 0, ranks, r.domain(), shape);
+            r.grow(
+                &mut pts,
+                (0, ranks),
+                r.domain(),
+                &mut |p, first, mid, end| Regions::quantile_cut(shape, p, (first, mid, end)),
+            );
             r
         };
         match shape {
@@ -140,21 +149,23 @@ impl Regions {
         (DVec3::from_array(lo), DVec3::from_array(hi))
     }
 
-    /// Build the tree below ranks `first..end` within `bounds`, each cut's axis and
-    /// coordinate from `choose(first, mid, end, bounds)`.
+    /// Build the tree below ranks `first..end` within `bounds` over the particles `pts`
+    /// (wrapped, finite; none for given cuts): `choose(pts, first, mid, end)` gives each
+    /// cut's axis and coordinate, with `pts` sorted along that axis, and the particles
+    /// below the cut go to the lower ranks.
     fn grow(
         &mut self,
-        first: usize,
-        end: usize,
+        pts: &mut [DVec3],
+        (first, end): (usize, usize),
         bounds: (DVec3, DVec3),
-        choose: &mut dyn FnMut(usize, usize, usize, (DVec3, DVec3)) -> (usize, f64),
+        choose: &mut ChooseCut<'_>,
     ) {
         if end - first <= 1 {
             self.boxes[first] = bounds;
             return;
         }
         let mid = first + (end - first) / 2;
-        let (axis, at) = choose(first, mid, end, bounds);
+        let (axis, at) = choose(pts, first, mid, end);
         let at = at.clamp(bounds.0[axis], bounds.1[axis]);
         self.cuts.push(Cut {
             first,
@@ -163,28 +174,23 @@ impl Regions {
             axis,
             at,
         });
+        let k = pts.partition_point(|p| p[axis] < at);
+        let (lo_pts, hi_pts) = pts.split_at_mut(k);
         let (mut below, mut above) = (bounds, bounds);
         below.1[axis] = at;
         above.0[axis] = at;
-        self.grow(first, mid, below, choose);
-        self.grow(mid, end, above, choose);
+        self.grow(lo_pts, (first, mid), below, choose);
+        self.grow(hi_pts, (mid, end), above, choose);
     }
 
-    /// Split the particles `pts` (wrapped, finite) over ranks `first..end` within
-    /// `bounds`, recursively.
-    fn split(
-        &mut self,
-        pts: &mut [DVec3],
-        first: usize,
-        end: usize,
-        bounds: (DVec3, DVec3),
+    /// The cut of `choose` in [`Regions::grow`] for a balanced split: along the slab axis
+    /// or the particles' longest extent, halfway between the last particle of the lower
+    /// ranks' share and the first of the upper's.
+    fn quantile_cut(
         shape: Shape,
-    ) {
-        if end - first <= 1 {
-            self.boxes[first] = bounds;
-            return;
-        }
-        let mid = first + (end - first) / 2;
+        pts: &mut [DVec3],
+        (first, mid, end): (usize, usize, usize),
+    ) -> (usize, f64) {
         let axis = match shape {
             Shape::Slabs(a) => a.min(2),
             _ => crate::decomp::longest_axis(pts.iter().copied()),
@@ -206,21 +212,7 @@ impl Regions {
             (Some(a), None) => a[axis],
             (None, None) => 0.0,
         };
-        let at = at.clamp(bounds.0[axis], bounds.1[axis]);
-        self.cuts.push(Cut {
-            first,
-            mid,
-            end,
-            axis,
-            at,
-        });
-        let k = pts.partition_point(|p| p[axis] < at);
-        let (lo_pts, hi_pts) = pts.split_at_mut(k);
-        let (mut below, mut above) = (bounds, bounds);
-        below.1[axis] = at;
-        above.0[axis] = at;
-        self.split(lo_pts, first, mid, below, shape);
-        self.split(hi_pts, mid, end, above, shape);
+        (axis, at)
     }
 
     /// Number of regions (ranks).

@@ -1,10 +1,37 @@
-//! The report of a decomposed run: rates, shares of the step time, per rank.
+//! The report of a decomposed run: how the particles are shared, rates, shares of the
+//! step time, per rank.
 
 use scg_core::stages::contacts::ContactState;
 
 use super::{Decomposed, Outcome};
+use crate::decomp::{Owners, Shape};
 
 impl Decomposed<'_> {
+    /// How the particles are shared, in words ("in slabs along x", "in 4 boxes by
+    /// recursive bisection (cuts along x, y)", "by id"), with why when the shape was
+    /// chosen ([`super::Decomposition::Auto`]).
+    pub fn describe(&self) -> String {
+        match &self.owners {
+            Owners::Ids(_) => "by id (no migration)".to_string(),
+            Owners::Regions(r) if self.shape == Shape::Auto => format!(
+                "{} (auto: {} ghost copies within {:.3e} m than {})",
+                r.describe(),
+                if r.slab_axis().is_some() {
+                    "no more"
+                } else {
+                    "fewer"
+                },
+                self.halo_reach,
+                if r.slab_axis().is_some() {
+                    "by bisection"
+                } else {
+                    "in slabs"
+                }
+            ),
+            Owners::Regions(r) => r.describe(),
+        }
+    }
+
     /// The run's report lines on rank 0 (`None` on the others; a collective): the rate,
     /// the shares of the step time, per rank the times, migrations and particles held,
     /// and with contacts the ghosts and list builds.
