@@ -530,6 +530,24 @@ fn contact_runs(
             );
         }
         all.push((format!("{n} ranks"), read(&out)));
+        // Its recording cannot be verified by a one-rank re-run, and `--verify` says why.
+        let mcap = std::fs::read_dir(&out)
+            .unwrap()
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .find(|p| p.extension().is_some_and(|x| x == "mcap"))
+            .expect("a recording");
+        let o = Command::new(scg_bin())
+            .arg("replay")
+            .arg(&mcap)
+            .arg("--verify")
+            .output()
+            .unwrap();
+        let said = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            said.contains(&format!("recorded on {n} MPI ranks with particle contacts"))
+                && o.status.code() == Some(1),
+            "{said}"
+        );
     }
     for (name, frames) in all {
         assert_eq!(frames.len(), reference.len(), "{stem} on {name}: frames");

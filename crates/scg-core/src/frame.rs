@@ -136,6 +136,10 @@ pub struct RunMeta {
     /// order, relative to this file's folder, each holding that rank's particles of every
     /// frame; this file (the index) holds no frame. Empty otherwise.
     pub parts: Vec<String>,
+    /// The MPI ranks the run was decomposed over (0 or 1: one process). With particle
+    /// contacts such a run is one rank's statistically, not bit for bit, so it cannot be
+    /// verified by re-running it on one.
+    pub ranks: u32,
 }
 
 /// The wear of a run's walls (`[erosion]`), handed to the recorders once, at the end of

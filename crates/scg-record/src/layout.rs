@@ -171,6 +171,10 @@ pub const META_SCENE_DIR: &str = "scene_dir";
 /// index, which holds no frame ([`scg_core::frame::RunMeta::parts`]).
 pub const META_PARTS: &str = "parts";
 
+/// Metadata key: the number of MPI ranks the run was decomposed over; present only when
+/// more than one ([`scg_core::frame::RunMeta::ranks`]).
+pub const META_RANKS: &str = "mpi_ranks";
+
 /// Colour (sRGB and alpha, 0–255) a boundary patch is drawn in, by role: walls grey and
 /// most translucent, outlets green, inlets blue, lost patches red.
 pub fn patch_color(role: &str) -> [u8; 4] {

@@ -14,9 +14,10 @@ use scg_core::frame::{Frame, GroupMeta, Outline, PatchSurface, RunMeta};
 
 use crate::layout::{
     EROSION_ATTACHMENT, FORMAT_VERSION, FieldType, GroupJson, META_CASE, META_DT, META_FORMAT,
-    META_GROUPS, META_OUTLINES, META_PARTS, META_RECORD_EVERY, META_SCENE_DIR, META_SCG_VERSION,
-    META_SEED, META_WARNINGS, METADATA_NAME, OutlineJson, POINT_FIELD_FLUCTUATION, POINT_FIELDS,
-    SCENE_ATTACHMENT, StatsIn, TOPIC_PARTICLES, TOPIC_PATCHES, TOPIC_STATS,
+    META_GROUPS, META_OUTLINES, META_PARTS, META_RANKS, META_RECORD_EVERY, META_SCENE_DIR,
+    META_SCG_VERSION, META_SEED, META_WARNINGS, METADATA_NAME, OutlineJson,
+    POINT_FIELD_FLUCTUATION, POINT_FIELDS, SCENE_ATTACHMENT, StatsIn, TOPIC_PARTICLES,
+    TOPIC_PATCHES, TOPIC_STATS,
 };
 use crate::{RecordError, Recording};
 
@@ -289,6 +290,10 @@ fn parse_meta(entries: &BTreeMap<String, String>) -> Result<RunMeta, String> {
         parts: match entries.get(META_PARTS) {
             Some(text) => serde_json::from_str(text).map_err(|e| bad(META_PARTS, &e))?,
             None => Vec::new(),
+        },
+        ranks: match entries.get(META_RANKS) {
+            Some(text) => text.parse().map_err(|e| bad(META_RANKS, &e))?,
+            None => 1,
         },
     })
 }

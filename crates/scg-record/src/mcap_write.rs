@@ -20,9 +20,9 @@ use crate::mcap_scene::{identity, patches_update, walls_update};
 
 use crate::layout::{
     EROSION_ATTACHMENT, FORMAT_VERSION, FRAME_ID, FieldType, GroupJson, META_CASE, META_DT,
-    META_FORMAT, META_GROUPS, META_OUTLINES, META_PARTS, META_RECORD_EVERY, META_SCENE_DIR,
-    META_SCG_VERSION, META_SEED, META_WARNINGS, METADATA_NAME, OrderedValues, OutlineJson,
-    POINT_FIELD_FLUCTUATION, POINT_FIELDS, POINT_STRIDE, POINT_STRIDE_FLUCTUATION,
+    META_FORMAT, META_GROUPS, META_OUTLINES, META_PARTS, META_RANKS, META_RECORD_EVERY,
+    META_SCENE_DIR, META_SCG_VERSION, META_SEED, META_WARNINGS, METADATA_NAME, OrderedValues,
+    OutlineJson, POINT_FIELD_FLUCTUATION, POINT_FIELDS, POINT_STRIDE, POINT_STRIDE_FLUCTUATION,
     SCENE_ATTACHMENT, SCENE_MEDIA_TYPE, STATS_JSON_SCHEMA, STATS_SCHEMA_NAME, StatsOut,
     TOPIC_PARTICLES, TOPIC_PATCHES, TOPIC_STATS, TOPIC_WALLS,
 };
@@ -146,6 +146,9 @@ fn meta_entries(meta: &RunMeta) -> Result<BTreeMap<String, String>, RecordError>
     ]);
     if !meta.parts.is_empty() {
         entries.insert(META_PARTS.to_owned(), to_json(&meta.parts)?);
+    }
+    if meta.ranks > 1 {
+        entries.insert(META_RANKS.to_owned(), meta.ranks.to_string());
     }
     Ok(entries)
 }

@@ -242,6 +242,7 @@ impl Scene {
                     color: g.color,
                 })
                 .collect(),
+            ranks: 1,
             scene_toml: self.source.clone(),
             parts: Vec::new(),
             scene_dir: self.scene_dir(),

@@ -80,7 +80,15 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
             eprintln!("error: rank {}: {e}", comm.rank());
         }
     } else if root && record {
-        made = make_sinks(&scene, &args, &report, &stem, &mut paths).map(|s| sinks = Some(s));
+        made = make_sinks(
+            &scene,
+            &args,
+            &report,
+            &stem,
+            comm.size() as u32,
+            &mut paths,
+        )
+        .map(|s| sinks = Some(s));
         if let Err((e, _)) = &made {
             eprintln!("error: {e}");
         }
@@ -200,7 +208,10 @@ fn make_part_sink(
     paths: &mut Vec<std::path::PathBuf>,
 ) -> Result<Box<dyn FrameSink>, (String, i32)> {
     ensure_writable(&args.out).map_err(|e| (e, EXIT_BAD_INPUT))?;
-    let meta = scene.run_meta(report.messages());
+    let meta = RunMeta {
+        ranks: comm.size() as u32,
+        ..scene.run_meta(report.messages())
+    };
     let io = |e: scg_record::RecordError| (e.to_string(), 1);
     let part = |k: usize| format!("{stem}.rank{k}.mcap");
     if comm.rank() == 0 {
@@ -234,11 +245,15 @@ fn make_sinks(
     args: &RunArgs,
     report: &scg_scene::check::Report,
     stem: &str,
+    ranks: u32,
     paths: &mut Vec<std::path::PathBuf>,
 ) -> Result<Box<dyn FrameSink>, (String, i32)> {
     ensure_writable(&args.out).map_err(|e| (e, EXIT_BAD_INPUT))?;
     let stem = stem.to_string();
-    let meta = scene.run_meta(report.messages());
+    let meta = RunMeta {
+        ranks,
+        ..scene.run_meta(report.messages())
+    };
     let rrd = args.out.join(format!("{stem}.rrd"));
     let mcap = args.out.join(format!("{stem}.mcap"));
     let io = |e: scg_record::RecordError| (e.to_string(), 1);

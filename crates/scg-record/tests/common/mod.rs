@@ -14,6 +14,7 @@ pub fn meta() -> RunMeta {
     RunMeta {
         case: "synthetic-case".into(),
         scg_version: "0.1.0-test".into(),
+        ranks: 3,
         seed: 0xDEAD_BEEF_0123_4567,
         dt: 1.0e-5 / 3.0,
         record_every: 250,
