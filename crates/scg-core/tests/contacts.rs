@@ -864,7 +864,7 @@ fn ghosts_and_migration_follow_the_whole_simulation() {
 }
 
 /// The same with the driver's protocol since issue 39 (LAMMPS's): a new ghost set, and
-/// migration, only on the steps where either half's `rebuild_due_here` asks for one
+/// migration, only on the steps where either half's `RebuildCheck` asks for one
 /// (one of its particles moved more than half the skin, or its table changed); the
 /// ghosts' states forwarded row for row between (`forward_ghosts`, no list rebuild).
 #[test]
@@ -878,7 +878,7 @@ fn forwarded_ghosts_follow_the_whole_simulation() {
 
 /// Runs the lattice below whole and split in two; returns the ghost sets given.
 fn ghosts_follow_the_whole(forward: bool) -> usize {
-    use scg_core::stages::contacts::ghosts::{Due, rebuild_due_here, table_rows, table_states};
+    use scg_core::stages::contacts::ghosts::{Due, RebuildCheck, TableStates, table_rows};
     let v = 0.5;
     let dt = auto_dt_pair(v);
     let cfg = || config(dt, Some(contact_cfg(0.7, 0.5, None)), None);
@@ -923,12 +923,14 @@ fn ghosts_follow_the_whole(forward: bool) -> usize {
         drop(h.extract_particles(|_, x| side(x) != k));
     }
     let (mut migrated, mut carried, mut ghost_contacts, mut sets) = (0, 0, 0, 0);
+    let mut checks = halves.each_mut().map(|h| RebuildCheck::new(&mut h.world));
     for step in 0..4000 {
         let due = !forward
             || step == 0
             || halves
                 .iter_mut()
-                .map(|h| rebuild_due_here(&mut h.world))
+                .zip(&mut checks)
+                .map(|(h, c)| c.due(&mut h.world))
                 .any(|d| d != Due::No);
         if due {
             sets += 1;
@@ -949,7 +951,7 @@ fn ghosts_follow_the_whole(forward: bool) -> usize {
                 let rows = table_rows(&mut h.world);
                 let mut order: Vec<u32> = (0..rows.len() as u32).collect();
                 order.sort_unstable_by_key(|&r| rows.ids[r as usize]);
-                table_states(&mut h.world, &order, &mut states[k]);
+                TableStates::new(&mut h.world).append(&h.world, &order, &mut states[k]);
             }
             for k in 0..2 {
                 let mut st = halves[k].world.resource_mut::<ContactState>();
@@ -970,7 +972,8 @@ fn ghosts_follow_the_whole(forward: bool) -> usize {
         if forward
             && !halves
                 .iter_mut()
-                .map(|h| rebuild_due_here(&mut h.world))
+                .zip(&mut checks)
+                .map(|(h, c)| c.due(&mut h.world))
                 .any(|d| d != Due::No)
         {
             continue;

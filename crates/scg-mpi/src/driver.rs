@@ -43,7 +43,7 @@ use scg_core::checkpoint::{Checkpoint, ParticleRecord};
 use scg_core::components::ParticleId;
 use scg_core::frame::FrameSink;
 use scg_core::stages::contacts::ContactState;
-use scg_core::stages::contacts::ghosts::Due;
+use scg_core::stages::contacts::ghosts::{Due, RebuildCheck};
 use scg_core::stages::feeder::SpawnOwner;
 use scg_core::stages::recording::RecordingParams;
 use scg_core::{SimError, Simulation};
@@ -199,10 +199,8 @@ pub struct Decomposed<'c> {
     by_id: bool,
     /// How the regions are cut at a rebalance.
     shape: Shape,
-    /// Per axis the periodic box's length, m (contacts in a periodic box).
-    period: [Option<f64>; 3],
-    /// The ghost halo the shapes are compared by ([`Shape::Auto`]), m.
-    halo_reach: f64,
+    /// Whether this rank needs a rebuild (contacts; its query kept across steps).
+    rebuild_check: RebuildCheck,
     /// Step of the last rebalance.
     last_rebalance: u64,
     /// Wall time of the parts of the steps, here.
@@ -256,6 +254,12 @@ impl<'c> Decomposed<'c> {
     fn migrate(&mut self) -> Result<(), String> {
         let out = self.leaving();
         self.deliver(&out)
+    }
+
+    /// The ghost halo the shapes are compared by ([`Shape::Auto`]), m (0 without
+    /// particle contacts).
+    fn halo_reach(&self) -> f64 {
+        self.halo.reach_in(&self.sim).unwrap_or(0.0)
     }
 
     /// Make the feeders spawn only the particles this rank owns (every rank draws them
@@ -315,9 +319,10 @@ impl<'c> Decomposed<'c> {
 
     /// Cut the regions again at the quantiles of all positions and migrate.
     fn rebalance(&mut self) -> Result<(), String> {
-        if !matches!(self.owners, Owners::Regions(_)) {
+        let Owners::Regions(regions) = &self.owners else {
             return Ok(());
-        }
+        };
+        let period = regions.period();
         let mine: Vec<[f64; 3]> = self.sim.frame_rows().iter().map(|r| r.position).collect();
         let all: Vec<glam::DVec3> = self
             .comm
@@ -330,8 +335,8 @@ impl<'c> Decomposed<'c> {
             self.shape,
             self.comm.size(),
             &all,
-            self.period,
-            self.halo_reach,
+            period,
+            self.halo_reach(),
         ));
         self.own_feeds();
         self.rebalances += 1;
@@ -370,14 +375,11 @@ impl<'c> Decomposed<'c> {
             Decomposition::Bisection => Shape::Bisection,
         };
         // Periodic contacts: the regions tile the box.
-        let state = sim.world.get_resource::<ContactState>();
-        let period = state
+        let period = (sim.world.get_resource::<ContactState>())
             .and_then(|c| c.params.periodic)
             .map_or([None; 3], |b| b.lengths.to_array().map(Some));
         let halo = Halo::new(scene);
-        let halo_reach = state.map_or(0.0, |c| {
-            crate::ghosts::reach(halo.r_max, halo.r_max, c.list.skin)
-        });
+        let halo_reach = halo.reach_in(&sim).unwrap_or(0.0);
         let owners = match how {
             Decomposition::Ids => Owners::Ids(comm.size()),
             _ => Owners::Regions(Regions::balanced(
@@ -389,13 +391,11 @@ impl<'c> Decomposed<'c> {
             )),
         };
         let me = comm.rank();
+        // (With contacts the first rebuild, before the first step, puts the rows of the
+        // particles kept in id order: `Simulation::sort_particles_by_id`.)
         drop(sim.extract_particles(|id, x| owners.owner(id, x) != me));
-        if contacts {
-            // The rows of the particles kept, in the one-rank order (their neighbours'
-            // rows near theirs: `Simulation::sort_particles_by_id`).
-            sim.sort_particles_by_id();
-        }
         let last_rebalance = sim.step_count();
+        let rebuild_check = RebuildCheck::new(&mut sim.world);
         let mut d = Decomposed {
             comm,
             sim,
@@ -407,8 +407,7 @@ impl<'c> Decomposed<'c> {
             contacts: contacts && how != Decomposition::Ids,
             by_id: how == Decomposition::Ids,
             shape,
-            period,
-            halo_reach,
+            rebuild_check,
             last_rebalance,
             times: Times::default(),
         };
@@ -479,7 +478,7 @@ impl<'c> Decomposed<'c> {
                 | (u64::from(sink_failed) * SINK_FAILED)
                 | (u64::from(stop.load(Ordering::Relaxed)) * STOP);
             if self.contacts {
-                match scg_core::stages::contacts::ghosts::rebuild_due_here(&mut self.sim.world) {
+                match self.rebuild_check.due(&mut self.sim.world) {
                     Due::Table => flags |= REBUILD | STALE,
                     Due::Moved => flags |= REBUILD,
                     Due::No => {}

@@ -106,19 +106,13 @@ pub fn largest_radius(scene: &scg_scene::Scene) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// The ranks other than `me` whose region lies within `halo` of position `x` (the
-/// distance to the nearest image of the region's box), ascending, into `out` (cleared
-/// first). A region thinner than the halo lets a particle be a ghost on several ranks. A
-/// non-finite position goes nowhere (rank 0's guard reports the particle).
+/// [`Regions::within`] into `out` (cleared first): the ranks a particle of `me` at `x`
+/// with halo `halo` is a ghost on. A region thinner than the halo lets a particle be a
+/// ghost on several ranks. A non-finite position goes nowhere (rank 0's guard reports
+/// the particle).
 pub fn ghost_targets(regions: &Regions, me: usize, x: DVec3, halo: f64, out: &mut Vec<usize>) {
     out.clear();
-    if !x.is_finite() {
-        return;
-    }
-    let (h2, w) = (halo * halo, regions.wrap(x));
-    out.extend(
-        (0..regions.ranks()).filter(|&q| q != me && regions.distance_squared_wrapped(w, q) <= h2),
-    );
+    out.extend(regions.within(me, x, halo));
 }
 
 /// The ranks whose region lies within `reach` of region `me` (other than `me`),
@@ -143,7 +137,7 @@ mod exchange {
     use scg_core::checkpoint::ParticleRecord;
     use scg_core::stages::contacts::ContactState;
     use scg_core::stages::contacts::ghosts::{
-        Ghosts, STATE_BYTES, table_rows_indexed_where, table_states,
+        Ghosts, STATE_BYTES, TableStates, table_rows_indexed_where,
     };
 
     use super::{Migrants, ghost_targets, peers, reach};
@@ -152,7 +146,7 @@ mod exchange {
 
     /// The ghosts of a run with contacts: the set given at the last rebuild and the
     /// rows forwarded since, and what it did.
-    #[derive(Debug, Default)]
+    #[derive(Default)]
     pub struct Halo {
         /// The largest particle radius of the scene, m ([`super::largest_radius`]).
         pub r_max: f64,
@@ -170,6 +164,8 @@ mod exchange {
         recv: Vec<usize>,
         /// Every rank's peers are all the other ranks (decided with the set).
         all_peers: bool,
+        /// The reader of the forwarded states (made with the first set).
+        states: Option<TableStates>,
     }
 
     /// What a forward message starts with: the sender's flags (a little-endian u64).
@@ -182,6 +178,13 @@ mod exchange {
                 r_max: super::largest_radius(scene),
                 ..Default::default()
             }
+        }
+
+        /// How far a ghost may reach into `sim`'s other regions, m: 2·r_max + skin (the
+        /// largest halo, [`reach`]); `None` without particle contacts.
+        pub fn reach_in(&self, sim: &Simulation) -> Option<f64> {
+            let skin = sim.world.get_resource::<ContactState>()?.list.skin;
+            Some(reach(self.r_max, self.r_max, skin))
         }
 
         /// True while a ghost set is held (contacts, regions, another rank within reach).
@@ -224,12 +227,14 @@ mod exchange {
             if with.is_empty() {
                 return;
             }
-            let mut to = Vec::new();
             let r_max = self.r_max;
             let (rows, g) = table_rows_indexed_where(&mut sim.world, |x, r| {
-                ghost_targets(regions, me, x, reach(r, r_max, skin), &mut to);
-                !to.is_empty()
+                regions
+                    .within(me, x, reach(r, r_max, skin))
+                    .next()
+                    .is_some()
             });
+            let mut to = Vec::new();
             let mut out = vec![Ghosts::default(); with.len()];
             let mut send = vec![Vec::new(); with.len()];
             for (k, &row) in rows.iter().enumerate() {
@@ -252,6 +257,9 @@ mod exchange {
             self.exchanges += 1;
             self.received += ghosts.len() as u64;
             (self.with, self.send, self.recv) = (with, send, recv);
+            if self.states.is_none() {
+                self.states = Some(TableStates::new(&mut sim.world));
+            }
             sim.world.resource_mut::<ContactState>().set_ghosts(ghosts);
         }
 
@@ -271,6 +279,10 @@ mod exchange {
             if !self.active() {
                 return flags;
             }
+            let states = self
+                .states
+                .as_mut()
+                .expect("a states reader with the ghost set");
             let msgs: Vec<Vec<u8>> = self
                 .send
                 .iter()
@@ -278,7 +290,7 @@ mod exchange {
                     let mut bytes = Vec::with_capacity(HEADER + STATE_BYTES * rows.len());
                     bytes.extend_from_slice(&flags.to_le_bytes());
                     if flags & stale == 0 {
-                        table_states(&mut sim.world, rows, &mut bytes);
+                        states.append(&sim.world, rows, &mut bytes);
                     }
                     bytes
                 })

@@ -80,15 +80,8 @@ pub fn run(comm: &Comm, args: RunArgs) -> i32 {
             eprintln!("error: rank {}: {e}", comm.rank());
         }
     } else if root && record {
-        made = make_sinks(
-            &scene,
-            &args,
-            &report,
-            &stem,
-            comm.size() as u32,
-            &mut paths,
-        )
-        .map(|s| sinks = Some(s));
+        made = make_sinks(&scene, &args, &report, &stem, comm.size(), &mut paths)
+            .map(|s| sinks = Some(s));
         if let Err((e, _)) = &made {
             eprintln!("error: {e}");
         }
@@ -208,10 +201,7 @@ fn make_part_sink(
     paths: &mut Vec<std::path::PathBuf>,
 ) -> Result<Box<dyn FrameSink>, (String, i32)> {
     ensure_writable(&args.out).map_err(|e| (e, EXIT_BAD_INPUT))?;
-    let meta = RunMeta {
-        ranks: comm.size() as u32,
-        ..scene.run_meta(report.messages())
-    };
+    let meta = run_meta(scene, report, comm.size());
     let io = |e: scg_record::RecordError| (e.to_string(), 1);
     let part = |k: usize| format!("{stem}.rank{k}.mcap");
     if comm.rank() == 0 {
@@ -245,15 +235,12 @@ fn make_sinks(
     args: &RunArgs,
     report: &scg_scene::check::Report,
     stem: &str,
-    ranks: u32,
+    ranks: usize,
     paths: &mut Vec<std::path::PathBuf>,
 ) -> Result<Box<dyn FrameSink>, (String, i32)> {
     ensure_writable(&args.out).map_err(|e| (e, EXIT_BAD_INPUT))?;
     let stem = stem.to_string();
-    let meta = RunMeta {
-        ranks,
-        ..scene.run_meta(report.messages())
-    };
+    let meta = run_meta(scene, report, ranks);
     let rrd = args.out.join(format!("{stem}.rrd"));
     let mcap = args.out.join(format!("{stem}.mcap"));
     let io = |e: scg_record::RecordError| (e.to_string(), 1);
@@ -269,6 +256,14 @@ fn make_sinks(
     paths.extend(args.vtk.iter().cloned());
     paths.extend(args.frames_csv.iter().cloned());
     Ok(Box::new(scg_record::Background::spawn(sinks)))
+}
+
+/// The description a decomposed run's recorders store: the scene's, with the rank count.
+fn run_meta(scene: &scg_scene::Scene, report: &scg_scene::check::Report, ranks: usize) -> RunMeta {
+    RunMeta {
+        ranks: ranks as u32,
+        ..scene.run_meta(report.messages())
+    }
 }
 
 /// The decomposition the environment asks for: `SCG_MPI_DECOMP` = `auto` (the default),

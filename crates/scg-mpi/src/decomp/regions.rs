@@ -230,6 +230,11 @@ impl Regions {
         self.slab_axis
     }
 
+    /// Per axis the periodic box's length the regions tile, m (`None`: open).
+    pub fn period(&self) -> [Option<f64>; 3] {
+        self.period
+    }
+
     /// `x` wrapped into [0, P) along the periodic axes.
     #[inline]
     pub fn wrap(&self, x: DVec3) -> DVec3 {
@@ -315,17 +320,20 @@ impl Regions {
             .sum()
     }
 
+    /// The ranks other than `me` whose region lies within `halo` of position `x` (the
+    /// distance to the nearest image of the region's box), ascending: where a particle
+    /// of `me` at `x` is a ghost. A non-finite position is nobody's ghost.
+    pub fn within(&self, me: usize, x: DVec3, halo: f64) -> impl Iterator<Item = usize> + '_ {
+        let (w, h2) = (self.wrap(x), halo * halo);
+        let ranks = if w.is_finite() { self.ranks() } else { 0 };
+        (0..ranks).filter(move |&q| q != me && self.distance_squared_wrapped(w, q) <= h2)
+    }
+
     /// The ghost copies of `xs` with halo `halo`: per particle, the regions other than
     /// its own within `halo` of it (what the ranks forward each step, summed).
     pub fn ghost_copies(&self, xs: &[DVec3], halo: f64) -> usize {
-        let h2 = halo * halo;
         xs.iter()
-            .map(|&x| {
-                let (me, w) = (self.owner(x), self.wrap(x));
-                (0..self.ranks())
-                    .filter(|&q| q != me && self.distance_squared_wrapped(w, q) <= h2)
-                    .count()
-            })
+            .map(|&x| self.within(self.owner(x), x, halo).count())
             .sum()
     }
 

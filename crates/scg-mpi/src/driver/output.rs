@@ -78,11 +78,10 @@ impl Decomposed<'_> {
     /// Gather every rank's checkpoint on rank 0, merge them ([`Self::gather_whole`])
     /// and write the one file there (a collective; `Err` only on rank 0).
     pub(super) fn write_checkpoint(&mut self, plan: &CheckpointPlan) -> Result<(), String> {
-        if self.comm.rank() != 0 {
-            drop(self.gather_whole());
+        // Rank 0 merges at least its own; the others have nothing to write.
+        let Some(mut c) = self.gather_whole() else {
             return Ok(());
-        }
-        let mut c = self.gather_whole().ok_or("no checkpoint to merge")?;
+        };
         c.scene.clone_from(&plan.scene);
         c.scene_file.clone_from(&plan.scene_file);
         scg_record::checkpoint::write_checkpoint(&plan.path, &c)

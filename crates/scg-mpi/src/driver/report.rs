@@ -13,21 +13,17 @@ impl Decomposed<'_> {
     pub fn describe(&self) -> String {
         match &self.owners {
             Owners::Ids(_) => "by id (no migration)".to_string(),
-            Owners::Regions(r) if self.shape == Shape::Auto => format!(
-                "{} (auto: {} ghost copies within {:.3e} m than {})",
-                r.describe(),
-                if r.slab_axis().is_some() {
-                    "no more"
-                } else {
-                    "fewer"
-                },
-                self.halo_reach,
-                if r.slab_axis().is_some() {
-                    "by bisection"
-                } else {
-                    "in slabs"
-                }
-            ),
+            Owners::Regions(r) if self.shape == Shape::Auto => {
+                let (than, other) = match r.slab_axis() {
+                    Some(_) => ("no more", "by bisection"),
+                    None => ("fewer", "in slabs"),
+                };
+                format!(
+                    "{} (auto: {than} ghost copies within {:.3e} m than {other})",
+                    r.describe(),
+                    self.halo_reach()
+                )
+            }
             Owners::Regions(r) => r.describe(),
         }
     }

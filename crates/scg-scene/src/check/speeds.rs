@@ -17,6 +17,7 @@ use crate::Scene;
 pub fn particle_contact_time(scene: &Scene) -> Option<f64> {
     let c = scene.contacts?;
     let e_eff = c.material.effective_modulus();
+    // Mass, radius, known speed and the distinct initial and feeding velocities.
     type Known = (f64, f64, Option<f64>, Vec<DVec3>);
     let gs: Vec<Known> = scene
         .groups
@@ -24,10 +25,11 @@ pub fn particle_contact_time(scene: &Scene) -> Option<f64> {
         .map(|g| {
             let s = coarse_grain(g.law, g.alpha, g.min_diameter(), g.density);
             let r = group_report(scene, g);
-            let vs = group_velocities(scene, g)
+            let vs: Vec<DVec3> = group_velocities(scene, g)
                 .into_iter()
                 .map(|p| p.1)
                 .collect();
+            let vs = distinct(&vs);
             (s.mass(), 0.5 * s.diameter, known_speed(scene, r.tau, g), vs)
         })
         .collect();
@@ -36,7 +38,7 @@ pub fn particle_contact_time(scene: &Scene) -> Option<f64> {
         for b in &gs[i..] {
             let m = scg_core::physics::contact::normal::effective(a.0, b.0);
             let r = scg_core::physics::contact::normal::effective(a.1, b.1);
-            let mut v = largest_difference(&a.3, &b.3);
+            let mut v = largest_between_distinct(&a.3, &b.3);
             if v == 0.0 {
                 v = a.2.unwrap_or(0.0).max(b.2.unwrap_or(0.0));
             }
@@ -56,22 +58,28 @@ pub fn particle_contact_time(scene: &Scene) -> Option<f64> {
 /// the bound of their bounding boxes, never smaller (so the contact time it gives is
 /// never longer). A lattice of 10⁶ particles at rest is one vector, not 10¹² pairs.
 pub fn largest_difference(a: &[DVec3], b: &[DVec3]) -> f64 {
-    let distinct = |vs: &[DVec3]| -> Vec<DVec3> {
-        let mut d: Vec<[u64; 3]> = vs.iter().map(|v| v.to_array().map(f64::to_bits)).collect();
-        d.sort_unstable();
-        d.dedup();
-        d.into_iter()
-            .map(|b| DVec3::from_array(b.map(f64::from_bits)))
-            .collect()
-    };
-    let (a, b) = (distinct(a), distinct(b));
+    largest_between_distinct(&distinct(a), &distinct(b))
+}
+
+/// The distinct vectors of `vs` (bitwise), in a fixed order.
+fn distinct(vs: &[DVec3]) -> Vec<DVec3> {
+    let mut d: Vec<[u64; 3]> = vs.iter().map(|v| v.to_array().map(f64::to_bits)).collect();
+    d.sort_unstable();
+    d.dedup();
+    d.into_iter()
+        .map(|b| DVec3::from_array(b.map(f64::from_bits)))
+        .collect()
+}
+
+/// [`largest_difference`] of two sets already distinct ([`distinct`]).
+fn largest_between_distinct(a: &[DVec3], b: &[DVec3]) -> f64 {
     if a.is_empty() || b.is_empty() {
         return 0.0;
     }
     if a.len().saturating_mul(b.len()) <= EXACT_DIFFERENCES {
         let mut v: f64 = 0.0;
-        for u in &a {
-            for w in &b {
+        for u in a {
+            for w in b {
                 v = v.max((*u - *w).length());
             }
         }
@@ -83,7 +91,7 @@ pub fn largest_difference(a: &[DVec3], b: &[DVec3]) -> f64 {
             |(lo, hi), v| (lo.min(*v), hi.max(*v)),
         )
     };
-    let ((alo, ahi), (blo, bhi)) = (bounds(&a), bounds(&b));
+    let ((alo, ahi), (blo, bhi)) = (bounds(a), bounds(b));
     (ahi - blo).abs().max((bhi - alo).abs()).length()
 }
 

@@ -5,7 +5,7 @@
 //! them) followed by the ghost rows the driver gave with [`ContactState::set_ghosts`] (a
 //! new set: the list is rebuilt) and whose states it updates before each step with
 //! [`ContactState::put_ghost_states`] (the list is kept: the driver gives a new set
-//! before any particle, here or there, moved half the skin, which [`rebuild_due_here`]
+//! before any particle, here or there, moved half the skin, which [`RebuildCheck::due`]
 //! tells it for this process's particles). The neighbour list is built over both,
 //! without ghost–ghost pairs;
 //! the force stage computes the local–local and local–ghost pairs; the kicks apply to the
@@ -158,29 +158,45 @@ pub fn table_rows_indexed_where(
     (rows, g)
 }
 
-/// Bytes of one forwarded state ([`table_states`], [`ContactState::put_ghost_states`]).
+/// Bytes of one forwarded state ([`TableStates`], [`ContactState::put_ghost_states`]).
 pub const STATE_BYTES: usize = 72;
 
-/// The position (m), velocity (m/s) and angular velocity (rad/s) of table rows `rows`, as
-/// nine f64 per row (x, v, ω) in native byte order, appended to `out`: the states a
-/// driver forwards to the ghosts of its particles elsewhere
-/// ([`ContactState::put_ghost_states`] reads them).
-///
-/// # Panics
-/// When a row is past the table.
-pub fn table_states(world: &mut World, rows: &[u32], out: &mut Vec<u8>) {
-    let mut qs = world.query::<(&Position, &Velocity, &AngularVelocity)>();
-    let q = qs.query(world);
-    let Some((xs, vs, ws)) = crate::stages::table::columns(&q) else {
-        assert!(rows.is_empty(), "ghost rows of an empty table");
-        return;
-    };
-    out.reserve(STATE_BYTES * rows.len());
-    for &k in rows {
-        let k = k as usize;
-        let (x, v, w) = (xs[k].0, vs[k].0, ws[k].0);
-        let s: [f64; 9] = [x.x, x.y, x.z, v.x, v.y, v.z, w.x, w.y, w.z];
-        out.extend_from_slice(bytemuck::bytes_of(&s));
+/// The reader of the states a driver forwards each step to the ghosts of its particles
+/// elsewhere ([`ContactState::put_ghost_states`] reads them). It keeps its query from one
+/// step to the next: building a query every step cost more than reading the few ghost
+/// rows of a dilute run.
+pub struct TableStates(
+    bevy_ecs::query::QueryState<(
+        &'static Position,
+        &'static Velocity,
+        &'static AngularVelocity,
+    )>,
+);
+
+impl TableStates {
+    /// A reader of `world`'s particle table (use it with that world only).
+    pub fn new(world: &mut World) -> Self {
+        TableStates(world.query())
+    }
+
+    /// The position (m), velocity (m/s) and angular velocity (rad/s) of table rows
+    /// `rows`, as nine f64 per row (x, v, ω) in native byte order, appended to `out`.
+    ///
+    /// # Panics
+    /// When a row is past the table.
+    pub fn append(&mut self, world: &World, rows: &[u32], out: &mut Vec<u8>) {
+        let q = self.0.query(world);
+        let Some((xs, vs, ws)) = crate::stages::table::columns(&q) else {
+            assert!(rows.is_empty(), "ghost rows of an empty table");
+            return;
+        };
+        out.reserve(STATE_BYTES * rows.len());
+        for &k in rows {
+            let k = k as usize;
+            let (x, v, w) = (xs[k].0, vs[k].0, ws[k].0);
+            let s: [f64; 9] = [x.x, x.y, x.z, v.x, v.y, v.z, w.x, w.y, w.z];
+            out.extend_from_slice(bytemuck::bytes_of(&s));
+        }
     }
 }
 
@@ -197,17 +213,33 @@ pub enum Due {
 }
 
 /// Whether this process's part of a decomposed run needs a new ghost set before its next
-/// step (asked between steps). The driver gives every process a new set when any of them
-/// says so; ghosts are checked by their owners, never here. A feed and a drain in the
-/// same step leave the count alone: the driver counts its feeds.
-///
-/// This is the next neighbour stage's displacement check, done now: it takes the last
-/// step's displacement into the list's bound (the stage then finds nothing more to add),
-/// so the exact check, when the bound passes half the skin, runs once a step.
-pub fn rebuild_due_here(world: &mut World) -> Due {
+/// step (asked between steps, [`RebuildCheck::due`]). It keeps its query from one step to
+/// the next, as [`TableStates`] does.
+pub struct RebuildCheck(bevy_ecs::query::QueryState<&'static Position>);
+
+impl RebuildCheck {
+    /// A check of `world`'s particle table (use it with that world only).
+    pub fn new(world: &mut World) -> Self {
+        RebuildCheck(world.query())
+    }
+
+    /// Whether a new ghost set is due before the next step. The driver gives every
+    /// process a new set when any of them says so; ghosts are checked by their owners,
+    /// never here. A feed and a drain in the same step leave the count alone: the driver
+    /// counts its feeds.
+    ///
+    /// This is the next neighbour stage's displacement check, done now: it takes the
+    /// last step's displacement into the list's bound (the stage then finds nothing more
+    /// to add), so the exact check, when the bound passes half the skin, runs once a
+    /// step.
+    pub fn due(&mut self, world: &mut World) -> Due {
+        rebuild_due(&mut self.0, world)
+    }
+}
+
+fn rebuild_due(qs: &mut bevy_ecs::query::QueryState<&'static Position>, world: &mut World) -> Due {
     let drift = world.resource::<StepDisplacement>().take();
     let due = world.resource_scope(|world, mut st: Mut<ContactState>| {
-        let mut qs = world.query::<&Position>();
         let q = qs.query(world);
         let pos: &[Position] = crate::stages::table::columns(&q).unwrap_or_default();
         let pos = <Position as bytemuck::TransparentWrapper<DVec3>>::peel_slice(pos);
@@ -254,7 +286,7 @@ impl ContactState {
     }
 
     /// Give ghost rows `at..` of the set last given ([`ContactState::set_ghosts`]) the
-    /// states in `bytes` for the coming step, as [`table_states`] writes them
+    /// states in `bytes` for the coming step, as [`TableStates::append`] writes them
     /// ([`STATE_BYTES`] a row: x in m, v in m/s, ω in rad/s); returns the row after the
     /// last one written. The list is not rebuilt: the driver guarantees that no ghost
     /// moved more than half the skin since the set was given.
