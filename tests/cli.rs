@@ -203,3 +203,45 @@ fn neighbours_benchmark_names_its_grids() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// `scg bench case SCENE` runs the scene (here the elbow, shortened with `--set`) and
+/// prints each system of its step with its time, the shares adding up to the step's
+/// whole, and the rate last; a missing scene is bad input.
+#[test]
+fn bench_case_times_each_system_of_a_scene() {
+    let out = scg()
+        .args(["--threads", "1", "bench", "case", "cases/elbow.toml"])
+        .args(["--set", "duration=0.005"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(
+        text.contains("bench case cases/elbow.toml: 200 steps"),
+        "{text}"
+    );
+    let shares: Vec<f64> = text
+        .lines()
+        .filter(|l| l.ends_with('%'))
+        .map(|l| l.split_whitespace().rev().nth(1).unwrap().parse().unwrap())
+        .collect();
+    for name in [
+        "integrate_mesh_flow",
+        "modify_carrier",
+        "feed_particles",
+        "mesh_boundary",
+    ] {
+        assert!(text.contains(name), "{name}: {text}");
+    }
+    let sum: f64 = shares.iter().sum();
+    assert!((sum - 100.0).abs() < 0.5, "shares sum to {sum}: {text}");
+    let last = text.lines().last().unwrap();
+    let rate: f64 = last
+        .strip_prefix("particle-steps/s: ")
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(rate > 0.0, "{last}");
+    let bad = scg().args(["bench", "case"]).output().unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+}

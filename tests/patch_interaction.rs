@@ -144,6 +144,7 @@ fn stick_walls_keep_what_reaches_them_and_every_particle_is_accounted_for() {
     for patches in [
         "wall_model = \"stick\"",
         "wall_model = \"rebound\"\nrestitution = 0.8\nfriction = 0.3",
+        "wall_model = \"rebound\"\nrestitution = 0.8\nfriction = 0.3\nfriction_model = \"openfoam_fraction\"",
         "[flow.patches.interaction]\nwalls = { model = \"rebound\", restitution = 0.5, friction = 0.1 }\ninlet = { model = \"stick\" }",
     ] {
         let sc = scene(d.path(), patches, 0.02);
@@ -248,11 +249,78 @@ fn bad_patch_models_are_refused() {
             "flow.patches.wall_model",
             "[material]",
         ),
+        (
+            "wall_model = \"rebound\"\nfriction_model = \"sliding\"",
+            "friction_model",
+            "sliding",
+        ),
+        (
+            "[flow.patches.interaction]\nwalls = { model = \"stick\", friction_model = \"coulomb\" }",
+            "flow.patches.interaction.walls.friction_model",
+            "rebound",
+        ),
     ] {
         let e = scene_with(patches).expect_err(patches);
         assert!(e.contains(key) && e.contains(message), "{patches}: {e}");
         assert!(!e.starts_with("error:"), "{e}");
     }
+}
+
+/// `friction_model` reaches the patch models: `[flow.patches]`'s for the walls, a per-patch
+/// entry's own, the Coulomb impact by default (and for the contact law's guard).
+#[test]
+fn friction_model_selects_the_rebound_rule_per_patch() {
+    use scg::core::physics::mesh_flow::{PatchInteraction, WallFriction};
+    let mesh = duct();
+    let d = tempfile::tempdir().unwrap();
+    write(&d.path().join("case"), &mesh, "type noSlip;");
+    let rule = |patches: &str| {
+        let sc = scene(d.path(), patches, 0.01);
+        let names: Vec<String> = sc
+            .mesh_flow
+            .as_ref()
+            .unwrap()
+            .flow
+            .mesh()
+            .patches
+            .iter()
+            .map(|p| p.name.clone())
+            .collect();
+        names
+            .into_iter()
+            .zip(&sc.patch_models)
+            .filter_map(|(n, m)| match m.interaction {
+                PatchInteraction::Rebound { mu, friction, .. } => Some((n, mu, friction)),
+                _ => None,
+            })
+            .collect::<Vec<_>>()
+    };
+    let walls = |r: Vec<(String, f64, WallFriction)>| {
+        r.into_iter()
+            .find(|(n, ..)| n == "walls")
+            .map(|(_, mu, f)| (mu, f))
+    };
+    assert_eq!(
+        walls(rule("wall_model = \"rebound\"\nfriction = 0.3")),
+        Some((0.3, WallFriction::Coulomb))
+    );
+    assert_eq!(
+        walls(rule(
+            "wall_model = \"rebound\"\nfriction = 0.3\nfriction_model = \"openfoam_fraction\""
+        )),
+        Some((0.3, WallFriction::OpenfoamFraction))
+    );
+    // a per-patch entry inherits [flow.patches]' rule, or names its own
+    let inherit = "wall_model = \"stick\"\nfriction_model = \"openfoam_fraction\"\n\n[flow.patches.interaction]\nwalls = { model = \"rebound\", friction = 0.2 }";
+    assert_eq!(
+        walls(rule(inherit)),
+        Some((0.2, WallFriction::OpenfoamFraction))
+    );
+    let own = "wall_model = \"stick\"\n\n[flow.patches.interaction]\nwalls = { model = \"rebound\", friction = 0.2, friction_model = \"openfoam_fraction\" }";
+    assert_eq!(
+        walls(rule(own)),
+        Some((0.2, WallFriction::OpenfoamFraction))
+    );
 }
 
 /// 5 µm dust with rebound walls (restitution and friction only, no `[material]`): `dt =

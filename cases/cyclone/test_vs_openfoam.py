@@ -375,6 +375,32 @@ class LikeForLike(unittest.TestCase):
         plain = os.path.join(self.tmp, "plain.toml")
         self.assertEqual(vs.like(dest, plain), [])
 
+    def test_friction_takes_openfoams_rebound_rule(self):
+        """A rebound with friction > 0: read_scene refuses scg's Coulomb impact (another
+        model under OpenFOAM's mu), `like` switches it to friction_model =
+        "openfoam_fraction" in [flow.patches] and in each per-patch table with friction."""
+        import tomllib
+        src = os.path.join(self.tmp, "mu.toml")
+        with open(FIXTURE) as f:
+            text = f.read().replace('case = "coarse"', f'case = "{os.path.join(HERE, "coarse")}"')
+        self.assertIn("[flow.patches]", text)
+        text = text.replace("[flow.patches]", "[flow.patches]\nfriction = 0.3", 1)
+        with open(src, "w") as f:
+            f.write(text)
+        with self.assertRaises(vs.SceneError) as e:
+            vs.read_scene(src)
+        self.assertIn("flow.patches.friction_model", str(e.exception))
+        dest = os.path.join(self.tmp, "mu-like.toml")
+        changes = vs.like(src, dest)
+        self.assertIn("flow.patches.friction_model", [c.split(":")[0] for c in changes], changes)
+        with open(dest, "rb") as f:
+            got = tomllib.load(f)
+        self.assertEqual(got["flow"]["patches"]["friction_model"], "openfoam_fraction")
+        sc = vs.read_scene(dest)
+        self.assertTrue(all(i["friction_model"] == "openfoam_fraction" for i in sc["interaction"].values()))
+        # the rule's own name is kept, and a frictionless scene is left alone
+        self.assertEqual(vs.like(dest, os.path.join(self.tmp, "again.toml")), [])
+
 
 if __name__ == "__main__":
     unittest.main()

@@ -17,8 +17,9 @@ bench/foam.py's helpers (dictionary header, timed run, list reader) are imported
       walls' no-slip values) and collecting zones ([[zones]] collects, a trap OpenFOAM's
       cloud has not: both then count 1 - escaped/fed) —, cell_point and conservative
       interpolation become cell_point_idw (OpenFOAM's cellPoint point values), langevin
-      dispersion becomes stochastic_ras (the eddy model OpenFOAM's tracker has), and
-      flow.case is made absolute
+      dispersion becomes stochastic_ras (the eddy model OpenFOAM's tracker has), a
+      rebound with friction > 0 takes friction_model = "openfoam_fraction" (OpenFOAM's
+      rebound rule), and flow.case is made absolute
   python3 vs_openfoam.py grade DIR OUT.json
       reads each run's log and patchPostProcessing output and writes grade.json
   python3 vs_openfoam.py summary GRADE.json [PARALLEL.json [CONCURRENT.json]]
@@ -38,7 +39,10 @@ Patch interaction, from [flow.patches]: wall_model "rebound" with [material] res
 no friction (the cyclone scenes) -> standardWallInteraction rebound (e, mu 0); wall_model
 "stick" | "escape" | "rebound" (restitution, friction) and [flow.patches.interaction]
 per-patch tables -> localInteraction, one entry per patch (outlets, inlets and unlisted
-non-wall patches escape). grade.json per class: fed, escaped (outlets), lost (other escape
+non-wall patches escape). OpenFOAM's rebound removes the fraction mu of the tangential
+velocity (U -= mu*Ut): a rebound with friction > 0 must say friction_model =
+"openfoam_fraction" (scg's same rule), else the scene is refused (scg's default Coulomb
+impact is another model under the same number). grade.json per class: fed, escaped (outlets), lost (other escape
 patches), stuck (written inactive at the end), held (written active), patches (counts by
 patch), and the log's localInteraction per-patch totals (log_fates).
 
@@ -93,6 +97,10 @@ def read_json(path):
 
 def bad(path, key, msg):
     raise SceneError(f"{path}: {key}: {msg}")
+
+
+# scg's rebound friction models ([flow.patches] friction_model): OpenFOAM's is "openfoam_fraction"
+FRICTION_MODELS = ("coulomb", "openfoam_fraction")
 
 
 def read_toml(path):
@@ -157,11 +165,16 @@ def read_scene(path, duration=None, feed_scale=None, dt=None):
             '(OpenFOAM: standardWallInteraction rebound or localInteraction; "contact" has no counterpart)')
     restitution = float(patches.get("restitution", s.get("material", {}).get("restitution", 1.0)))
     friction = float(patches.get("friction", 0.0))
+    friction_model = patches.get("friction_model", "coulomb")
+    if friction_model not in FRICTION_MODELS:
+        bad(path, "flow.patches.friction_model", f'{friction_model!r}: must be "coulomb" or "openfoam_fraction"')
     interaction = {}
     for p in walls:
-        interaction[p] = {"model": wall_model, "e": restitution, "mu": friction}
+        interaction[p] = {"model": wall_model, "e": restitution, "mu": friction,
+                          "friction_model": friction_model}
     for p in outlets + inlets:
-        interaction[p] = {"model": "escape", "e": restitution, "mu": friction}
+        interaction[p] = {"model": "escape", "e": restitution, "mu": friction,
+                          "friction_model": friction_model}
     overrides = patches.get("interaction", {})
     if not isinstance(overrides, dict):
         bad(path, "flow.patches.interaction", "a table of patch = { model = ... }")
@@ -172,8 +185,21 @@ def read_scene(path, duration=None, feed_scale=None, dt=None):
         model = o.get("model")
         if model not in ("rebound", "stick", "escape"):
             bad(path, key + ".model", f'{model!r}: must be "rebound", "stick" or "escape"')
+        fm = o.get("friction_model", friction_model)
+        if fm not in FRICTION_MODELS:
+            bad(path, key + ".friction_model", f'{fm!r}: must be "coulomb" or "openfoam_fraction"')
         interaction[p] = {"model": model, "e": float(o.get("restitution", restitution)),
-                          "mu": float(o.get("friction", friction))}
+                          "mu": float(o.get("friction", friction)), "friction_model": fm}
+    # OpenFOAM's rebound removes the fraction mu of the tangential velocity (U -= mu*Ut);
+    # scg's "coulomb" friction is another model under the same number: refused unless 0
+    for p, i in interaction.items():
+        fm = i.get("friction_model", friction_model)
+        if i["model"] == "rebound" and i["mu"] > 0.0 and fm != "openfoam_fraction":
+            key = (f"flow.patches.interaction.{p}" if p in overrides else "flow.patches")
+            bad(path, key + ".friction_model",
+                f"friction {i['mu']} with the Coulomb impact (scg's default) is not OpenFOAM's rebound, "
+                "which removes the fraction mu of the tangential velocity (U -= mu*Ut): set "
+                'friction_model = "openfoam_fraction" (vs_openfoam.py like does)')
     fluid = s.get("fluid", {})
     rho_f = float(fluid.get("density", 1.2))
     mu = float(fluid.get("viscosity", 1.8e-5))
@@ -310,6 +336,18 @@ def like(path, dest):
         d["model"] = "stochastic_ras"
         changes.append("dispersion.model: langevin -> stochastic_ras (OpenFOAM's "
                        "stochasticDispersionRAS, the eddy model its tracker has)")
+    patches = flow.get("patches", {})
+    if isinstance(patches, dict):
+        tables = [("flow.patches", patches)] + [
+            (f"flow.patches.interaction.{p}", o)
+            for p, o in (patches.get("interaction") or {}).items() if isinstance(o, dict)]
+        for key, t in tables:
+            fm = t.get("friction_model", patches.get("friction_model", "coulomb"))
+            mu = float(t.get("friction", patches.get("friction", 0.0)))
+            if mu > 0.0 and fm != "openfoam_fraction":
+                t["friction_model"] = "openfoam_fraction"
+                changes.append(f"{key}.friction_model: {fm} -> openfoam_fraction (OpenFOAM's "
+                               f"rebound: the fraction mu = {mu:g} of the tangential velocity removed)")
     for i, z in enumerate(s.get("zones", [])):
         if z.get("collects"):
             z["collects"] = False

@@ -89,6 +89,12 @@ class Mapping(unittest.TestCase):
     def test_rebound_with_friction_and_per_patch_overrides(self):
         text = self.base.replace('wall_model = "stick"',
                                  'wall_model = "rebound"\nrestitution = 0.9\nfriction = 0.2')
+        # scg's Coulomb impact under OpenFOAM's mu: refused, naming the key
+        with self.assertRaises(cyc.SceneError) as e:
+            self.cloud(text)
+        self.assertIn("flow.patches.friction_model", str(e.exception))
+        self.assertIn("openfoam_fraction", str(e.exception))
+        text = text.replace("friction = 0.2", 'friction = 0.2\nfriction_model = "openfoam_fraction"')
         plan, cloud = self.cloud(text)
         self.assertEqual(plan["patch_model"], "localInteraction")  # friction: not standardWallInteraction
         self.assertRegex(block(cloud, "localInteractionCoeffs"), r"walls \{ type rebound; e 0.9; mu 0.2; \}")

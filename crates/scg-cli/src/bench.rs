@@ -26,6 +26,10 @@ pub enum BenchKind {
     /// in eight packed clusters far apart (hashed cells) and packed at 0.5 (a dense grid),
     /// skin 10 µm. Last line: `particle-builds/s` of the packed cloud.
     Neighbours,
+    /// A scene file (`scg bench case SCENE`, `--set` edits it): its whole duration (or
+    /// `--steps`) without recording, then the time of each system of its step and what
+    /// building the scene took.
+    Case,
 }
 
 /// The dispersion model a benchmark runs with (`--dispersion`).
@@ -47,9 +51,16 @@ pub struct BenchArgs {
     /// Number of particles.
     #[arg(long, default_value_t = 1_000_000)]
     pub particles: u64,
-    /// Number of timed steps (after 5 warm-up steps).
-    #[arg(long, default_value_t = 200)]
-    pub steps: u64,
+    /// Number of timed steps (after 5 warm-up steps; default 200, `case`: the scene's
+    /// whole duration, no warm-up).
+    #[arg(long)]
+    pub steps: Option<u64>,
+    /// `case`: the scene file.
+    #[arg(value_name = "SCENE")]
+    pub scene: Option<std::path::PathBuf>,
+    /// `case`: edit the scene (`key=value`, as `scg run --set`).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
     /// `mesh`: about this many cells (tetrahedra).
     #[arg(long, default_value_t = 100_000)]
     pub cells: u64,
@@ -356,7 +367,15 @@ fn bench_neighbours(n: u64, builds: u64) -> i32 {
 /// Run a benchmark; the last line printed is `particle-steps/s: <number>`
 /// (`particle-builds/s` for `neighbours`).
 pub fn bench(a: BenchArgs) -> i32 {
-    if a.particles == 0 || a.steps == 0 {
+    if let BenchKind::Case = a.kind {
+        return bench_case(&a);
+    }
+    if a.scene.is_some() || !a.set.is_empty() {
+        eprintln!("error: a scene file and --set are for `scg bench case` only");
+        return EXIT_BAD_INPUT;
+    }
+    let steps = a.steps.unwrap_or(200);
+    if a.particles == 0 || steps == 0 {
         eprintln!("error: --particles and --steps must be ≥ 1");
         return EXIT_BAD_INPUT;
     }
@@ -365,13 +384,13 @@ pub fn bench(a: BenchArgs) -> i32 {
             eprintln!("error: --scene-out: the neighbours benchmark has no scene");
             return EXIT_BAD_INPUT;
         }
-        return bench_neighbours(a.particles, a.steps);
+        return bench_neighbours(a.particles, steps);
     }
     let text = match a.kind {
         BenchKind::Drag => drag_scene(a.particles),
-        BenchKind::Dilute => dilute_scene(a.particles, a.steps),
-        BenchKind::Dense => dense_scene(a.particles, a.steps),
-        BenchKind::Mesh | BenchKind::Neighbours => String::new(),
+        BenchKind::Dilute => dilute_scene(a.particles, steps),
+        BenchKind::Dense => dense_scene(a.particles, steps),
+        BenchKind::Mesh | BenchKind::Neighbours | BenchKind::Case => String::new(),
     };
     if let Some(path) = &a.scene_out {
         if text.is_empty() {
@@ -428,7 +447,7 @@ pub fn bench(a: BenchArgs) -> i32 {
     }
     let ps0 = sim.particle_steps();
     let t0 = Instant::now();
-    if let Err(e) = sim.run(a.steps, |_| true) {
+    if let Err(e) = sim.run(steps, |_| true) {
         eprintln!("error: {e}");
         return 1;
     }
@@ -439,7 +458,7 @@ pub fn bench(a: BenchArgs) -> i32 {
         "bench {:?}: {} particles × {} steps in {:.3} s on {} threads ({:.3e} s per particle-step; {} kernels)",
         a.kind,
         a.particles,
-        a.steps,
+        steps,
         wall,
         threads,
         wall / ps,
@@ -463,6 +482,63 @@ pub fn bench(a: BenchArgs) -> i32 {
     {
         println!("  neighbour list: {}", c.summary());
     }
+    println!("particle-steps/s: {:.4e}", ps / wall);
+    0
+}
+
+/// `scg bench case SCENE`: the scene's run (no recording, no end tables), its
+/// particle-steps per second and where the time went: building the scene, then each
+/// system of the step (`StageTimers::by_system`); the last line is
+/// `particle-steps/s: <number>`.
+fn bench_case(a: &BenchArgs) -> i32 {
+    let Some(path) = &a.scene else {
+        eprintln!("error: `scg bench case` needs a scene file (scg bench case SCENE)");
+        return EXIT_BAD_INPUT;
+    };
+    let t = Instant::now();
+    let scene = match scg_scene::load(path, &a.set) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_BAD_INPUT;
+        }
+    };
+    let mut sim = scene.build(false);
+    let build = t.elapsed().as_secs_f64();
+    let steps = a.steps.unwrap_or_else(|| scene.steps());
+    let t0 = Instant::now();
+    if let Err(e) = sim.run(steps, |_| true) {
+        eprintln!("error: {e}");
+        return 1;
+    }
+    let wall = t0.elapsed().as_secs_f64();
+    let ps = sim.particle_steps() as f64;
+    println!(
+        "bench case {}: {steps} steps, {ps:.0} particle-steps in {wall:.3} s on {} threads \
+         ({:.3e} s per particle-step); scene read and built in {build:.3} s",
+        path.display(),
+        scg_core::exec::settings().team_size(),
+        wall / ps.max(1.0),
+    );
+    let timers = sim.timers();
+    let total = timers.sum().as_secs_f64().max(1e-12);
+    for (s, d) in timers.by_system(sim.plan()) {
+        println!(
+            "  {:<12} {:<24} {:<28} {:>8.3} s {:>5.1} %",
+            s.set.name(),
+            s.system.name(),
+            format!("[{}]", s.effect),
+            d.as_secs_f64(),
+            100.0 * d.as_secs_f64() / total
+        );
+    }
+    let inner: f64 = timers.rows.iter().map(|d| d.as_secs_f64()).sum();
+    println!(
+        "  {:<66} {:>8.3} s {:>5.1} %",
+        "(the step's own bookkeeping: schedule, timer marks)",
+        total - inner,
+        100.0 * (total - inner) / total
+    );
     println!("particle-steps/s: {:.4e}", ps / wall);
     0
 }

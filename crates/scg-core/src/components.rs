@@ -125,6 +125,14 @@ pub struct BodyAcceleration(pub DVec3);
 #[repr(transparent)]
 pub struct CellHint(pub u32);
 
+/// The record of the mesh cell's tetrahedron that held the particle at the last query
+/// (mesh flows only; `scg_mesh::NO_TET` when unknown): a hint that lets the next query read
+/// that tetrahedron alone ([`scg_mesh::CellTable::walk`]). It changes what is read, never
+/// a result, so it is scratch: unknown after a restore or a migration.
+#[derive(Component, Clone, Copy, Debug, PartialEq, Eq, TransparentWrapper)]
+#[repr(transparent)]
+pub struct TetHint(pub u32);
+
 /// The fluid velocity at the particle's centre as the last step's landing on the mesh
 /// found it (mesh flows only): `u` (m/s) at the centre `at` (m). A step starting from
 /// `at` takes `u` instead of locating the centre again, which gives the same value bit

@@ -188,6 +188,8 @@ pub fn visit_layout(v: &mut impl LayoutVisitor) {
     v.visit::<CellHint>(Recorded);
     // A cache: unknown after a restore, which gives the same bits (its docs).
     v.visit::<FlowAtCentre>(Scratch);
+    // A hint that changes no result (its docs).
+    v.visit::<TetHint>(Scratch);
     // The constant offset is rewritten before every integration, but turbulent
     // dispersion keeps its fluctuation from step to step: state.
     v.visit::<CarrierOffset>(Recorded);
@@ -256,7 +258,11 @@ macro_rules! spawn_bundle {
             e.insert(gravity);
         }
         if rules.mesh {
-            e.insert((CellHint(hint), FlowAtCentre::UNKNOWN));
+            e.insert((
+                CellHint(hint),
+                TetHint(scg_mesh::NO_TET),
+                FlowAtCentre::UNKNOWN,
+            ));
         }
         if rules.carrier_offset {
             e.insert(CarrierOffset::default());

@@ -283,9 +283,13 @@ impl Plan {
 pub struct StageTimers {
     /// Accumulated time per set, indexed like [`StepSet::ORDER`].
     pub total: [Duration; StepSet::COUNT],
+    /// Accumulated time per system, indexed by its row of [`StepSystem::TABLE`] (from the
+    /// mark before it to the next mark: the set's own mark is not in any row).
+    pub rows: [Duration; StepSystem::TABLE.len()],
     /// Steps timed.
     pub steps: u64,
     open: Option<(usize, Instant)>,
+    open_row: Option<(usize, Instant)>,
 }
 
 impl StageTimers {
@@ -294,10 +298,28 @@ impl StageTimers {
         if let Some((i, t0)) = self.open.take() {
             self.total[i] += now - t0;
         }
+        if let Some((r, t0)) = self.open_row.take() {
+            self.rows[r] += now - t0;
+        }
         match set {
             Some(i) => self.open = Some((i, now)),
             None => self.steps += 1,
         }
+    }
+
+    fn mark_row(&mut self, row: usize) {
+        let now = Instant::now();
+        if let Some((r, t0)) = self.open_row.replace((row, now)) {
+            self.rows[r] += now - t0;
+        }
+    }
+
+    /// Time per system of `plan`, in its order.
+    pub fn by_system(&self, plan: &Plan) -> Vec<(PlannedSystem, Duration)> {
+        plan.systems
+            .iter()
+            .map(|s| (s.clone(), self.rows[s.system.row().0]))
+            .collect()
     }
 
     /// Time per set, with the set names.
@@ -376,8 +398,12 @@ impl StepBuilder {
             set.name()
         );
         assert!(!self.plan.contains(name), "{name} was added twice");
-        let configs: ScheduleConfigs<ScheduleSystem> =
-            system.into_configs().in_set(set).in_set(Slot::Row(row));
+        // a timer mark before the system: StageTimers::rows
+        let mark = (move |mut t: ResMut<StageTimers>| t.mark_row(row)).into_configs();
+        let configs: ScheduleConfigs<ScheduleSystem> = (mark, system.into_configs())
+            .chain()
+            .in_set(set)
+            .in_set(Slot::Row(row));
         self.schedule.add_systems(configs);
         self.plan.systems.push(PlannedSystem {
             set,

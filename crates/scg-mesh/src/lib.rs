@@ -48,4 +48,4 @@ pub use interp::{Interpolation, Interpolator};
 pub use locate::{Hit, Location, Locator};
 pub use polymesh::{CellField, Patch, PolyMesh, ScalarField};
 pub use shared::Shared;
-pub use table::{CellTable, TableWalk};
+pub use table::{CellTable, NO_TET, TableWalk};

@@ -35,16 +35,29 @@
 //!
 //! With [`crate::Interpolation::Conservative`] every cell takes the general records, and a
 //! query answers its tetrahedron's constant velocity instead of the linear value, read
-//! from the interpolator's velocities (shared, not copied: each cell record knows where
-//! its cell's start).
+//! from the interpolator's velocities (shared, not copied: each tetrahedron record knows
+//! its index there).
+//!
+//! # Tetrahedron hints
+//!
+//! A particle moving a fraction of a tetrahedron per step is found, most steps, in the
+//! tetrahedron of its last query. [`CellTable::walk`] takes that record as a hint (each
+//! particle carries it): the query reads the cell record and that one tetrahedron record
+//! (4 cache lines instead of the ~13 of a hexahedron's exit face and fan), and on a miss
+//! hops to the sibling across the side of the most negative coordinate (each record links
+//! its three siblings and the tetrahedron across its outer triangle, the next cell's hint).
+//! A hint changes what is read, never the answer: a tetrahedron is taken only where the
+//! point lies deeper inside it than its margin, which is where the search (exit face, fan,
+//! all tetrahedra) provably ends in the same tetrahedron with the same arithmetic
+//! (`build::tet_margins`); anything else is searched as without a hint. So results do not
+//! depend on hints (tested bit for bit at points within 10^-12–10^-6 of every side, and on
+//! whole runs), and a hint is scratch state: unknown after a restart or a migration.
 //!
 //! Memory: 64 bytes per cell; a simple cell 96 per face (a tetrahedron: 0.45 kB); any other
-//! 32 per cell face and 144 per tetrahedron of the decomposition (a hexahedron's 24:
-//! 3.7 kB). [`CellTable::new`] declines (returns `None`) above [`CellTable::MAX_BYTES`].
+//! 36 per cell face and 176 per tetrahedron of the decomposition (a hexahedron's 24:
+//! 4.5 kB). [`CellTable::new`] declines (returns `None`) above [`CellTable::MAX_BYTES`].
 
 use glam::DVec3;
-
-use crate::interp::Interpolator;
 
 /// Relative tolerance of the inside test (the locator's).
 const TOL: f64 = 1e-9;
@@ -61,14 +74,12 @@ struct CellRec {
     /// A convex cell of triangular faces: one tetrahedron per face, whose record holds
     /// the rows of the value's gradient G (u = u_c + G·(x − cc)) instead of M and Δu.
     simple: u32,
-    /// The conservative scheme: the index of the cell's first tetrahedron in
-    /// [`CellTable::tet_values`].
-    tet_base: u32,
 }
 
-// the cell record is one cache line (the conservative scheme's `tet_base` uses its spare
-// four bytes)
+// the cell record is one cache line
 const _: () = assert!(size_of::<CellRec>() == 64);
+// a tetrahedron record under three
+const _: () = assert!(size_of::<TetRec>() == 176);
 
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(32))]
@@ -86,6 +97,19 @@ struct TetRec {
     m: [DVec3; 3],
     /// Node values minus the cell value.
     du: [DVec3; 3],
+    /// The hinted query's margin (`build::tet_margins`): a point whose three coordinates exceed
+    /// it is in this tetrahedron and within the tolerance of no other of its cell's.
+    margin: f64,
+    /// The cell it belongs to.
+    cell: u32,
+    /// The conservative scheme: its index in [`CellTable::tet_values`].
+    value: u32,
+    /// The record of the cell's tetrahedron across the side opposite corner j (the side
+    /// where coordinate j is 0), [`NO_TET`] if none.
+    links: [u32; 3],
+    /// The record of the tetrahedron across the outer triangle, in the next cell
+    /// ([`NO_TET`] at the boundary or where that cell has no tetrahedron records).
+    across: u32,
 }
 
 /// A face of a convex cell of triangular faces (a `simple` cell): the exit ratio's `q` and
@@ -118,12 +142,18 @@ pub struct CellTable {
     tet_values: Option<std::sync::Arc<[DVec3]>>,
 }
 
+/// Most sibling tetrahedra a hinted query tries before it searches the cell.
+const HINT_HOPS: usize = 3;
+
 /// Nothing across (padding records).
 const NO_CELL: u32 = u32::MAX;
 
 /// Across a face: the neighbour cell, or for a boundary face `BOUNDARY | face` (the mesh's
 /// face index; meshes have fewer than 2^31 faces).
 const BOUNDARY: u32 = 1 << 31;
+
+/// No tetrahedron hint (a new particle, or one found on a simple cell's records).
+pub const NO_TET: u32 = u32::MAX;
 
 /// Where [`CellTable::walk`] ended.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -132,6 +162,9 @@ pub enum TableWalk {
     Inside {
         /// The cell holding x.
         cell: u32,
+        /// The tetrahedron record holding x, the hint of the next query from this cell
+        /// ([`NO_TET`] for a simple cell, whose query reads no tetrahedron record).
+        tet: u32,
         /// The interpolated value at x.
         value: DVec3,
     },
@@ -148,11 +181,13 @@ pub enum TableWalk {
 
 /// What [`CellTable::query`] learns of x from cell `c`'s records.
 enum Query {
-    /// x is in the cell; the interpolated value.
-    Inside(DVec3),
+    /// x is in the cell; the interpolated value and the tetrahedron record holding x
+    /// ([`NO_TET`] on a simple cell).
+    Inside(DVec3, u32),
     /// x is beyond the face the ray from the centre leaves through: what is across it
-    /// (see [`BOUNDARY`]).
-    Beyond(u32),
+    /// (see [`BOUNDARY`]), and the tetrahedron record across the triangle the ray leaves
+    /// through (the next query's hint, [`NO_TET`] if none).
+    Beyond(u32, u32),
     /// The records cannot tell (no records, out of range, a ray the exit face's
     /// tetrahedra do not take).
     Unknown,
@@ -161,178 +196,6 @@ enum Query {
 impl CellTable {
     /// Largest table [`CellTable::new`] builds, bytes (4 GiB).
     pub const MAX_BYTES: usize = 4 << 30;
-
-    /// The records of `it`'s mesh and field (any scheme: for `CellValue` the node
-    /// differences are zero and the value is the cell's). `None` when the table would
-    /// exceed [`CellTable::MAX_BYTES`].
-    pub fn new(it: &Interpolator<'_>) -> Option<Self> {
-        let loc = it.locator();
-        let mesh = loc.mesh();
-        let geom = loc.geometry();
-        let nc = mesh.n_cells;
-        let n_faces = geom.cell_faces.len();
-        let n_tets: usize = geom
-            .cell_faces
-            .iter()
-            .map(|&f| {
-                let k = mesh.face(f as usize).len();
-                if k == 3 { 1 } else { k }
-            })
-            .sum();
-        let bytes = nc * size_of::<CellRec>()
-            + n_faces * (size_of::<FaceRec>() + size_of::<u32>())
-            + n_tets * size_of::<TetRec>();
-        if bytes > Self::MAX_BYTES || n_tets > u32::MAX as usize {
-            return None;
-        }
-        let cellv = it.cell_values();
-        let nodev = it.node_values();
-        let np = mesh.points.len() as u32;
-        let mut t = CellTable {
-            cells: Vec::with_capacity(nc),
-            faces: Vec::with_capacity(n_faces),
-            tets: Vec::with_capacity(n_tets),
-            simple: Vec::new(),
-            simple_next: Vec::new(),
-            faces_next: Vec::with_capacity(n_faces),
-            tet_values: None,
-        };
-        let shared = it.tet_velocities();
-        t.tet_values = shared.map(|(v, _)| std::sync::Arc::clone(v));
-        let conservative = shared.is_some();
-        // room for the cells that may be simple (all faces triangles), each on a line
-        let tri_faced: usize = (0..nc)
-            .map(|c| geom.faces_of(c))
-            .filter(|fs| fs.iter().all(|&f| mesh.face(f as usize).len() == 3))
-            .map(|fs| fs.len() + 1)
-            .sum();
-        t.simple.reserve_exact(tri_faced);
-        t.simple_next.reserve_exact(tri_faced);
-        huge_pages(&t.cells);
-        huge_pages(&t.faces);
-        huge_pages(&t.tets);
-        huge_pages(&t.simple);
-        for (c, (&cc, &uc)) in geom.cell_centres.iter().zip(cellv).enumerate() {
-            if t.faces.len() % 2 == 1 {
-                // start every cell's face records on a 64-byte line (a tetrahedral cell's
-                // four: two lines)
-                t.faces.push(FaceRec::default());
-                t.faces_next.push(NO_CELL);
-            }
-            let (f0, t0) = (t.faces.len(), t.tets.len());
-            let mut ok = true;
-            for &f in geom.faces_of(c) {
-                let fi = f as usize;
-                let a = geom.face_areas[fi];
-                let den = (geom.face_centres[fi] - cc).dot(a);
-                let q = a / den;
-                let tet = t.tets.len() as u32;
-                let pts = mesh.face(fi);
-                let flip = mesh.owner[fi] as usize != c;
-                let mut push = |nodes: [u32; 3]| {
-                    let v = nodes.map(|n| loc.node(n) - cc);
-                    let n23 = v[1].cross(v[2]);
-                    let det = v[0].dot(n23);
-                    if det.is_nan() || det <= 0.0 {
-                        return false;
-                    }
-                    let inv = 1.0 / det;
-                    let m = [n23 * inv, v[2].cross(v[0]) * inv, v[0].cross(v[1]) * inv];
-                    let du = nodes.map(|n| nodev.get(n as usize).map_or(DVec3::ZERO, |&u| u - uc));
-                    t.tets.push(TetRec { m, du });
-                    true
-                };
-                if pts.len() == 3 {
-                    let (a, b) = if flip {
-                        (pts[2], pts[1])
-                    } else {
-                        (pts[1], pts[2])
-                    };
-                    ok &= push([pts[0], a, b]);
-                } else {
-                    let n = pts.len();
-                    for i in 0..n {
-                        let (pa, pb) = (pts[i], pts[(i + 1) % n]);
-                        let (a, b) = if flip { (pb, pa) } else { (pa, pb) };
-                        ok &= push([np + f, a, b]);
-                    }
-                }
-                ok &= q.is_finite();
-                t.faces.push(FaceRec {
-                    q,
-                    tet,
-                    n_tets: t.tets.len() as u32 - tet,
-                });
-                let across = if mesh.owner[fi] as usize == c {
-                    mesh.neighbour.get(fi).copied()
-                } else {
-                    Some(mesh.owner[fi])
-                };
-                t.faces_next.push(across.unwrap_or(BOUNDARY | f));
-            }
-            if !ok {
-                t.faces.truncate(f0);
-                t.faces_next.truncate(f0);
-                t.tets.truncate(t0);
-            }
-            // convex with triangular faces: every point of the cell on the inner side of
-            // every face plane, one tetrahedron per face
-            let faces = &t.faces[f0..];
-            let simple = ok
-                && !conservative
-                && faces.iter().all(|f| f.n_tets == 1)
-                && geom.faces_of(c).iter().all(|&f| {
-                    mesh.face(f as usize).len() == 3
-                        && geom.faces_of(c).iter().all(|&g| {
-                            mesh.face(g as usize).iter().all(|&p| {
-                                faces
-                                    .iter()
-                                    .all(|fr| fr.q.dot(mesh.points[p as usize] - cc) <= 1.0 + 1e-9)
-                            })
-                        })
-                });
-            let (face, n_faces) = if simple {
-                // the gradient of each face's tetrahedron beside the face's q, and no
-                // general records
-                if t.simple.len() % 2 == 1 {
-                    // start on a 64-byte line (a tetrahedral cell's four: six lines)
-                    t.simple.push(SimpleFace::default());
-                    t.simple_next.push(NO_CELL);
-                }
-                let s0 = t.simple.len();
-                t.simple_next.extend_from_slice(&t.faces_next[f0..]);
-                for fr in &t.faces[f0..] {
-                    let tr = &t.tets[fr.tet as usize];
-                    let g = [0, 1, 2].map(|j| {
-                        tr.m[0] * tr.du[0][j] + tr.m[1] * tr.du[1][j] + tr.m[2] * tr.du[2][j]
-                    });
-                    t.simple.push(SimpleFace { q: fr.q, g });
-                }
-                t.faces.truncate(f0);
-                t.faces_next.truncate(f0);
-                t.tets.truncate(t0);
-                (s0, t.simple.len() - s0)
-            } else {
-                (f0, t.faces.len() - f0)
-            };
-            t.cells.push(CellRec {
-                cc,
-                uc,
-                face: face as u32,
-                n_faces: n_faces as u32,
-                simple: u32::from(simple),
-                tet_base: shared.map_or(0, |(_, offsets)| {
-                    offsets[geom.cell_face_offsets[c] as usize]
-                }),
-            });
-        }
-        // the general records were sized for every cell: give back what the simple cells
-        // did not use
-        t.faces.shrink_to_fit();
-        t.faces_next.shrink_to_fit();
-        t.tets.shrink_to_fit();
-        Some(t)
-    }
 
     /// Cells on the short path (convex, triangular faces), and cells without records.
     pub fn counts(&self) -> (usize, usize) {
@@ -355,9 +218,9 @@ impl CellTable {
     /// `c` is out of range.
     #[inline]
     pub fn velocity_in(&self, c: u32, x: DVec3) -> Option<DVec3> {
-        match self.query(c, x) {
-            Query::Inside(u) => Some(u),
-            Query::Beyond(_) | Query::Unknown => None,
+        match self.query(c, NO_TET, x) {
+            Query::Inside(u, _) => Some(u),
+            Query::Beyond(..) | Query::Unknown => None,
         }
     }
 
@@ -367,31 +230,50 @@ impl CellTable {
     /// boundary face the walk meets; [`TableWalk::Unknown`] when the table cannot tell
     /// within that (a warped or non-convex cell whose exit the records cannot name, too
     /// far): ask the locator.
+    ///
+    /// `tet` is a hint: the tetrahedron record where the last query from `c` found its
+    /// point ([`TableWalk::Inside`]'s `tet`), or [`NO_TET`]. It changes how much is read,
+    /// never the answer: the hinted tetrahedron alone is taken only where the point lies
+    /// deeper inside it than its margin, where the search finds that tetrahedron too
+    /// (tested bit for bit with and without hints).
     #[inline]
-    pub fn walk(&self, mut c: u32, x: DVec3, hops: usize) -> TableWalk {
+    pub fn walk(&self, mut c: u32, mut tet: u32, x: DVec3, hops: usize) -> TableWalk {
         for _ in 0..=hops {
-            match self.query(c, x) {
-                Query::Inside(value) => return TableWalk::Inside { cell: c, value },
-                Query::Beyond(NO_CELL) | Query::Unknown => return TableWalk::Unknown,
-                Query::Beyond(next) if next & BOUNDARY != 0 => {
+            match self.query(c, tet, x) {
+                Query::Inside(value, tet) => {
+                    return TableWalk::Inside {
+                        cell: c,
+                        tet,
+                        value,
+                    };
+                }
+                Query::Beyond(NO_CELL, _) | Query::Unknown => return TableWalk::Unknown,
+                Query::Beyond(next, _) if next & BOUNDARY != 0 => {
                     return TableWalk::Boundary {
                         cell: c,
                         face: next & !BOUNDARY,
                     };
                 }
-                Query::Beyond(next) => c = next,
+                Query::Beyond(next, across) => {
+                    c = next;
+                    tet = across;
+                }
             }
         }
         TableWalk::Unknown
     }
 
-    /// What cell `c`'s records tell of x (see [`Query`]).
+    /// What cell `c`'s records tell of x (see [`Query`]), the tetrahedron record `hint`
+    /// tried first ([`CellTable::walk`]).
     #[inline(never)]
-    fn query(&self, c: u32, x: DVec3) -> Query {
+    fn query(&self, c: u32, hint: u32, x: DVec3) -> Query {
         let Some(rec) = self.cells.get(c as usize) else {
             return Query::Unknown;
         };
         let d = x - rec.cc;
+        if let Some(q) = self.hinted(c, rec, hint, d) {
+            return q;
+        }
         if rec.simple != 0 {
             self.query_simple(rec, d)
         } else {
@@ -412,10 +294,71 @@ impl CellTable {
             return Query::Unknown;
         };
         if best_ratio > 1.0 + TOL {
-            return Query::Beyond(next[best]);
+            return Query::Beyond(next[best], NO_TET);
         }
         let g = &faces[best].g;
-        Query::Inside(rec.uc + DVec3::new(g[0].dot(d), g[1].dot(d), g[2].dot(d)))
+        Query::Inside(
+            rec.uc + DVec3::new(g[0].dot(d), g[1].dot(d), g[2].dot(d)),
+            NO_TET,
+        )
+    }
+
+    /// What the search would answer for d in cell `c`, found from tetrahedron record
+    /// `k` (the hint) and at most [`HINT_HOPS`] of its siblings across the side of the
+    /// most negative coordinate: x inside one deeper than its margin (where the search
+    /// finds that tetrahedron as well, `build::tet_margins`; the value with
+    /// [`CellTable::in_tets`]'s operations, so the same bits), or beyond its outer
+    /// triangle when that is on the face the search's ray leaves through; `None` where the
+    /// hints cannot tell (then search).
+    #[inline(always)]
+    fn hinted(&self, c: u32, rec: &CellRec, mut k: u32, d: DVec3) -> Option<Query> {
+        for _ in 0..=HINT_HOPS {
+            let t = self.tets.get(k as usize)?;
+            if t.cell != c {
+                return None;
+            }
+            let (b, cw, a) = (t.m[1].dot(d), t.m[2].dot(d), t.m[0].dot(d));
+            let w = DVec3::new(a, b, cw);
+            if a > t.margin && b > t.margin && cw > t.margin {
+                if w.element_sum() <= 1.0 + TOL {
+                    return Some(Query::Inside(self.tet_value(t, rec.uc, w), k));
+                }
+                return self.beyond(rec, k, t.across, d);
+            }
+            let j = if a <= b && a <= cw {
+                0
+            } else if b <= cw {
+                1
+            } else {
+                2
+            };
+            k = t.links[j];
+        }
+        None
+    }
+
+    /// [`Query::Beyond`] for d deeper than its margin in the cone of tetrahedron record
+    /// `k` and beyond its outer triangle, when the search's exit face (the largest ratio)
+    /// is `k`'s face: the search then takes `k` first in that face's fan and answers so.
+    #[inline(always)]
+    fn beyond(&self, rec: &CellRec, k: u32, across: u32, d: DVec3) -> Option<Query> {
+        let r = rec.face as usize..(rec.face + rec.n_faces) as usize;
+        let (faces, next) = (self.faces.get(r.clone())?, self.faces_next.get(r)?);
+        let (best, _) = exit_face(faces, |f| f.q, d)?;
+        let f = &faces[best];
+        (f.tet..f.tet + f.n_tets)
+            .contains(&k)
+            .then(|| Query::Beyond(next[best], across))
+    }
+
+    /// The value in tetrahedron `t` at coordinates `w`: the conservative scheme's constant,
+    /// else linear from the node differences.
+    #[inline(always)]
+    fn tet_value(&self, t: &TetRec, uc: DVec3, w: DVec3) -> DVec3 {
+        match &self.tet_values {
+            Some(v) => v.get(t.value as usize).copied().unwrap_or(DVec3::NAN),
+            None => uc + w.x * t.du[0] + w.y * t.du[1] + w.z * t.du[2],
+        }
     }
 
     /// [`CellTable::query`] for any other cell: the exit face's tetrahedra, then (a warped
@@ -437,13 +380,14 @@ impl CellTable {
         else {
             return Query::Unknown;
         };
-        // the index of `tets`' first in the shared velocities (conservative scheme)
-        let first = rec.tet_base as usize + (bf.tet - faces[0].tet) as usize;
-        match self.in_tets(first, tets, rec.uc, d) {
-            Some(Some(u)) => return Query::Inside(u),
+        match self.in_tets(bf.tet, tets, rec.uc, d) {
+            Some((Some(u), t)) => return Query::Inside(u, t),
             // the ray leaves through the outer triangle of one of this face's tetrahedra:
             // the locator crosses this face too
-            Some(None) => return Query::Beyond(next[best]),
+            Some((None, t)) => {
+                let across = self.tets.get(t as usize).map_or(NO_TET, |r| r.across);
+                return Query::Beyond(next[best], across);
+            }
             None => {}
         }
         // the ray leaves through another face (a warped face, a non-convex cell): all the
@@ -452,18 +396,24 @@ impl CellTable {
         let Some(all) = self.tets.get(a as usize..(b.tet + b.n_tets) as usize) else {
             return Query::Unknown;
         };
-        match self.in_tets(rec.tet_base as usize, all, rec.uc, d) {
-            Some(Some(u)) => Query::Inside(u),
+        match self.in_tets(a, all, rec.uc, d) {
+            Some((Some(u), t)) => Query::Inside(u, t),
             _ => Query::Unknown,
         }
     }
 
-    /// The tetrahedron of `tets` the ray from the centre along d crosses: `Some(Some(u))`
-    /// when d is inside it, `Some(None)` when beyond its outer triangle, `None` when no
-    /// tetrahedron takes the ray. With the conservative scheme's velocities the value is
-    /// that of the tetrahedron's, `first` being the index of `tets[0]` among them.
+    /// The tetrahedron of `tets` the ray from the centre along d crosses, and its record's
+    /// index (`first` being that of `tets[0]`): with `Some(u)` the value when d is inside
+    /// it, `None` when d is beyond its outer triangle; `None` when no tetrahedron takes
+    /// the ray. With the conservative scheme's velocities the value is the tetrahedron's.
     #[inline(always)]
-    fn in_tets(&self, first: usize, tets: &[TetRec], uc: DVec3, d: DVec3) -> Option<Option<DVec3>> {
+    fn in_tets(
+        &self,
+        first: u32,
+        tets: &[TetRec],
+        uc: DVec3,
+        d: DVec3,
+    ) -> Option<(Option<DVec3>, u32)> {
         for (i, t) in tets.iter().enumerate() {
             // the two coordinates of the face's edge nodes first: they place the ray in a
             // face-centre fan, and most tetrahedra fail one of them
@@ -480,13 +430,11 @@ impl CellTable {
                 continue;
             }
             let w = DVec3::new(a, b, c);
+            let k = first + i as u32;
             if w.element_sum() > 1.0 + TOL {
-                return Some(None);
+                return Some((None, k));
             }
-            if let Some(v) = &self.tet_values {
-                return v.get(first + i).map(|&u| Some(u));
-            }
-            return Some(Some(uc + w.x * t.du[0] + w.y * t.du[1] + w.z * t.du[2]));
+            return Some((Some(self.tet_value(t, uc, w)), k));
         }
         None
     }
@@ -517,6 +465,19 @@ impl CellTable {
                 f,
                 (rec.n_faces as usize * size_of::<FaceRec>()).div_ceil(64),
             );
+        }
+    }
+
+    /// Ask the processor to load tetrahedron record `tet` (a hint of [`CellTable::walk`]);
+    /// false when there is no such record. No effect on results.
+    #[inline(always)]
+    pub fn prefetch_tet(&self, tet: u32) -> bool {
+        match self.tets.get(tet as usize) {
+            Some(t) => {
+                crate::prefetch::lines(t, size_of::<TetRec>().div_ceil(64) + 1);
+                true
+            }
+            None => false,
         }
     }
 
@@ -563,28 +524,7 @@ fn exit_face<F>(faces: &[F], q: impl Fn(&F) -> DVec3, d: DVec3) -> Option<(usize
     Some((best, best_ratio))
 }
 
-/// Ask Linux to back the (still untouched) capacity of `v` with transparent huge pages
-/// where it spans whole 2 MiB pages: particles visit the cells of a large mesh at random,
-/// and with 4 KiB pages nearly every record read would also miss the TLB. A hint: no
-/// effect on results, ignored where unsupported.
-fn huge_pages<T>(v: &Vec<T>) {
-    #[cfg(target_os = "linux")]
-    {
-        const HUGE: usize = 2 << 20;
-        let start = v.as_ptr() as usize;
-        let end = start + v.capacity() * size_of::<T>();
-        let (a, b) = (start.next_multiple_of(HUGE), end / HUGE * HUGE);
-        if b > a {
-            // SAFETY: madvise only advises on pages of this live allocation; it does not
-            // change their contents or validity.
-            unsafe {
-                libc::madvise(a as *mut libc::c_void, b - a, libc::MADV_HUGEPAGE);
-            }
-        }
-    }
-    #[cfg(not(target_os = "linux"))]
-    let _ = v;
-}
+mod build;
 
 #[cfg(test)]
 mod tests;

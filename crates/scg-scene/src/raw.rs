@@ -266,8 +266,11 @@ pub struct RawPatches {
     pub wall_model: Option<RawWallModel>,
     /// Normal restitution of `rebound` walls (default `material.restitution`, else 1).
     pub restitution: Option<f64>,
-    /// Coulomb friction of `rebound` walls (default 0).
+    /// Friction coefficient of `rebound` walls (default 0).
     pub friction: Option<f64>,
+    /// What `friction` means: `coulomb` (default) or `openfoam_fraction`.
+    #[serde(default, deserialize_with = "some_name")]
+    pub friction_model: Option<RawFrictionModel>,
     /// Per-patch models by patch name (OpenFOAM's `localInteraction`), overriding the
     /// role's default.
     #[serde(default)]
@@ -282,6 +285,28 @@ pub struct RawInteraction {
     pub model: RawWallModel,
     pub restitution: Option<f64>,
     pub friction: Option<f64>,
+    #[serde(default, deserialize_with = "some_name")]
+    pub friction_model: Option<RawFrictionModel>,
+}
+
+/// `friction_model` of a rebound: what its `friction` coefficient does.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum RawFrictionModel {
+    /// The rigid-sphere impact with Coulomb friction.
+    Coulomb,
+    /// OpenFOAM's rebound: the fraction μ of the tangential velocity removed.
+    OpenfoamFraction,
+}
+
+impl From<RawFrictionModel> for scg_core::physics::patch_interaction::WallFriction {
+    fn from(m: RawFrictionModel) -> Self {
+        use scg_core::physics::patch_interaction::WallFriction;
+        match m {
+            RawFrictionModel::Coulomb => WallFriction::Coulomb,
+            RawFrictionModel::OpenfoamFraction => WallFriction::OpenfoamFraction,
+        }
+    }
 }
 
 /// `flow.patches.wall_model`, `flow.patches.interaction.<patch>.model`.
@@ -370,8 +395,11 @@ pub struct RawWall {
     pub model: Option<RawWallModel>,
     /// e of a `rebound` wall.
     pub restitution: Option<f64>,
-    /// Coulomb μ of a `rebound` wall.
+    /// μ of a `rebound` wall.
     pub friction: Option<f64>,
+    /// What `friction` means (`coulomb` by default).
+    #[serde(default, deserialize_with = "some_name")]
+    pub friction_model: Option<RawFrictionModel>,
     /// A prescribed rigid motion.
     pub motion: Option<RawWallMotion>,
 }

@@ -27,12 +27,34 @@ use super::integrate::{
 };
 use crate::components::{FluidCoupling, StokesFactors};
 
+/// Where a carrier last found a particle: its mesh cell and, as a hint that changes no
+/// result, the tetrahedron record of the cell's decomposition that held it
+/// ([`scg_mesh::NO_TET`]: unknown). Analytic flows carry it through unchanged.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Place {
+    /// The mesh cell (or a departure marker, see `mesh_flow::hint`).
+    pub cell: u32,
+    /// The tetrahedron hint.
+    pub tet: u32,
+}
+
+impl Place {
+    /// Cell `cell`, no tetrahedron hint.
+    #[inline]
+    pub const fn cell(cell: u32) -> Self {
+        Place {
+            cell,
+            tet: scg_mesh::NO_TET,
+        }
+    }
+}
+
 /// The fluid velocity a particle sees.
 pub trait Carrier: Sync {
-    /// The fluid velocity at `x` (m/s) for a particle last found in mesh cell `cell`, and
-    /// the cell holding `x` (analytic flows return `cell` unchanged; a mesh flow returns
-    /// the cell its walk ended in).
-    fn at(&self, cell: u32, x: DVec3) -> (DVec3, u32);
+    /// The fluid velocity at `x` (m/s) for a particle last found at `place`, and where `x`
+    /// is (analytic flows return `place` unchanged; a mesh flow returns the cell and
+    /// tetrahedron its walk ended in).
+    fn at(&self, place: Place, x: DVec3) -> (DVec3, Place);
 
     /// The velocity gradient at `x` in `cell` (the cell [`Carrier::at`] returned), column
     /// k = ∂u/∂x_k, 1/s: read only by the opt-in forces ([`crate::physics::forces`]).
@@ -41,8 +63,8 @@ pub trait Carrier: Sync {
 
 impl Carrier for FlowField {
     #[inline(always)]
-    fn at(&self, cell: u32, x: DVec3) -> (DVec3, u32) {
-        (self.velocity(x), cell)
+    fn at(&self, place: Place, x: DVec3) -> (DVec3, Place) {
+        (self.velocity(x), place)
     }
 
     fn gradient(&self, _cell: u32, x: DVec3) -> DMat3 {
@@ -52,8 +74,8 @@ impl Carrier for FlowField {
 
 impl<C: Carrier + ?Sized> Carrier for &C {
     #[inline(always)]
-    fn at(&self, cell: u32, x: DVec3) -> (DVec3, u32) {
-        (**self).at(cell, x)
+    fn at(&self, place: Place, x: DVec3) -> (DVec3, Place) {
+        (**self).at(place, x)
     }
 
     fn gradient(&self, cell: u32, x: DVec3) -> DMat3 {
@@ -73,9 +95,9 @@ pub struct WithOffset<C> {
 
 impl<C: Carrier> Carrier for WithOffset<C> {
     #[inline(always)]
-    fn at(&self, cell: u32, x: DVec3) -> (DVec3, u32) {
-        let (u, c) = self.inner.at(cell, x);
-        (u + self.du, c)
+    fn at(&self, place: Place, x: DVec3) -> (DVec3, Place) {
+        let (u, p) = self.inner.at(place, x);
+        (u + self.du, p)
     }
 
     /// The mean carrier's (the offset is uniform over the step).
@@ -150,20 +172,21 @@ pub struct Body<'a> {
 }
 
 /// One step of `b` in `carrier` (see the module documentation): the new position and
-/// velocity and the cell the carrier last found (the mid-step point's for the exponential
-/// schemes, the last sub-step's for the explicit one). `start`: the carrier velocity at
-/// `b.x` when the caller knows it (it must be what `carrier.at(cell, b.x)` gives).
+/// velocity and the place the carrier last found (the mid-step point's for the
+/// exponential schemes, the last sub-step's for the explicit one). `start`: the carrier
+/// velocity at `b.x` when the caller knows it (it must be what `carrier.at(cell, b.x)`
+/// gives).
 #[inline(always)]
 pub fn advance<C: Carrier>(
     s: &Scheme,
     carrier: &C,
     b: &Body,
-    cell: u32,
+    cell: Place,
     start: Option<DVec3>,
-) -> (DVec3, DVec3, u32) {
+) -> (DVec3, DVec3, Place) {
     let dt = s.dt;
     let (x0, v0, fc) = (b.x, b.v, b.fc);
-    let u_start = |h: u32, x: DVec3| start.unwrap_or_else(|| carrier.at(h, x).0);
+    let u_start = |h: Place, x: DVec3| start.unwrap_or_else(|| carrier.at(h, x).0);
     match (s.law, s.integrator) {
         (Some(law), Integrator::Explicit) => {
             let mut acc = b.a;
@@ -181,7 +204,7 @@ pub fn advance<C: Carrier>(
                 let tau = effective_tau(law, fc, &s.fluid, (u - vi).length());
                 let a = match &s.forces {
                     None => acc,
-                    Some(f) => acc + f.acceleration(fc, xi, u, carrier.gradient(h, xi), vi),
+                    Some(f) => acc + f.acceleration(fc, xi, u, carrier.gradient(h.cell, xi), vi),
                 };
                 (xi, vi) = explicit_euler(xi, vi, u, a, tau, step);
             }
@@ -203,7 +226,7 @@ pub fn advance<C: Carrier>(
                 Some(f) => {
                     let relax = (-0.5 * dt / fc.tau).exp();
                     let gain = -fc.tau * (-0.5 * dt / fc.tau).exp_m1();
-                    let j = carrier.gradient(hm, xm);
+                    let j = carrier.gradient(hm.cell, xm);
                     let vm = u + (vk - u) * relax + b.a * gain;
                     let first = f.acceleration(fc, xm, u, j, vm);
                     b.a + f.acceleration(fc, xm, u, j, vm + first * gain)
@@ -274,15 +297,15 @@ mod tests {
             inner: FlowField::Uniform(u),
             du,
         };
-        let (x1, v1, _) = advance(&s, &shifted, &b, 0, None);
-        let (x2, v2, _) = advance(&s, &FlowField::Uniform(u + du), &b, 0, None);
+        let (x1, v1, _) = advance(&s, &shifted, &b, Place::cell(0), None);
+        let (x2, v2, _) = advance(&s, &FlowField::Uniform(u + du), &b, Place::cell(0), None);
         assert_eq!((x1, v1), (x2, v2));
         // Many steps: the analytic relaxation of v toward w = u + δ + a·τ.
         let (mut x, mut v) = (b.x, b.v);
         let n = 40;
         for _ in 0..n {
             let bi = Body { x, v, ..b };
-            (x, v, _) = advance(&s, &shifted, &bi, 0, None);
+            (x, v, _) = advance(&s, &shifted, &bi, Place::cell(0), None);
         }
         let t = n as f64 * dt;
         let w = u + du + b.a * tau;

@@ -46,9 +46,11 @@ pub fn exponential_factors(tau: f64, dt: f64) -> (f64, f64) {
         return (0.0, dt);
     }
     let x = dt / tau;
-    let gain = -(-x).exp_m1();
+    // e^(−x) − 1 once (the same bits as evaluating it for each factor)
+    let em1 = (-x).exp_m1();
+    let gain = -em1;
     // τ·(1 − e^(−x)) = dt·(1 − e^(−x))/x, evaluated with exp_m1 to keep precision for small x.
-    let relax = -tau * (-x).exp_m1();
+    let relax = -tau * em1;
     (gain, relax)
 }
 

@@ -11,10 +11,14 @@ use std::sync::Arc;
 use glam::DVec3;
 use scg_mesh::{
     CellField, CellTable, Hit, Interpolation, Interpolator, Location, Locator, MeshGeometry,
-    PolyMesh, TableWalk,
+    NO_TET, PolyMesh, TableWalk,
 };
 
-pub use super::patch_interaction::{PatchInteraction, coulomb_rebound, hint, rebound};
+use super::carrier::Place;
+
+pub use super::patch_interaction::{
+    PatchInteraction, WallFriction, coulomb_rebound, hint, rebound, rebound_velocity,
+};
 use super::wall_function::{FrictionVelocity, LogLaw, WallCells, slip_wall_values};
 pub use moving::{MovingFaces, Spin};
 
@@ -32,8 +36,8 @@ pub struct WallFunctionSpec {
 /// The mesh flow as the carrier of its particles ([`MeshFlow::velocity`]).
 impl super::carrier::Carrier for MeshFlow {
     #[inline(always)]
-    fn at(&self, cell: u32, x: DVec3) -> (DVec3, u32) {
-        self.velocity(cell, x)
+    fn at(&self, place: Place, x: DVec3) -> (DVec3, Place) {
+        self.velocity_at(place, x)
     }
 
     /// The cell's Gauss gradient ([`MeshFlow::cell_gradient`]), as OpenFOAM's particle
@@ -278,8 +282,15 @@ impl MeshFlow {
     /// tell (then walk with [`MeshFlow::track`]).
     #[inline]
     pub fn walk_table(&self, c: u32, x: DVec3) -> TableWalk {
+        self.walk_from(Place::cell(c), x)
+    }
+
+    /// [`MeshFlow::walk_table`] from `place`, its tetrahedron the first tried (a hint:
+    /// the same answer, bit for bit, [`CellTable::walk`]).
+    #[inline]
+    pub fn walk_from(&self, place: Place, x: DVec3) -> TableWalk {
         match &self.table {
-            Some(t) => t.walk(c, x, TABLE_HOPS),
+            Some(t) => t.walk(place.cell, place.tet, x, TABLE_HOPS),
             None => TableWalk::Unknown,
         }
     }
@@ -301,8 +312,19 @@ impl MeshFlow {
     /// mesh the value is extrapolated from the hint's cell ([`Interpolator::velocity`]).
     #[inline]
     pub fn velocity(&self, hint: u32, x: DVec3) -> (DVec3, u32) {
-        let hit = match self.walk_table(hint, x) {
-            TableWalk::Inside { cell, value } => return (self.near_wall(cell, x, value), cell),
+        let (u, p) = self.velocity_at(Place::cell(hint), x);
+        (u, p.cell)
+    }
+
+    /// [`MeshFlow::velocity`] from `place` (its tetrahedron a hint), and where x is: its
+    /// cell and, when the table found it, its tetrahedron.
+    #[inline]
+    pub fn velocity_at(&self, place: Place, x: DVec3) -> (DVec3, Place) {
+        let hint = place.cell;
+        let hit = match self.walk_from(place, x) {
+            TableWalk::Inside { cell, tet, value } => {
+                return (self.near_wall(cell, x, value), Place { cell, tet });
+            }
             // The ray toward x leaves the mesh through a boundary face (a particle at a
             // wall, its mid-step point beyond it): the locator's walk, on the same faces,
             // would end there too, and only asks whether x is inside the mesh elsewhere (a
@@ -318,9 +340,12 @@ impl MeshFlow {
                 let u = self
                     .velocity_in(h.cell, x)
                     .unwrap_or_else(|| self.interp.at(&h));
-                (self.near_wall(h.cell, x, u), h.cell)
+                (self.near_wall(h.cell, x, u), Place::cell(h.cell))
             }
-            None => (self.near_wall(hint, x, self.interp.velocity(hint, x)), hint),
+            None => (
+                self.near_wall(hint, x, self.interp.velocity(hint, x)),
+                Place::cell(hint),
+            ),
         }
     }
 
@@ -370,6 +395,13 @@ impl MeshFlow {
         }
     }
 
+    /// Ask the processor to load tetrahedron record `tet` (a particle's hint) when there
+    /// is one; false when `tet` names none. No effect on results.
+    #[inline(always)]
+    pub fn prefetch_tet(&self, tet: u32) -> bool {
+        self.table.as_ref().is_some_and(|t| t.prefetch_tet(tet))
+    }
+
     /// Ask the processor to load the [`CellTable`] records a query for x in cell `c` reads
     /// last (the tetrahedron; the cell and face records should be in cache by then: call
     /// [`MeshFlow::prefetch`] earlier). No effect on results.
@@ -407,6 +439,8 @@ pub struct Landing {
     /// Next hint: the cell, or a departure marker ([`hint::escaped`], [`hint::stuck`],
     /// [`hint::LOST`]).
     pub hint: u32,
+    /// The tetrahedron hint of the cell ([`NO_TET`] where the table did not find `x`).
+    pub tet: u32,
     /// The step's first impact on a wall patch that rebounds or sticks (erosion logs it).
     pub impact: Option<WallImpact>,
 }
@@ -440,24 +474,25 @@ pub fn land(
     flow: &MeshFlow,
     x0: DVec3,
     h0: u32,
-    h_from: u32,
+    h_from: Place,
     x1: DVec3,
     v1: DVec3,
     models: &[PatchInteraction],
 ) -> Landing {
-    // The table first: x1 is in the cell of the mid-step point (most steps) or a few
-    // cells on.
-    let walked = flow.walk_table(h_from, x1);
-    if let TableWalk::Inside { cell, value } = walked {
+    // The table first: x1 is in the tetrahedron of the mid-step point (most steps), its
+    // cell, or a few cells on.
+    let walked = flow.walk_from(h_from, x1);
+    if let TableWalk::Inside { cell, tet, value } = walked {
         return Landing {
             x: x1,
             v: v1,
             u: Some(flow.near_wall(cell, x1, value)),
             hint: cell,
+            tet,
             impact: None,
         };
     }
-    land_boundary(flow, (x0, h0), h_from, walked, x1, v1, models)
+    land_boundary(flow, (x0, h0), h_from.cell, walked, x1, v1, models)
 }
 
 /// [`land`] when the table did not find x1 from `h_from` (`walked`): the boundary, the
@@ -483,12 +518,13 @@ fn land_boundary(
             walked = flow.walk_table(from, x1);
         }
         let (face, patch) = match walked {
-            TableWalk::Inside { cell, value } => {
+            TableWalk::Inside { cell, tet, value } => {
                 return Landing {
                     x: x1,
                     v: v1,
                     u: Some(flow.near_wall(cell, x1, value)),
                     hint: cell,
+                    tet,
                     impact,
                 };
             }
@@ -503,6 +539,7 @@ fn land_boundary(
                         v: v1,
                         u: None,
                         hint: h.cell,
+                        tet: NO_TET,
                         impact,
                     };
                 }
@@ -520,6 +557,7 @@ fn land_boundary(
                         v: v1,
                         u: None,
                         hint: hint::LOST,
+                        tet: NO_TET,
                         impact,
                     };
                 }
@@ -530,7 +568,7 @@ fn land_boundary(
             .copied()
             .unwrap_or(PatchInteraction::Escape);
         let marker = match model {
-            PatchInteraction::Rebound { e, mu } => {
+            PatchInteraction::Rebound { e, mu, friction } => {
                 let (n, p) = flow.face_plane(face);
                 // a moving surface: the rebound relative to it
                 let w = flow.surface_velocity(face, x1 - (x1 - p).dot(n) * n);
@@ -540,9 +578,9 @@ fn land_boundary(
                     velocity: w.map_or(v1, |w| v1 - w),
                 }));
                 (x1, v1) = match w {
-                    None => rebound(x1, v1, p, n, e, mu),
+                    None => rebound(x1, v1, p, n, e, mu, friction),
                     Some(w) => {
-                        let (x, v) = rebound(x1, v1 - w, p, n, e, mu);
+                        let (x, v) = rebound(x1, v1 - w, p, n, e, mu, friction);
                         (x, v + w)
                     }
                 };
@@ -563,6 +601,7 @@ fn land_boundary(
             v: v1,
             u: None,
             hint: marker,
+            tet: NO_TET,
             impact,
         };
     }
@@ -571,6 +610,7 @@ fn land_boundary(
         v: v1,
         u: None,
         hint: h0,
+        tet: NO_TET,
         impact,
     }
 }

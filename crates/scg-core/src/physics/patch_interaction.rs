@@ -9,13 +9,16 @@ use glam::DVec3;
 /// models of OpenFOAM's `localInteraction` (rebound, stick, escape), one per patch.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PatchInteraction {
-    /// Rebounds as an impulse ([`coulomb_rebound`]): normal restitution `e` and Coulomb
-    /// friction `mu`; the centre is mirrored back inside, never crossing the wall.
+    /// Rebounds as an impulse ([`rebound_velocity`]): normal restitution `e` and friction
+    /// `mu` under the rule `friction`; the centre is mirrored back inside, never crossing
+    /// the wall.
     Rebound {
         /// Normal restitution, v_n' = −e·v_n, in [0, 1].
         e: f64,
-        /// Coulomb friction coefficient, ≥ 0.
+        /// Friction coefficient, ≥ 0 (its meaning is `friction`'s).
         mu: f64,
+        /// What `mu` does to the tangential velocity.
+        friction: WallFriction,
     },
     /// Sticks (deposits): removed from the flow and counted as stuck on the patch.
     Stick,
@@ -32,6 +35,56 @@ impl PatchInteraction {
             PatchInteraction::Escape => "escape",
         }
     }
+}
+
+/// The tangential rule of a rebound: what its friction coefficient μ means.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum WallFriction {
+    /// The rigid-sphere impact with Coulomb friction μ ([`coulomb_rebound`]): sliding
+    /// loses μ(1 + e)·v_n, a sphere that stops slipping leaves rolling at 5/7·v_t.
+    #[default]
+    Coulomb,
+    /// OpenFOAM's `rebound` (`localInteraction`, `standardWallInteraction`): the fraction
+    /// μ of the tangential velocity removed at every impact, whatever its angle
+    /// ([`openfoam_fraction_rebound`]).
+    OpenfoamFraction,
+}
+
+impl WallFriction {
+    /// Name used in scene files and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            WallFriction::Coulomb => "coulomb",
+            WallFriction::OpenfoamFraction => "openfoam_fraction",
+        }
+    }
+}
+
+/// The velocity after an impulsive impact on a wall of unit outward normal `n` (at rest),
+/// restitution `e`, friction `mu` under the rule `friction`.
+#[inline]
+pub fn rebound_velocity(v: DVec3, n: DVec3, e: f64, mu: f64, friction: WallFriction) -> DVec3 {
+    match friction {
+        WallFriction::Coulomb => coulomb_rebound(v, n, e, mu),
+        WallFriction::OpenfoamFraction => openfoam_fraction_rebound(v, n, e, mu),
+    }
+}
+
+/// OpenFOAM's rebound (v1912's `LocalInteraction::correct` and
+/// `StandardWallInteraction::correct`, `itRebound`), on a wall of unit outward normal `n`
+/// at rest: with v_n = v·n and v_t = v − v_n·n taken before the impact,
+/// v' = v − (1 + e)·v_n·n (only when v_n > 0), then v' −= μ·v_t. The tangential loss is a
+/// fraction of v_t at every angle of incidence, unlike [`coulomb_rebound`]'s impulse;
+/// the two agree at μ = 0.
+#[inline]
+pub fn openfoam_fraction_rebound(v: DVec3, n: DVec3, e: f64, mu: f64) -> DVec3 {
+    let vn = v.dot(n);
+    let vt = v - vn * n;
+    let mut u = v;
+    if vn > 0.0 {
+        u -= (1.0 + e) * vn * n;
+    }
+    u - mu * vt
 }
 
 /// The velocity after an impulsive impact on a wall of unit outward normal `n` (the wall
@@ -123,13 +176,21 @@ pub mod hint {
 
 /// The rebound of a particle that crossed the wall plane through `p` with unit outward
 /// normal `n`: its centre is mirrored back inside (when beyond the plane) and its velocity
-/// changed by the impulse of [`coulomb_rebound`] (restitution `e`, friction `mu`). Returns
-/// (x', v').
+/// changed by [`rebound_velocity`] (restitution `e`, friction `mu` under `friction`).
+/// Returns (x', v').
 #[inline]
-pub fn rebound(x: DVec3, v: DVec3, p: DVec3, n: DVec3, e: f64, mu: f64) -> (DVec3, DVec3) {
+pub fn rebound(
+    x: DVec3,
+    v: DVec3,
+    p: DVec3,
+    n: DVec3,
+    e: f64,
+    mu: f64,
+    friction: WallFriction,
+) -> (DVec3, DVec3) {
     let d = (x - p).dot(n);
     let x1 = if d > 0.0 { x - 2.0 * d * n } else { x };
-    (x1, coulomb_rebound(v, n, e, mu))
+    (x1, rebound_velocity(v, n, e, mu, friction))
 }
 
 #[cfg(test)]
@@ -145,11 +206,20 @@ mod tests {
             DVec3::X,
             0.5,
             0.0,
+            WallFriction::Coulomb,
         );
         assert!((x - DVec3::new(0.9, 0.5, 0.5)).length() < 1e-15);
         assert_eq!(v, DVec3::new(-1.0, 1.0, 0.0));
         // moving inward already: velocity kept
-        let (_, v) = rebound(DVec3::ZERO, -DVec3::X, DVec3::ONE, DVec3::X, 0.5, 0.3);
+        let (_, v) = rebound(
+            DVec3::ZERO,
+            -DVec3::X,
+            DVec3::ONE,
+            DVec3::X,
+            0.5,
+            0.3,
+            WallFriction::Coulomb,
+        );
         assert_eq!(v, -DVec3::X);
     }
 
@@ -181,6 +251,33 @@ mod tests {
         // frictionless: the tangential velocity is kept
         let v = coulomb_rebound(2.0 * n + 3.0 * t, n, e, 0.0);
         assert!(close(v, -e * 2.0 * n + 3.0 * t));
+    }
+
+    /// OpenFOAM's rule against its closed form, and against the Coulomb impact: the same
+    /// at μ = 0, and at μ = 0.3, e = 0.5 a grazing impact (v_t = 10·v_n) keeps 0.7·v_t
+    /// where the Coulomb impact keeps v_t − 0.45·v_n (0.955·v_t): 6.7 times less
+    /// tangential loss under the other reading of the same μ.
+    #[test]
+    fn openfoam_fraction_is_openfoams_rebound() {
+        let n = DVec3::new(0.3, -1.0, 0.2).normalize();
+        let t = n.any_orthonormal_vector();
+        let close = |a: DVec3, b: DVec3| (a - b).length() <= 1e-12 * b.length().max(1.0);
+        let (e, mu) = (0.5, 0.3);
+        let v = 1.0 * n + 10.0 * t;
+        let of = rebound_velocity(v, n, e, mu, WallFriction::OpenfoamFraction);
+        assert!(close(of, -e * n + 0.7 * 10.0 * t), "{of}");
+        let co = rebound_velocity(v, n, e, mu, WallFriction::Coulomb);
+        assert!(close(co, -e * n + (10.0 - mu * (1.0 + e)) * t), "{co}");
+        let loss = |w: DVec3| 10.0 - w.dot(t);
+        assert!((loss(of) / loss(co) - 3.0 / 0.45).abs() < 1e-9);
+        // μ = 0: both the specular rebound with restitution
+        for f in [WallFriction::Coulomb, WallFriction::OpenfoamFraction] {
+            assert!(close(rebound_velocity(v, n, e, 0.0, f), -e * n + 10.0 * t));
+        }
+        // moving away from the wall: OpenFOAM still takes μ·v_t off (its rule has no test)
+        let away = rebound_velocity(-n + 2.0 * t, n, e, mu, WallFriction::OpenfoamFraction);
+        assert!(close(away, -n + 1.4 * t), "{away}");
+        assert_eq!(WallFriction::OpenfoamFraction.name(), "openfoam_fraction");
     }
 
     /// Departure markers decode back to their patch and fate, and are never a cell.

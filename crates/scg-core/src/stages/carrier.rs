@@ -18,7 +18,7 @@ use crate::components::{
     CarrierOffset, CellHint, Eddy, FlowAtCentre, ParticleId, Position, Velocity,
 };
 use crate::exec::par::for_each_piece;
-use crate::physics::carrier::Carrier;
+use crate::physics::carrier::{Carrier, Place};
 use crate::physics::dispersion::{self, Model, State, Turbulence};
 use crate::physics::flow::FlowField;
 use crate::physics::random::Draws;
@@ -132,7 +132,7 @@ pub fn disperse(
     let (dt, step) = (clock.dt, clock.step);
     let mesh = mesh.as_ref().map(|m| &*m.spec.flow);
     let mean = |cell: u32, x: DVec3| match mesh {
-        Some(mf) => Carrier::at(mf, cell, x).0,
+        Some(mf) => Carrier::at(mf, Place::cell(cell), x).0,
         None => flow.velocity(x),
     };
     let cols = (ids, xs, vs, cells, known, bypass(eddies), bypass(offs));

@@ -2,7 +2,7 @@
 //! "stick" | "escape"`): the patch interaction models of a mesh flow's patches
 //! ([`crate::physics::patch_interaction`]) for STL and analytic walls. After the
 //! integration, a particle whose sphere touches such a wall rebounds (its centre pushed
-//! back to touching distance, its velocity by [`coulomb_rebound`]), sticks (removed,
+//! back to touching distance, its velocity by [`rebound_velocity`]), sticks (removed,
 //! counted as stuck on the wall) or escapes (removed, counted as escaped through it).
 //! No contact time is resolved, so the time step follows the drag. With `[erosion]` the
 //! rebounds and sticks on logged walls wear them ([`ErosionLog::add_walls`]).
@@ -11,7 +11,7 @@ use bevy_ecs::prelude::*;
 
 use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
 use crate::components::*;
-use crate::physics::patch_interaction::{PatchInteraction, coulomb_rebound};
+use crate::physics::patch_interaction::{PatchInteraction, rebound_velocity};
 use crate::physics::wall_motion::Pose;
 use crate::physics::wall_shape::WallTouch;
 use crate::stages::erosion::{ErosionLog, WallHit, represented_mass};
@@ -125,15 +125,15 @@ pub fn impulse(
     };
     let outcome = match w.model {
         // t.normal points from the wall to the centre: the wall's outward normal, as
-        // coulomb_rebound takes it, is −t.normal. The push back to touching distance is
+        // rebound_velocity takes it, is −t.normal. The push back to touching distance is
         // made in the wall's frame: a turning wall carries the particle's velocity along
         // (+ ω × δ), so the motion relative to the wall is the same seen from either frame.
-        PatchInteraction::Rebound { e, mu } => {
+        PatchInteraction::Rebound { e, mu, friction } => {
             let push = t.overlap * t.normal;
             let carried = pose.map_or(glam::DVec3::ZERO, |p| p.angular_velocity.cross(push));
             Ok((
                 x + push,
-                surface + coulomb_rebound(v - surface, -t.normal, e, mu) + carried,
+                surface + rebound_velocity(v - surface, -t.normal, e, mu, friction) + carried,
             ))
         }
         m => Err(m),
@@ -209,6 +209,7 @@ pub fn impulse_walls(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::physics::patch_interaction::{WallFriction, coulomb_rebound};
     use crate::physics::wall_shape::WallShape;
     use glam::DVec3;
 
@@ -231,7 +232,11 @@ mod tests {
     /// the floor is left alone.
     #[test]
     fn a_touching_sphere_rebounds_to_touching_distance() {
-        let w = floor(PatchInteraction::Rebound { e: 0.5, mu: 0.2 });
+        let w = floor(PatchInteraction::Rebound {
+            e: 0.5,
+            mu: 0.2,
+            friction: WallFriction::Coulomb,
+        });
         let (x, v) = (DVec3::new(1.0, 2.0, 0.7e-3), DVec3::new(3.0, 0.0, -2.0));
         let Some((t, surface, Ok((x1, v1)))) = impulse(&w, None, x, v, 1e-3) else {
             panic!()
@@ -256,7 +261,11 @@ mod tests {
     #[test]
     fn a_moving_wall_rebounds_the_relative_velocity() {
         use crate::physics::wall_motion::WallMotion;
-        let mut w = floor(PatchInteraction::Rebound { e: 0.6, mu: 0.0 });
+        let mut w = floor(PatchInteraction::Rebound {
+            e: 0.6,
+            mu: 0.0,
+            friction: WallFriction::Coulomb,
+        });
         w.wall.motion = WallMotion {
             velocity: DVec3::new(0.0, 0.0, 2.0),
             angular_velocity: DVec3::new(0.0, 0.0, 50.0),

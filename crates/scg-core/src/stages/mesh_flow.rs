@@ -27,7 +27,7 @@ use super::table::{bypass, columns_mut, reorder_particles};
 use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
 use crate::components::*;
 use crate::exec::par::for_each_piece_heavy;
-use crate::physics::carrier::{Body, Carrier, Scheme, WithOffset, advance};
+use crate::physics::carrier::{Body, Carrier, Place, Scheme, WithOffset, advance};
 use crate::physics::flow::Fluid;
 use crate::physics::mesh_flow::{MeshFlow, PatchInteraction, PatchRole, hint, land};
 use crate::state::{Health, Motion, SimClock, StepDisplacement, Tally};
@@ -133,7 +133,11 @@ type MeshMoveQuery<'w, 's> = Query<
         &'static Mass,
         Option<&'static Force>,
         Option<&'static BodyAcceleration>,
-        (&'static mut CellHint, &'static mut FlowAtCentre),
+        (
+            &'static mut CellHint,
+            &'static mut TetHint,
+            &'static mut FlowAtCentre,
+        ),
         Option<&'static CarrierOffset>,
         (&'static CoarseGrain, &'static ParticleId),
     ),
@@ -160,7 +164,8 @@ pub fn integrate_mesh_flow(mut d: MeshInputs, mut q: MeshMoveQuery) {
     let disp = d.disp.as_deref();
     let departures = &d.state.departures;
     departures.store(0, Ordering::Relaxed);
-    let Some((xs, vs, drag, ms, fs, gs, (hs, us), offs, (cgs, ids))) = columns_mut(&mut q) else {
+    let Some((xs, vs, drag, ms, fs, gs, (hs, ts, us), offs, (cgs, ids))) = columns_mut(&mut q)
+    else {
         if let Some(dd) = disp {
             dd.mark_reported();
         }
@@ -173,7 +178,7 @@ pub fn integrate_mesh_flow(mut d: MeshInputs, mut q: MeshMoveQuery) {
         ms,
         fs,
         gs,
-        (bypass(hs), bypass(us)),
+        (bypass(hs), bypass(ts), bypass(us)),
         (offs, (cgs, ids)),
     );
     let flow: &MeshFlow = &d.state.spec.flow;
@@ -233,7 +238,11 @@ type MeshPiece<'a> = (
     &'a [Mass],
     Option<&'a [Force]>,
     Option<&'a [BodyAcceleration]>,
-    (&'a mut [CellHint], &'a mut [FlowAtCentre]),
+    (
+        &'a mut [CellHint],
+        &'a mut [TetHint],
+        &'a mut [FlowAtCentre],
+    ),
     (
         Option<&'a [CarrierOffset]>,
         (&'a [CoarseGrain], &'a [ParticleId]),
@@ -265,7 +274,7 @@ impl MeshStep<'_> {
         piece: MeshPiece,
         carrier: impl Fn(usize) -> C,
     ) -> (f64, u64) {
-        let (xs, vs, (sfs, fcs), ms, fs, gs, (hs, us), (offs, (cgs, ids))) = piece;
+        let (xs, vs, (sfs, fcs), ms, fs, gs, (hs, ts, us), (offs, (cgs, ids))) = piece;
         let MeshStep {
             scheme,
             flow,
@@ -279,22 +288,29 @@ impl MeshStep<'_> {
         let mut gone = 0u64;
         for i in 0..xs.len() {
             // Memory latency dominates on large meshes: start loading a later particle's
-            // records now (its cell 16 ahead, the cell's faces 8 ahead, the tetrahedron
-            // holding it 4 ahead).
+            // records now (its cell 16 ahead; 8 ahead its tetrahedron when hinted, else
+            // the cell's faces; without a hint the tetrahedron holding it 4 ahead).
             if let Some(h) = hs.get(i + 16) {
                 flow.prefetch(h.0, false);
             }
-            if let Some(h) = hs.get(i + 8) {
+            if let (Some(h), Some(t)) = (hs.get(i + 8), ts.get(i + 8))
+                && !flow.prefetch_tet(t.0)
+            {
                 flow.prefetch(h.0, true);
             }
-            if let Some(h) = hs.get(i + 4) {
+            if let (Some(h), Some(t)) = (hs.get(i + 4), ts.get(i + 4))
+                && t.0 == scg_mesh::NO_TET
+            {
                 flow.prefetch_at(h.0, xs[i + 4].0);
             }
             let x0 = xs[i].0;
-            let mut h0 = hs[i].0;
-            if h0 >= n_cells {
+            let mut h0 = Place {
+                cell: hs[i].0,
+                tet: ts[i].0,
+            };
+            if h0.cell >= n_cells {
                 match flow.find_cell(x0) {
-                    Some(c) => h0 = c,
+                    Some(c) => h0 = Place::cell(c),
                     None => {
                         hs[i].0 = hint::LOST;
                         gone += 1;
@@ -327,7 +343,7 @@ impl MeshStep<'_> {
                 }
                 continue;
             }
-            let l = land(flow, x0, h0, h_end, x1, v1, models);
+            let l = land(flow, x0, h0.cell, h_end, x1, v1, models);
             if let (Some(w), Some((log, _))) = (&l.impact, erosion)
                 && log.wants(flow.patch_of(w.face))
             {
@@ -343,6 +359,7 @@ impl MeshStep<'_> {
             xs[i].0 = l.x;
             vs[i].0 = l.v;
             hs[i].0 = l.hint;
+            ts[i].0 = l.tet;
             if KEEP {
                 us[i] = match l.u {
                     Some(u) => FlowAtCentre { at: l.x, u },

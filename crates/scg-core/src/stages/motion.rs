@@ -20,7 +20,7 @@ use super::table::{bypass, columns_mut};
 use super::walls::WallCandidates;
 use crate::components::*;
 use crate::exec::par::{Rows, Split, for_each_piece};
-use crate::physics::carrier::{Body, Scheme, WithOffset, advance};
+use crate::physics::carrier::{Body, Place, Scheme, WithOffset, advance};
 use crate::physics::drag::DragLaw;
 use crate::physics::flow::{Affine, FlowField, Fluid};
 use crate::physics::integrate::{Integrator, angular_kick};
@@ -198,7 +198,7 @@ fn carrier_pass<'a>(
         };
         match offs {
             None => scalar_rows(&mut p, 0..n, |i, m| {
-                let (x, v, _) = advance(scheme, flow, &body(i, m), 0, None);
+                let (x, v, _) = advance(scheme, flow, &body(i, m), Place::cell(0), None);
                 (x, v)
             }),
             Some(offs) => scalar_rows(&mut p, 0..n, |i, m| {
@@ -206,7 +206,7 @@ fn carrier_pass<'a>(
                     inner: flow,
                     du: offs[i].0,
                 };
-                let (x, v, _) = advance(scheme, &carrier, &body(i, m), 0, None);
+                let (x, v, _) = advance(scheme, &carrier, &body(i, m), Place::cell(0), None);
                 (x, v)
             }),
         }

@@ -17,7 +17,7 @@ use crate::components::{
     AngularVelocity, CarrierOffset, CellHint, FluidCoupling, Position, Velocity,
 };
 use crate::exec::par::for_each_piece;
-use crate::physics::carrier::Carrier;
+use crate::physics::carrier::{Carrier, Place};
 use crate::physics::flow::{FlowField, Fluid};
 use crate::physics::forces::{rotational_lift_step, vorticity};
 use crate::state::SimClock;
@@ -67,7 +67,10 @@ pub fn rotational_lift(
     let (dt, fluid, ca) = (clock.dt, *fluid, lift.added_mass);
     let mesh = mesh.as_ref().map(|m| &*m.spec.flow);
     let at = |cell: u32, x: DVec3| match mesh {
-        Some(mf) => (Carrier::at(mf, cell, x).0, Carrier::gradient(mf, cell, x)),
+        Some(mf) => (
+            Carrier::at(mf, Place::cell(cell), x).0,
+            Carrier::gradient(mf, cell, x),
+        ),
         None => (flow.velocity(x), flow.gradient(x)),
     };
     let cols = (xs, fcs, cells, offs, bypass(vs), bypass(spins));

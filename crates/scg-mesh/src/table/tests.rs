@@ -108,8 +108,8 @@ fn table_walk_ends_where_the_locator_does() {
                 continue;
             };
             n += 1;
-            match t.walk(s.cell, x, 4) {
-                TableWalk::Inside { cell, value } => {
+            match t.walk(s.cell, NO_TET, x, 4) {
+                TableWalk::Inside { cell, value, .. } => {
                     if cell != s.cell {
                         walked += 1;
                     }
@@ -123,7 +123,7 @@ fn table_walk_ends_where_the_locator_does() {
             // beyond the box's x = 1 side: never inside, and the boundary face met
             // is one of that side's (its centre at x = 1)
             let out = DVec3::new(1.0 + 0.1 * rng.random::<f64>(), x.y, x.z);
-            match t.walk(h.cell, out, 64) {
+            match t.walk(h.cell, NO_TET, out, 64) {
                 TableWalk::Inside { .. } => panic!("{shape:?}: {out} is outside"),
                 TableWalk::Boundary { cell, face } => {
                     boundary += 1;
@@ -138,5 +138,112 @@ fn table_walk_ends_where_the_locator_does() {
         println!("{shape:?}: walked to another cell for {walked} of {n}");
         assert!(walked as f64 > 0.2 * n as f64, "{walked} of {n}");
         assert!(boundary as f64 > 0.5 * n as f64, "{boundary} of {n}");
+    }
+}
+
+/// The tetrahedron hint changes what a query reads, never its answer: at points on and
+/// next to every side of the tetrahedra (within 10^-12 to 10^-6 of it, where a tolerance
+/// decides) and along short moves, the hinted query gives the unhinted one's cell,
+/// tetrahedron and value bit for bit, for every scheme and cell shape; and the hint alone
+/// answers most steps of a move (the fast path is taken).
+#[test]
+fn tet_hints_change_no_answer() {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    for shape in [
+        CellShape::Hex,
+        CellShape::Tet,
+        CellShape::Poly { refine: 0.3 },
+    ] {
+        let (m, g, field) = perturbed_box(shape, 5);
+        let loc = Locator::new(&m, &g).unwrap();
+        for scheme in [
+            Interpolation::CellPoint,
+            Interpolation::CellPointIdw,
+            Interpolation::Conservative,
+        ] {
+            let outflow = vec![true; m.patches.len()];
+            let it = crate::Interpolator::with_outflow(&loc, &field, scheme, &outflow).unwrap();
+            let t = CellTable::new(&it).unwrap();
+            let bits = |w: TableWalk| match w {
+                TableWalk::Inside { cell, tet, value } => {
+                    Some((cell, tet, value.to_array().map(f64::to_bits)))
+                }
+                _ => None,
+            };
+            // next to the sides: a random tetrahedron record, a point on one of its
+            // sides (or at a corner) moved off it by up to 1e-6 of the cell
+            let mut near = 0;
+            for _ in 0..if t.tets.is_empty() { 0 } else { 20_000 } {
+                let k = rng.random_range(0..t.tets.len());
+                let r = &t.tets[k];
+                let c = r.cell;
+                let cc = t.cells[c as usize].cc;
+                let inv = glam::DMat3::from_cols(r.m[0], r.m[1], r.m[2])
+                    .transpose()
+                    .inverse();
+                let mut w: [f64; 3] = [rng.random(), rng.random(), rng.random()];
+                let s: f64 = w.iter().sum();
+                w = w.map(|x| x / s * rng.random::<f64>());
+                w[rng.random_range(0..3)] = 0.0;
+                let scale = 10f64.powf(rng.random_range(-12.0..-6.0));
+                let jiggle = DVec3::new(rng.random(), rng.random(), rng.random()) - 0.5;
+                let x = cc + inv * DVec3::from(w) + jiggle * scale;
+                let plain = bits(t.walk(c, NO_TET, x, 0));
+                let hinted = bits(t.walk(c, k as u32, x, 0));
+                assert_eq!(plain, hinted, "{shape:?} {scheme:?}: tet {k}, x {x}");
+                // hinted by a sibling, and by the tetrahedron across (from the next cell)
+                let sibling = r.links[rng.random_range(0..3)];
+                assert_eq!(
+                    plain,
+                    bits(t.walk(c, sibling, x, 0)),
+                    "{shape:?}: {sibling}"
+                );
+                if let Some(a) = t.tets.get(r.across as usize) {
+                    let from_next = t.walk(a.cell, r.across, x, 2);
+                    assert_eq!(bits(from_next), bits(t.walk(a.cell, NO_TET, x, 2)));
+                }
+                if matches!(t.hinted(c, &t.cells[c as usize], k as u32, x - cc), Some(Query::Inside(_, h)) if h == k as u32)
+                {
+                    near += 1;
+                }
+            }
+            // along moves of 1 % of a cell per step, each query hinted by the last
+            let (mut steps, mut fast) = (0, 0);
+            for _ in 0..200 {
+                let mut x = DVec3::new(rng.random(), rng.random(), rng.random()) * 0.8 + 0.1;
+                let Location::Inside(h) = loc.track(0, x) else {
+                    continue;
+                };
+                let (mut c, mut tet) = (h.cell, NO_TET);
+                let dir = (DVec3::new(rng.random(), rng.random(), rng.random()) - 0.5) * 0.004;
+                for _ in 0..100 {
+                    x += dir;
+                    let plain = t.walk(c, NO_TET, x, 4);
+                    let hinted = t.walk(c, tet, x, 4);
+                    assert_eq!(bits(plain), bits(hinted), "{shape:?} {scheme:?}: x {x}");
+                    if let Some(r) = t.tets.get(tet as usize)
+                        && r.cell == c
+                        && t.hinted(c, &t.cells[c as usize], tet, x - t.cells[c as usize].cc)
+                            .is_some()
+                    {
+                        fast += 1;
+                    }
+                    steps += 1;
+                    match hinted {
+                        TableWalk::Inside { cell, tet: k, .. } => (c, tet) = (cell, k),
+                        _ => break,
+                    }
+                }
+            }
+            println!(
+                "{shape:?} {scheme:?}: hint alone {fast} of {steps} steps, {near} of 20000 next to a side"
+            );
+            if t.counts().0 == 0 {
+                assert!(
+                    fast as f64 > 0.8 * steps as f64,
+                    "{shape:?} {scheme:?}: {fast} of {steps}"
+                );
+            }
+        }
     }
 }

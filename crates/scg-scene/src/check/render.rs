@@ -70,8 +70,9 @@ pub fn render(scene: &Scene, r: &Report) -> String {
             "wall `{}`: {}\n",
             w.wall.name,
             match w.model {
-                PatchInteraction::Rebound { e, mu } => format!(
-                    "rebound as an impulse, restitution e = {e}, Coulomb friction μ = {mu} (no contact law)"
+                PatchInteraction::Rebound { e, mu, friction } => format!(
+                    "rebound as an impulse, restitution e = {e}, {} (no contact law)",
+                    friction_text(mu, friction)
                 ),
                 PatchInteraction::Stick => "stick (particles touching it deposit)".into(),
                 PatchInteraction::Escape => "escape (particles touching it leave)".into(),
@@ -213,9 +214,10 @@ fn mesh_flow_lines(
                 }
             ),
             Some(pm) => match pm.interaction {
-                PatchInteraction::Rebound { e, mu } => format!(
-                    "{}: rebound of the centre as an impulse, restitution e = {e}, Coulomb friction μ = {mu}",
-                    role.name()
+                PatchInteraction::Rebound { e, mu, friction } => format!(
+                    "{}: rebound of the centre as an impulse, restitution e = {e}, {}",
+                    role.name(),
+                    friction_text(mu, friction)
                 ),
                 PatchInteraction::Stick => {
                     format!("{}: stick (particles reaching it deposit)", role.name())
@@ -337,4 +339,15 @@ fn time_scales(scene: &Scene, r: &Report) -> String {
     }
     s.push('\n');
     s
+}
+
+/// A rebound's friction in words: the coefficient and what it does.
+fn friction_text(mu: f64, friction: scg_core::physics::patch_interaction::WallFriction) -> String {
+    use scg_core::physics::patch_interaction::WallFriction;
+    match friction {
+        WallFriction::Coulomb => format!("Coulomb friction μ = {mu}"),
+        WallFriction::OpenfoamFraction => format!(
+            "OpenFOAM's rebound friction μ = {mu} (the fraction μ of the tangential velocity removed)"
+        ),
+    }
 }

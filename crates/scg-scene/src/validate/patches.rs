@@ -1,9 +1,9 @@
 //! What particles do at the patches of a mesh flow: `[flow.patches]` `wall_model`,
-//! `restitution`, `friction` and the per-patch `[flow.patches.interaction]` (OpenFOAM's
+//! `restitution`, `friction`, `friction_model` and the per-patch `[flow.patches.interaction]` (OpenFOAM's
 //! `localInteraction`), and the contact wall built from the `contact` patches.
 
 use scg_core::physics::contact::Material;
-use scg_core::physics::mesh_flow::{PatchInteraction, PatchRole};
+use scg_core::physics::mesh_flow::{PatchInteraction, PatchRole, WallFriction};
 use scg_core::physics::trimesh::TriMesh;
 use scg_core::physics::wall_shape::WallShape;
 use scg_core::stages::walls::Wall;
@@ -21,8 +21,9 @@ pub const MIRROR_KINDS: [&str; 4] = scg_mesh::polymesh::CONSTRAINT_KINDS;
 /// (default `contact` with a `[material]`, else `rebound`); unlisted constraint patches
 /// ([`MIRROR_KINDS`]) reflect specularly; outlets, inlets and other unlisted patches
 /// escape; `interaction.<patch>` overrides either. A `rebound` takes its
-/// `restitution` and `friction` from its own entry, else from `[flow.patches]`, else e
-/// from `material.restitution` (1 without a material) and μ = 0. `contact` needs a
+/// `restitution`, `friction` and `friction_model` from its own entry, else from
+/// `[flow.patches]`, else e from `material.restitution` (1 without a material), μ = 0 and
+/// the Coulomb impact. `contact` needs a
 /// `[material]`; its patches' centres rebound with the material's restitution (the guard
 /// behind the contact law).
 pub(super) fn patch_models(
@@ -50,40 +51,44 @@ pub(super) fn patch_models(
     let e_default = unit("flow.patches.restitution", patches.restitution)?
         .unwrap_or(material.map_or(1.0, |m| m.restitution));
     let mu_default = friction("flow.patches.friction", patches.friction)?.unwrap_or(0.0);
-    let model = |m: RawWallModel, key: &str, e: Option<f64>, mu: Option<f64>| {
-        Ok(match m {
-            RawWallModel::Contact => {
-                let Some(mat) = material else {
-                    return Err(cx.err(
-                        key,
-                        "\"contact\" needs a [material] table (the contact law)",
-                    ));
-                };
-                PatchModel {
-                    interaction: PatchInteraction::Rebound {
-                        e: mat.restitution,
-                        mu: 0.0,
-                    },
-                    contact: true,
+    let fm_default: WallFriction = patches.friction_model.map(Into::into).unwrap_or_default();
+    let model =
+        |m: RawWallModel, key: &str, e: Option<f64>, mu: Option<f64>, fm: Option<WallFriction>| {
+            Ok(match m {
+                RawWallModel::Contact => {
+                    let Some(mat) = material else {
+                        return Err(cx.err(
+                            key,
+                            "\"contact\" needs a [material] table (the contact law)",
+                        ));
+                    };
+                    PatchModel {
+                        interaction: PatchInteraction::Rebound {
+                            e: mat.restitution,
+                            mu: 0.0,
+                            friction: WallFriction::Coulomb,
+                        },
+                        contact: true,
+                    }
                 }
-            }
-            RawWallModel::Rebound => PatchModel {
-                interaction: PatchInteraction::Rebound {
-                    e: e.unwrap_or(e_default),
-                    mu: mu.unwrap_or(mu_default),
+                RawWallModel::Rebound => PatchModel {
+                    interaction: PatchInteraction::Rebound {
+                        e: e.unwrap_or(e_default),
+                        mu: mu.unwrap_or(mu_default),
+                        friction: fm.unwrap_or(fm_default),
+                    },
+                    contact: false,
                 },
-                contact: false,
-            },
-            RawWallModel::Stick => PatchModel {
-                interaction: PatchInteraction::Stick,
-                contact: false,
-            },
-            RawWallModel::Escape => PatchModel {
-                interaction: PatchInteraction::Escape,
-                contact: false,
-            },
-        })
-    };
+                RawWallModel::Stick => PatchModel {
+                    interaction: PatchInteraction::Stick,
+                    contact: false,
+                },
+                RawWallModel::Escape => PatchModel {
+                    interaction: PatchInteraction::Escape,
+                    contact: false,
+                },
+            })
+        };
     let wall_model = patches.wall_model.unwrap_or(if material.is_some() {
         RawWallModel::Contact
     } else {
@@ -92,15 +97,19 @@ pub(super) fn patch_models(
     let mut out = Vec::with_capacity(mesh.patches.len());
     for (r, p) in flow.roles().iter().zip(&mesh.patches) {
         out.push(match r {
-            PatchRole::Wall => model(wall_model, "flow.patches.wall_model", None, None)?,
+            PatchRole::Wall => model(wall_model, "flow.patches.wall_model", None, None, None)?,
             // OpenFOAM's constraint patches reflect a particle specularly (its
             // hitSymmetryPatch): symmetry planes, and the two sides of a 2-D (`empty`) or
             // axisymmetric (`wedge`) case, which keeps its motion in the slab
             PatchRole::Lost if MIRROR_KINDS.contains(&p.kind.as_str()) => PatchModel {
-                interaction: PatchInteraction::Rebound { e: 1.0, mu: 0.0 },
+                interaction: PatchInteraction::Rebound {
+                    e: 1.0,
+                    mu: 0.0,
+                    friction: WallFriction::Coulomb,
+                },
                 contact: false,
             },
-            _ => model(RawWallModel::Escape, "flow.patches", None, None)?,
+            _ => model(RawWallModel::Escape, "flow.patches", None, None, None)?,
         });
     }
     for (name, entry) in &patches.interaction {
@@ -114,10 +123,11 @@ pub(super) fn patch_models(
         };
         if entry.model != RawWallModel::Rebound {
             for (k, v) in [
-                ("restitution", entry.restitution),
-                ("friction", entry.friction),
+                ("restitution", entry.restitution.is_some()),
+                ("friction", entry.friction.is_some()),
+                ("friction_model", entry.friction_model.is_some()),
             ] {
-                if v.is_some() {
+                if v {
                     return Err(cx.err(
                         &format!("{key}.{k}"),
                         "is used by \"rebound\" only, not by this model",
@@ -133,7 +143,8 @@ pub(super) fn patch_models(
         }
         let e = unit(&format!("{key}.restitution"), entry.restitution)?;
         let mu = friction(&format!("{key}.friction"), entry.friction)?;
-        out[i] = model(entry.model, &format!("{key}.model"), e, mu)?;
+        let fm = entry.friction_model.map(Into::into);
+        out[i] = model(entry.model, &format!("{key}.model"), e, mu, fm)?;
     }
     Ok(out)
 }
@@ -185,8 +196,12 @@ pub(super) fn wall_model(
     let k = |s: &str| format!("walls[{i}].{s}");
     let model = w.model.unwrap_or(RawWallModel::Contact);
     if model != RawWallModel::Rebound {
-        for (key, v) in [("restitution", w.restitution), ("friction", w.friction)] {
-            if v.is_some() {
+        for (key, v) in [
+            ("restitution", w.restitution.is_some()),
+            ("friction", w.friction.is_some()),
+            ("friction_model", w.friction_model.is_some()),
+        ] {
+            if v {
                 return Err(cx.err(&k(key), "is used by model = \"rebound\" only"));
             }
         }
@@ -205,7 +220,11 @@ pub(super) fn wall_model(
                 Some(mu) => cx.non_negative(&k("friction"), mu)?,
                 None => 0.0,
             };
-            Some(PatchInteraction::Rebound { e, mu })
+            Some(PatchInteraction::Rebound {
+                e,
+                mu,
+                friction: w.friction_model.map(Into::into).unwrap_or_default(),
+            })
         }
     })
 }

@@ -66,7 +66,7 @@ fn velocity_at_a_boundary_equals_the_locators_walk() {
     let roles = vec![PatchRole::Wall; m.patches.len()];
     let flow = MeshFlow::new(m, &field, Interpolation::CellPoint, roles).unwrap();
     let reference = |hint: u32, x: DVec3| -> (DVec3, u32) {
-        if let TableWalk::Inside { cell, value } = flow.walk_table(hint, x) {
+        if let TableWalk::Inside { cell, value, .. } = flow.walk_table(hint, x) {
             return (value, cell);
         }
         match flow.loc.track(hint, x) {
@@ -105,7 +105,11 @@ fn models(f: &MeshFlow, e: f64) -> Vec<PatchInteraction> {
     f.roles()
         .iter()
         .map(|r| match r {
-            PatchRole::Wall => PatchInteraction::Rebound { e, mu: 0.0 },
+            PatchRole::Wall => PatchInteraction::Rebound {
+                e,
+                mu: 0.0,
+                friction: WallFriction::Coulomb,
+            },
             _ => PatchInteraction::Escape,
         })
         .collect()
@@ -133,13 +137,29 @@ fn landing_by_role() {
     assert!((h as usize) < f.mesh().n_cells);
     let m1 = models(&f, 1.0);
     // through the outlet (x max)
-    let l = land(&f, x0, h0, h0, DVec3::new(1.2, 0.5, 0.5), DVec3::X, &m1);
+    let l = land(
+        &f,
+        x0,
+        h0,
+        Place::cell(h0),
+        DVec3::new(1.2, 0.5, 0.5),
+        DVec3::X,
+        &m1,
+    );
     assert_eq!(
         hint::departure(l.hint),
         Some(hint::Departure::Escaped(patch(&f, "outlet")))
     );
     // through the inlet (escapes there)
-    let l = land(&f, x0, h0, h0, DVec3::new(-0.2, 0.5, 0.5), -DVec3::X, &m1);
+    let l = land(
+        &f,
+        x0,
+        h0,
+        Place::cell(h0),
+        DVec3::new(-0.2, 0.5, 0.5),
+        -DVec3::X,
+        &m1,
+    );
     assert_eq!(
         hint::departure(l.hint),
         Some(hint::Departure::Escaped(patch(&f, "inlet")))
@@ -147,7 +167,15 @@ fn landing_by_role() {
     // a stick wall keeps it
     let mut ms = m1.clone();
     ms[patch(&f, "walls") as usize] = PatchInteraction::Stick;
-    let l = land(&f, x0, h0, h0, DVec3::new(0.5, 1.25, 0.5), DVec3::Y, &ms);
+    let l = land(
+        &f,
+        x0,
+        h0,
+        Place::cell(h0),
+        DVec3::new(0.5, 1.25, 0.5),
+        DVec3::Y,
+        &ms,
+    );
     assert_eq!(
         hint::departure(l.hint),
         Some(hint::Departure::Stuck(patch(&f, "walls")))
@@ -157,7 +185,7 @@ fn landing_by_role() {
         &f,
         x0,
         h0,
-        h0,
+        Place::cell(h0),
         DVec3::new(0.5, 1.25, 0.5),
         DVec3::new(0.0, 2.0, 1.0),
         &models(&f, 0.5),
@@ -171,7 +199,7 @@ fn landing_by_role() {
         &f,
         x0,
         h0,
-        h0,
+        Place::cell(h0),
         DVec3::new(0.5, 1.2, -0.1),
         DVec3::new(0.0, 1.0, -1.0),
         &m1,
@@ -221,7 +249,7 @@ fn a_moving_wall_face_rebounds_relative_to_its_surface() {
         &f,
         x0,
         h0,
-        h0,
+        Place::cell(h0),
         DVec3::new(0.5, 1.25, 0.5),
         v,
         &models(&f, e),
@@ -239,7 +267,7 @@ fn a_moving_wall_face_rebounds_relative_to_its_surface() {
         &f,
         x0,
         h0,
-        h0,
+        Place::cell(h0),
         DVec3::new(0.5, -0.25, 0.5),
         -v,
         &models(&f, e),

@@ -1,0 +1,311 @@
+//! Building a [`CellTable`] from an interpolator: the records, the tetrahedron margins and
+//! links of the hinted query, and the huge-page advice.
+
+use glam::DVec3;
+
+use super::{BOUNDARY, CellRec, CellTable, FaceRec, NO_CELL, NO_TET, SimpleFace, TOL, TetRec};
+use crate::interp::Interpolator;
+
+impl CellTable {
+    /// The records of `it`'s mesh and field (any scheme: for `CellValue` the node
+    /// differences are zero and the value is the cell's). `None` when the table would
+    /// exceed [`CellTable::MAX_BYTES`].
+    pub fn new(it: &Interpolator<'_>) -> Option<Self> {
+        let loc = it.locator();
+        let mesh = loc.mesh();
+        let geom = loc.geometry();
+        let nc = mesh.n_cells;
+        let n_faces = geom.cell_faces.len();
+        let n_tets: usize = geom
+            .cell_faces
+            .iter()
+            .map(|&f| {
+                let k = mesh.face(f as usize).len();
+                if k == 3 { 1 } else { k }
+            })
+            .sum();
+        let bytes = nc * size_of::<CellRec>()
+            + n_faces * (size_of::<FaceRec>() + size_of::<u32>())
+            + n_tets * size_of::<TetRec>();
+        if bytes > Self::MAX_BYTES || n_tets > u32::MAX as usize {
+            return None;
+        }
+        let cellv = it.cell_values();
+        let nodev = it.node_values();
+        let np = mesh.points.len() as u32;
+        let mut t = CellTable {
+            cells: Vec::with_capacity(nc),
+            faces: Vec::with_capacity(n_faces),
+            tets: Vec::with_capacity(n_tets),
+            simple: Vec::new(),
+            simple_next: Vec::new(),
+            faces_next: Vec::with_capacity(n_faces),
+            tet_values: None,
+        };
+        let shared = it.tet_velocities();
+        t.tet_values = shared.map(|(v, _)| std::sync::Arc::clone(v));
+        let conservative = shared.is_some();
+        // room for the cells that may be simple (all faces triangles), each on a line
+        let tri_faced: usize = (0..nc)
+            .map(|c| geom.faces_of(c))
+            .filter(|fs| fs.iter().all(|&f| mesh.face(f as usize).len() == 3))
+            .map(|fs| fs.len() + 1)
+            .sum();
+        t.simple.reserve_exact(tri_faced);
+        t.simple_next.reserve_exact(tri_faced);
+        huge_pages(&t.cells);
+        huge_pages(&t.faces);
+        huge_pages(&t.tets);
+        huge_pages(&t.simple);
+        // the corners v_i − cc of the cell's tetrahedra (for their margins) and their node
+        // numbers (for their links)
+        let mut corners: Vec<[DVec3; 3]> = Vec::new();
+        let mut ids: Vec<[u32; 3]> = Vec::new();
+        // each face's first tetrahedron record on its owner's and its neighbour's side
+        let mut side_first = vec![[NO_TET; 2]; mesh.n_faces()];
+        for (c, (&cc, &uc)) in geom.cell_centres.iter().zip(cellv).enumerate() {
+            if t.faces.len() % 2 == 1 {
+                // start every cell's face records on a 64-byte line (a tetrahedral cell's
+                // four: two lines)
+                t.faces.push(FaceRec::default());
+                t.faces_next.push(NO_CELL);
+            }
+            let (f0, t0) = (t.faces.len(), t.tets.len());
+            let mut ok = true;
+            corners.clear();
+            ids.clear();
+            for &f in geom.faces_of(c) {
+                let fi = f as usize;
+                let a = geom.face_areas[fi];
+                let den = (geom.face_centres[fi] - cc).dot(a);
+                let q = a / den;
+                let tet = t.tets.len() as u32;
+                let pts = mesh.face(fi);
+                let flip = mesh.owner[fi] as usize != c;
+                let mut push = |nodes: [u32; 3]| {
+                    let v = nodes.map(|n| loc.node(n) - cc);
+                    let n23 = v[1].cross(v[2]);
+                    let det = v[0].dot(n23);
+                    if det.is_nan() || det <= 0.0 {
+                        return false;
+                    }
+                    let inv = 1.0 / det;
+                    let m = [n23 * inv, v[2].cross(v[0]) * inv, v[0].cross(v[1]) * inv];
+                    let du = nodes.map(|n| nodev.get(n as usize).map_or(DVec3::ZERO, |&u| u - uc));
+                    corners.push(v);
+                    ids.push(nodes);
+                    t.tets.push(TetRec {
+                        m,
+                        du,
+                        margin: f64::INFINITY,
+                        cell: c as u32,
+                        value: 0,
+                        links: [NO_TET; 3],
+                        across: NO_TET,
+                    });
+                    true
+                };
+                if pts.len() == 3 {
+                    let (a, b) = if flip {
+                        (pts[2], pts[1])
+                    } else {
+                        (pts[1], pts[2])
+                    };
+                    ok &= push([pts[0], a, b]);
+                } else {
+                    let n = pts.len();
+                    for i in 0..n {
+                        let (pa, pb) = (pts[i], pts[(i + 1) % n]);
+                        let (a, b) = if flip { (pb, pa) } else { (pa, pb) };
+                        ok &= push([np + f, a, b]);
+                    }
+                }
+                ok &= q.is_finite();
+                t.faces.push(FaceRec {
+                    q,
+                    tet,
+                    n_tets: t.tets.len() as u32 - tet,
+                });
+                let across = if mesh.owner[fi] as usize == c {
+                    mesh.neighbour.get(fi).copied()
+                } else {
+                    Some(mesh.owner[fi])
+                };
+                t.faces_next.push(across.unwrap_or(BOUNDARY | f));
+            }
+            if !ok {
+                t.faces.truncate(f0);
+                t.faces_next.truncate(f0);
+                t.tets.truncate(t0);
+            }
+            let tet_base = shared.map_or(0, |(_, offsets)| {
+                offsets[geom.cell_face_offsets[c] as usize]
+            });
+            corners.truncate(t.tets.len() - t0);
+            ids.truncate(t.tets.len() - t0);
+            tet_margins(&mut t.tets[t0..], &corners);
+            tet_links(&mut t.tets[t0..], t0 as u32, &ids);
+            for (k, r) in t.tets[t0..].iter_mut().enumerate() {
+                r.value = tet_base + k as u32;
+            }
+            // convex with triangular faces: every point of the cell on the inner side of
+            // every face plane, one tetrahedron per face
+            let faces = &t.faces[f0..];
+            let simple = ok
+                && !conservative
+                && faces.iter().all(|f| f.n_tets == 1)
+                && geom.faces_of(c).iter().all(|&f| {
+                    mesh.face(f as usize).len() == 3
+                        && geom.faces_of(c).iter().all(|&g| {
+                            mesh.face(g as usize).iter().all(|&p| {
+                                faces
+                                    .iter()
+                                    .all(|fr| fr.q.dot(mesh.points[p as usize] - cc) <= 1.0 + 1e-9)
+                            })
+                        })
+                });
+            if ok && !simple {
+                for (k, &f) in geom.faces_of(c).iter().enumerate() {
+                    let side = usize::from(mesh.owner[f as usize] as usize != c);
+                    side_first[f as usize][side] = t.faces[f0 + k].tet;
+                }
+            }
+            let (face, n_faces) = if simple {
+                // the gradient of each face's tetrahedron beside the face's q, and no
+                // general records
+                if t.simple.len() % 2 == 1 {
+                    // start on a 64-byte line (a tetrahedral cell's four: six lines)
+                    t.simple.push(SimpleFace::default());
+                    t.simple_next.push(NO_CELL);
+                }
+                let s0 = t.simple.len();
+                t.simple_next.extend_from_slice(&t.faces_next[f0..]);
+                for fr in &t.faces[f0..] {
+                    let tr = &t.tets[fr.tet as usize];
+                    let g = [0, 1, 2].map(|j| {
+                        tr.m[0] * tr.du[0][j] + tr.m[1] * tr.du[1][j] + tr.m[2] * tr.du[2][j]
+                    });
+                    t.simple.push(SimpleFace { q: fr.q, g });
+                }
+                t.faces.truncate(f0);
+                t.faces_next.truncate(f0);
+                t.tets.truncate(t0);
+                (s0, t.simple.len() - s0)
+            } else {
+                (f0, t.faces.len() - f0)
+            };
+            t.cells.push(CellRec {
+                cc,
+                uc,
+                face: face as u32,
+                n_faces: n_faces as u32,
+                simple: u32::from(simple),
+            });
+        }
+        // across each face's triangles: the same fan position on the other side
+        for (f, &[own, nb]) in side_first.iter().enumerate() {
+            if own == NO_TET || nb == NO_TET {
+                continue;
+            }
+            let n = match mesh.face(f).len() {
+                3 => 1,
+                k => k as u32,
+            };
+            for i in 0..n {
+                t.tets[(own + i) as usize].across = nb + i;
+                t.tets[(nb + i) as usize].across = own + i;
+            }
+        }
+        // the general records were sized for every cell: give back what the simple cells
+        // did not use
+        t.faces.shrink_to_fit();
+        t.faces_next.shrink_to_fit();
+        t.tets.shrink_to_fit();
+        Some(t)
+    }
+}
+
+/// The margins of one cell's tetrahedra (`corners`: each one's v_i = node_i − cc, the
+/// columns of the inverse of its rows m), so that a point whose three coordinates in
+/// tetrahedron t exceed t's margin is found in t by [`CellTable::query`]'s search as well.
+///
+/// The search takes the first tetrahedron t′ (exit face first, then all) whose three
+/// coordinates w′_j = m′_j·d are ≥ −TOL, i.e. whose cone from the centre x lies within
+/// δ′_j ≥ −TOL·H′_j of each side plane (H′_j = 1/|m′_j| the height of corner j above the
+/// plane opposite it, δ′ the signed distance). A point meeting those is within
+/// ‖N′⁻¹‖·√3·TOL·max_j H′_j of the cone (N′ the unit side normals m′_j/|m′_j| as rows:
+/// x′ = N′⁻¹·max(N′d, 0) is in the cone, and ‖N′⁻¹‖_F² = Σ_j |v′_j|²·|m′_j|² since
+/// N′⁻¹ = V′·diag|m′_j|): K(t′) = √3·‖N′⁻¹‖_F·max_j H′_j·TOL. The cones of a star-shaped
+/// cell do not overlap, so a point inside t's cone at distance ρ = min_j w_j·H_j from its
+/// sides is at least ρ from every other cone, and no other meets the search's test when
+/// ρ > K = max_t′ K(t′): when every w_j > 4·K·max_j |m_j| (a factor 4 over the bound for
+/// the rounding of both sides). Such a point's ray also leaves through t's face, so the
+/// search, exit face first or all, ends in t with the same arithmetic.
+fn tet_margins(tets: &mut [TetRec], corners: &[[DVec3; 3]]) {
+    let k = tets
+        .iter()
+        .zip(corners)
+        .map(|(t, v)| {
+            let norms = t.m.map(|m| m.length());
+            let frob: f64 = (0..3)
+                .map(|j| v[j].length_squared() * norms[j] * norms[j])
+                .sum();
+            let h_max = norms.iter().fold(0.0_f64, |h, &n| h.max(1.0 / n));
+            3.0_f64.sqrt() * frob.sqrt() * h_max * TOL
+        })
+        .fold(0.0_f64, f64::max);
+    for t in tets.iter_mut() {
+        let m_max = t.m.iter().fold(0.0_f64, |a, m| a.max(m.length()));
+        let margin = 4.0 * k * m_max;
+        // a cell whose bound is not finite takes no hint
+        t.margin = if margin.is_finite() {
+            margin
+        } else {
+            f64::INFINITY
+        };
+    }
+}
+
+/// The links of one cell's tetrahedra (records from `first`, corner node numbers `ids`):
+/// across the side opposite corner j, the other tetrahedron holding the other two corners.
+fn tet_links(tets: &mut [TetRec], first: u32, ids: &[[u32; 3]]) {
+    // (edge, tetrahedron, corner opposite), sorted by edge: the two holders side by side
+    let mut sides: Vec<([u32; 2], u32, usize)> = Vec::with_capacity(3 * ids.len());
+    for (k, n) in ids.iter().enumerate() {
+        for j in 0..3 {
+            let (p, q) = (n[(j + 1) % 3], n[(j + 2) % 3]);
+            sides.push(([p.min(q), p.max(q)], k as u32, j));
+        }
+    }
+    sides.sort_unstable();
+    for pair in sides.windows(2) {
+        let ((e0, k0, j0), (e1, k1, j1)) = (pair[0], pair[1]);
+        if e0 == e1 && k0 != k1 {
+            tets[k0 as usize].links[j0] = first + k1;
+            tets[k1 as usize].links[j1] = first + k0;
+        }
+    }
+}
+
+/// Ask Linux to back the (still untouched) capacity of `v` with transparent huge pages
+/// where it spans whole 2 MiB pages: particles visit the cells of a large mesh at random,
+/// and with 4 KiB pages nearly every record read would also miss the TLB. A hint: no
+/// effect on results, ignored where unsupported.
+fn huge_pages<T>(v: &Vec<T>) {
+    #[cfg(target_os = "linux")]
+    {
+        const HUGE: usize = 2 << 20;
+        let start = v.as_ptr() as usize;
+        let end = start + v.capacity() * size_of::<T>();
+        let (a, b) = (start.next_multiple_of(HUGE), end / HUGE * HUGE);
+        if b > a {
+            // SAFETY: madvise only advises on pages of this live allocation; it does not
+            // change their contents or validity.
+            unsafe {
+                libc::madvise(a as *mut libc::c_void, b - a, libc::MADV_HUGEPAGE);
+            }
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = v;
+}
