@@ -274,53 +274,32 @@ fn friction_model_selects_the_rebound_rule_per_patch() {
     let mesh = duct();
     let d = tempfile::tempdir().unwrap();
     write(&d.path().join("case"), &mesh, "type noSlip;");
-    let rule = |patches: &str| {
+    // the "walls" patch's (mu, friction rule) under a [flow.patches] block
+    let walls = |patches: &str| {
         let sc = scene(d.path(), patches, 0.01);
-        let names: Vec<String> = sc
-            .mesh_flow
-            .as_ref()
-            .unwrap()
-            .flow
-            .mesh()
-            .patches
+        let mesh = sc.mesh_flow.as_ref().unwrap().flow.mesh();
+        mesh.patches
             .iter()
-            .map(|p| p.name.clone())
-            .collect();
-        names
-            .into_iter()
             .zip(&sc.patch_models)
-            .filter_map(|(n, m)| match m.interaction {
-                PatchInteraction::Rebound { mu, friction, .. } => Some((n, mu, friction)),
+            .find(|(p, _)| p.name == "walls")
+            .and_then(|(_, m)| match m.interaction {
+                PatchInteraction::Rebound { mu, friction, .. } => Some((mu, friction)),
                 _ => None,
             })
-            .collect::<Vec<_>>()
-    };
-    let walls = |r: Vec<(String, f64, WallFriction)>| {
-        r.into_iter()
-            .find(|(n, ..)| n == "walls")
-            .map(|(_, mu, f)| (mu, f))
     };
     assert_eq!(
-        walls(rule("wall_model = \"rebound\"\nfriction = 0.3")),
+        walls("wall_model = \"rebound\"\nfriction = 0.3"),
         Some((0.3, WallFriction::Coulomb))
     );
     assert_eq!(
-        walls(rule(
-            "wall_model = \"rebound\"\nfriction = 0.3\nfriction_model = \"openfoam_fraction\""
-        )),
+        walls("wall_model = \"rebound\"\nfriction = 0.3\nfriction_model = \"openfoam_fraction\""),
         Some((0.3, WallFriction::OpenfoamFraction))
     );
     // a per-patch entry inherits [flow.patches]' rule, or names its own
     let inherit = "wall_model = \"stick\"\nfriction_model = \"openfoam_fraction\"\n\n[flow.patches.interaction]\nwalls = { model = \"rebound\", friction = 0.2 }";
-    assert_eq!(
-        walls(rule(inherit)),
-        Some((0.2, WallFriction::OpenfoamFraction))
-    );
+    assert_eq!(walls(inherit), Some((0.2, WallFriction::OpenfoamFraction)));
     let own = "wall_model = \"stick\"\n\n[flow.patches.interaction]\nwalls = { model = \"rebound\", friction = 0.2, friction_model = \"openfoam_fraction\" }";
-    assert_eq!(
-        walls(rule(own)),
-        Some((0.2, WallFriction::OpenfoamFraction))
-    );
+    assert_eq!(walls(own), Some((0.2, WallFriction::OpenfoamFraction)));
 }
 
 /// 5 µm dust with rebound walls (restitution and friction only, no `[material]`): `dt =

@@ -165,9 +165,13 @@ def read_scene(path, duration=None, feed_scale=None, dt=None):
             '(OpenFOAM: standardWallInteraction rebound or localInteraction; "contact" has no counterpart)')
     restitution = float(patches.get("restitution", s.get("material", {}).get("restitution", 1.0)))
     friction = float(patches.get("friction", 0.0))
-    friction_model = patches.get("friction_model", "coulomb")
-    if friction_model not in FRICTION_MODELS:
-        bad(path, "flow.patches.friction_model", f'{friction_model!r}: must be "coulomb" or "openfoam_fraction"')
+
+    def friction_rule(key, value):
+        if value not in FRICTION_MODELS:
+            bad(path, key, f'{value!r}: must be "coulomb" or "openfoam_fraction"')
+        return value
+
+    friction_model = friction_rule("flow.patches.friction_model", patches.get("friction_model", "coulomb"))
     interaction = {}
     for p in walls:
         interaction[p] = {"model": wall_model, "e": restitution, "mu": friction,
@@ -185,16 +189,13 @@ def read_scene(path, duration=None, feed_scale=None, dt=None):
         model = o.get("model")
         if model not in ("rebound", "stick", "escape"):
             bad(path, key + ".model", f'{model!r}: must be "rebound", "stick" or "escape"')
-        fm = o.get("friction_model", friction_model)
-        if fm not in FRICTION_MODELS:
-            bad(path, key + ".friction_model", f'{fm!r}: must be "coulomb" or "openfoam_fraction"')
+        fm = friction_rule(key + ".friction_model", o.get("friction_model", friction_model))
         interaction[p] = {"model": model, "e": float(o.get("restitution", restitution)),
                           "mu": float(o.get("friction", friction)), "friction_model": fm}
     # OpenFOAM's rebound removes the fraction mu of the tangential velocity (U -= mu*Ut);
     # scg's "coulomb" friction is another model under the same number: refused unless 0
     for p, i in interaction.items():
-        fm = i.get("friction_model", friction_model)
-        if i["model"] == "rebound" and i["mu"] > 0.0 and fm != "openfoam_fraction":
+        if i["model"] == "rebound" and i["mu"] > 0.0 and i["friction_model"] != "openfoam_fraction":
             key = (f"flow.patches.interaction.{p}" if p in overrides else "flow.patches")
             bad(path, key + ".friction_model",
                 f"friction {i['mu']} with the Coulomb impact (scg's default) is not OpenFOAM's rebound, "

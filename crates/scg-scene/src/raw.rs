@@ -11,6 +11,7 @@ use serde::{Deserialize, Deserializer};
 
 use scg_core::physics::drag::DragLaw;
 use scg_core::physics::integrate::Integrator;
+use scg_core::physics::patch_interaction::WallFriction;
 use scg_core::physics::scaling::CoarseGrainLaw;
 
 #[derive(Deserialize, Debug, Clone)]
@@ -270,7 +271,7 @@ pub struct RawPatches {
     pub friction: Option<f64>,
     /// What `friction` means: `coulomb` (default) or `openfoam_fraction`.
     #[serde(default, deserialize_with = "some_name")]
-    pub friction_model: Option<RawFrictionModel>,
+    pub friction_model: Option<WallFriction>,
     /// Per-patch models by patch name (OpenFOAM's `localInteraction`), overriding the
     /// role's default.
     #[serde(default)]
@@ -286,27 +287,7 @@ pub struct RawInteraction {
     pub restitution: Option<f64>,
     pub friction: Option<f64>,
     #[serde(default, deserialize_with = "some_name")]
-    pub friction_model: Option<RawFrictionModel>,
-}
-
-/// `friction_model` of a rebound: what its `friction` coefficient does.
-#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum RawFrictionModel {
-    /// The rigid-sphere impact with Coulomb friction.
-    Coulomb,
-    /// OpenFOAM's rebound: the fraction μ of the tangential velocity removed.
-    OpenfoamFraction,
-}
-
-impl From<RawFrictionModel> for scg_core::physics::patch_interaction::WallFriction {
-    fn from(m: RawFrictionModel) -> Self {
-        use scg_core::physics::patch_interaction::WallFriction;
-        match m {
-            RawFrictionModel::Coulomb => WallFriction::Coulomb,
-            RawFrictionModel::OpenfoamFraction => WallFriction::OpenfoamFraction,
-        }
-    }
+    pub friction_model: Option<WallFriction>,
 }
 
 /// `flow.patches.wall_model`, `flow.patches.interaction.<patch>.model`.
@@ -399,7 +380,7 @@ pub struct RawWall {
     pub friction: Option<f64>,
     /// What `friction` means (`coulomb` by default).
     #[serde(default, deserialize_with = "some_name")]
-    pub friction_model: Option<RawFrictionModel>,
+    pub friction_model: Option<WallFriction>,
     /// A prescribed rigid motion.
     pub motion: Option<RawWallMotion>,
 }

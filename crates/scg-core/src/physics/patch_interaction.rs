@@ -4,6 +4,7 @@
 //! leaves for the boundary stage. Pure functions; [`super::mesh_flow::land`] applies them.
 
 use glam::DVec3;
+use serde::Deserialize;
 
 /// What a particle whose centre reaches a boundary patch does: the patch interaction
 /// models of OpenFOAM's `localInteraction` (rebound, stick, escape), one per patch.
@@ -27,6 +28,16 @@ pub enum PatchInteraction {
 }
 
 impl PatchInteraction {
+    /// A rebound without friction, restitution `e` (the contact law's guard, the mirror of
+    /// a constraint patch).
+    pub const fn frictionless(e: f64) -> Self {
+        PatchInteraction::Rebound {
+            e,
+            mu: 0.0,
+            friction: WallFriction::Coulomb,
+        }
+    }
+
     /// Name used in scene files and reports.
     pub fn name(self) -> &'static str {
         match self {
@@ -37,8 +48,10 @@ impl PatchInteraction {
     }
 }
 
-/// The tangential rule of a rebound: what its friction coefficient μ means.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// The tangential rule of a rebound: what its friction coefficient μ means (scene files
+/// name it: `friction_model = "coulomb" | "openfoam_fraction"`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum WallFriction {
     /// The rigid-sphere impact with Coulomb friction μ ([`coulomb_rebound`]): sliding
     /// loses μ(1 + e)·v_n, a sphere that stops slipping leaves rolling at 5/7·v_t.

@@ -261,11 +261,7 @@ mod tests {
     #[test]
     fn a_moving_wall_rebounds_the_relative_velocity() {
         use crate::physics::wall_motion::WallMotion;
-        let mut w = floor(PatchInteraction::Rebound {
-            e: 0.6,
-            mu: 0.0,
-            friction: WallFriction::Coulomb,
-        });
+        let mut w = floor(PatchInteraction::frictionless(0.6));
         w.wall.motion = WallMotion {
             velocity: DVec3::new(0.0, 0.0, 2.0),
             angular_velocity: DVec3::new(0.0, 0.0, 50.0),

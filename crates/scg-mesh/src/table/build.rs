@@ -138,16 +138,6 @@ impl CellTable {
                 t.faces_next.truncate(f0);
                 t.tets.truncate(t0);
             }
-            let tet_base = shared.map_or(0, |(_, offsets)| {
-                offsets[geom.cell_face_offsets[c] as usize]
-            });
-            corners.truncate(t.tets.len() - t0);
-            ids.truncate(t.tets.len() - t0);
-            tet_margins(&mut t.tets[t0..], &corners);
-            tet_links(&mut t.tets[t0..], t0 as u32, &ids);
-            for (k, r) in t.tets[t0..].iter_mut().enumerate() {
-                r.value = tet_base + k as u32;
-            }
             // convex with triangular faces: every point of the cell on the inner side of
             // every face plane, one tetrahedron per face
             let faces = &t.faces[f0..];
@@ -165,6 +155,16 @@ impl CellTable {
                         })
                 });
             if ok && !simple {
+                // only general cells keep tetrahedron records: their margins, links and
+                // conservative-velocity indices
+                let tet_base = shared.map_or(0, |(_, offsets)| {
+                    offsets[geom.cell_face_offsets[c] as usize]
+                });
+                tet_margins(&mut t.tets[t0..], &corners);
+                tet_links(&mut t.tets[t0..], t0 as u32, &ids);
+                for (k, r) in t.tets[t0..].iter_mut().enumerate() {
+                    r.value = tet_base + k as u32;
+                }
                 for (k, &f) in geom.faces_of(c).iter().enumerate() {
                     let side = usize::from(mesh.owner[f as usize] as usize != c);
                     side_first[f as usize][side] = t.faces[f0 + k].tet;

@@ -21,12 +21,21 @@ fn perturbed_box(shape: CellShape, n: usize) -> (crate::PolyMesh, MeshGeometry, 
     (m, g, field)
 }
 
-/// At random points of perturbed hex, tet and polyhedral boxes, the table finds the
-/// point in the cell the locator finds (or declines) and interpolates the locator's
-/// value to rounding, for every scheme; it declines for another cell.
-#[test]
-fn table_agrees_with_the_locator_and_interpolator() {
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+/// `f` on the table of a perturbed 5³ box of each cell shape (hex, tet, polyhedra) and each
+/// of `schemes` (all patches outflow for the conservative scheme): the shape, the scheme,
+/// the mesh, its geometry, the locator, the interpolator and the table.
+fn for_each_table(
+    schemes: &[Interpolation],
+    mut f: impl FnMut(
+        CellShape,
+        Interpolation,
+        &crate::PolyMesh,
+        &MeshGeometry,
+        &Locator,
+        &crate::Interpolator,
+        &CellTable,
+    ),
+) {
     for shape in [
         CellShape::Hex,
         CellShape::Tet,
@@ -34,15 +43,29 @@ fn table_agrees_with_the_locator_and_interpolator() {
     ] {
         let (m, g, field) = perturbed_box(shape, 5);
         let loc = Locator::new(&m, &g).unwrap();
-        for scheme in [
-            Interpolation::CellPoint,
-            Interpolation::CellPointIdw,
-            Interpolation::CellValue,
-            Interpolation::Conservative,
-        ] {
+        for &scheme in schemes {
             let outflow = vec![true; m.patches.len()];
             let it = crate::Interpolator::with_outflow(&loc, &field, scheme, &outflow).unwrap();
             let t = CellTable::new(&it).unwrap();
+            f(shape, scheme, &m, &g, &loc, &it, &t);
+        }
+    }
+}
+
+/// At random points of perturbed hex, tet and polyhedral boxes, the table finds the
+/// point in the cell the locator finds (or declines) and interpolates the locator's
+/// value to rounding, for every scheme; it declines for another cell.
+#[test]
+fn table_agrees_with_the_locator_and_interpolator() {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    let schemes = [
+        Interpolation::CellPoint,
+        Interpolation::CellPointIdw,
+        Interpolation::CellValue,
+        Interpolation::Conservative,
+    ];
+    for_each_table(&schemes, |shape, scheme, m, g, loc, it, t| {
+        {
             let (simple, none) = t.counts();
             assert_eq!(none, 0);
             if shape == CellShape::Tet && scheme != Interpolation::Conservative {
@@ -78,7 +101,7 @@ fn table_agrees_with_the_locator_and_interpolator() {
             );
             assert!(t.velocity_in(u32::MAX, DVec3::ZERO).is_none());
         }
-    }
+    });
 }
 
 /// Walking on the table from a cell near x ends in the locator's cell with the
@@ -149,21 +172,13 @@ fn table_walk_ends_where_the_locator_does() {
 #[test]
 fn tet_hints_change_no_answer() {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
-    for shape in [
-        CellShape::Hex,
-        CellShape::Tet,
-        CellShape::Poly { refine: 0.3 },
-    ] {
-        let (m, g, field) = perturbed_box(shape, 5);
-        let loc = Locator::new(&m, &g).unwrap();
-        for scheme in [
-            Interpolation::CellPoint,
-            Interpolation::CellPointIdw,
-            Interpolation::Conservative,
-        ] {
-            let outflow = vec![true; m.patches.len()];
-            let it = crate::Interpolator::with_outflow(&loc, &field, scheme, &outflow).unwrap();
-            let t = CellTable::new(&it).unwrap();
+    let schemes = [
+        Interpolation::CellPoint,
+        Interpolation::CellPointIdw,
+        Interpolation::Conservative,
+    ];
+    for_each_table(&schemes, |shape, scheme, _, _, loc, _, t| {
+        {
             let bits = |w: TableWalk| match w {
                 TableWalk::Inside { cell, tet, value } => {
                     Some((cell, tet, value.to_array().map(f64::to_bits)))
@@ -245,5 +260,5 @@ fn tet_hints_change_no_answer() {
                 );
             }
         }
-    }
+    });
 }

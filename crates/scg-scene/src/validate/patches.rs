@@ -51,7 +51,7 @@ pub(super) fn patch_models(
     let e_default = unit("flow.patches.restitution", patches.restitution)?
         .unwrap_or(material.map_or(1.0, |m| m.restitution));
     let mu_default = friction("flow.patches.friction", patches.friction)?.unwrap_or(0.0);
-    let fm_default: WallFriction = patches.friction_model.map(Into::into).unwrap_or_default();
+    let fm_default = patches.friction_model.unwrap_or_default();
     let model =
         |m: RawWallModel, key: &str, e: Option<f64>, mu: Option<f64>, fm: Option<WallFriction>| {
             Ok(match m {
@@ -63,11 +63,7 @@ pub(super) fn patch_models(
                         ));
                     };
                     PatchModel {
-                        interaction: PatchInteraction::Rebound {
-                            e: mat.restitution,
-                            mu: 0.0,
-                            friction: WallFriction::Coulomb,
-                        },
+                        interaction: PatchInteraction::frictionless(mat.restitution),
                         contact: true,
                     }
                 }
@@ -102,11 +98,7 @@ pub(super) fn patch_models(
             // hitSymmetryPatch): symmetry planes, and the two sides of a 2-D (`empty`) or
             // axisymmetric (`wedge`) case, which keeps its motion in the slab
             PatchRole::Lost if MIRROR_KINDS.contains(&p.kind.as_str()) => PatchModel {
-                interaction: PatchInteraction::Rebound {
-                    e: 1.0,
-                    mu: 0.0,
-                    friction: WallFriction::Coulomb,
-                },
+                interaction: PatchInteraction::frictionless(1.0),
                 contact: false,
             },
             _ => model(RawWallModel::Escape, "flow.patches", None, None, None)?,
@@ -143,7 +135,7 @@ pub(super) fn patch_models(
         }
         let e = unit(&format!("{key}.restitution"), entry.restitution)?;
         let mu = friction(&format!("{key}.friction"), entry.friction)?;
-        let fm = entry.friction_model.map(Into::into);
+        let fm = entry.friction_model;
         out[i] = model(entry.model, &format!("{key}.model"), e, mu, fm)?;
     }
     Ok(out)
@@ -223,7 +215,7 @@ pub(super) fn wall_model(
             Some(PatchInteraction::Rebound {
                 e,
                 mu,
-                friction: w.friction_model.map(Into::into).unwrap_or_default(),
+                friction: w.friction_model.unwrap_or_default(),
             })
         }
     })

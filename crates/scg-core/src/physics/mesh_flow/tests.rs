@@ -105,11 +105,7 @@ fn models(f: &MeshFlow, e: f64) -> Vec<PatchInteraction> {
     f.roles()
         .iter()
         .map(|r| match r {
-            PatchRole::Wall => PatchInteraction::Rebound {
-                e,
-                mu: 0.0,
-                friction: WallFriction::Coulomb,
-            },
+            PatchRole::Wall => PatchInteraction::frictionless(e),
             _ => PatchInteraction::Escape,
         })
         .collect()
@@ -136,30 +132,18 @@ fn landing_by_role() {
     assert!((w - u).length() < 1e-14);
     assert!((h as usize) < f.mesh().n_cells);
     let m1 = models(&f, 1.0);
+    // a step from x0 (in cell h0, its mid-step point too) to x1 at v1
+    let step = |x1: DVec3, v1: DVec3, models: &[PatchInteraction]| {
+        land(&f, x0, h0, Place::cell(h0), x1, v1, models)
+    };
     // through the outlet (x max)
-    let l = land(
-        &f,
-        x0,
-        h0,
-        Place::cell(h0),
-        DVec3::new(1.2, 0.5, 0.5),
-        DVec3::X,
-        &m1,
-    );
+    let l = step(DVec3::new(1.2, 0.5, 0.5), DVec3::X, &m1);
     assert_eq!(
         hint::departure(l.hint),
         Some(hint::Departure::Escaped(patch(&f, "outlet")))
     );
     // through the inlet (escapes there)
-    let l = land(
-        &f,
-        x0,
-        h0,
-        Place::cell(h0),
-        DVec3::new(-0.2, 0.5, 0.5),
-        -DVec3::X,
-        &m1,
-    );
+    let l = step(DVec3::new(-0.2, 0.5, 0.5), -DVec3::X, &m1);
     assert_eq!(
         hint::departure(l.hint),
         Some(hint::Departure::Escaped(patch(&f, "inlet")))
@@ -167,25 +151,13 @@ fn landing_by_role() {
     // a stick wall keeps it
     let mut ms = m1.clone();
     ms[patch(&f, "walls") as usize] = PatchInteraction::Stick;
-    let l = land(
-        &f,
-        x0,
-        h0,
-        Place::cell(h0),
-        DVec3::new(0.5, 1.25, 0.5),
-        DVec3::Y,
-        &ms,
-    );
+    let l = step(DVec3::new(0.5, 1.25, 0.5), DVec3::Y, &ms);
     assert_eq!(
         hint::departure(l.hint),
         Some(hint::Departure::Stuck(patch(&f, "walls")))
     );
     // into the y max wall: mirrored back, v_y reversed × e
-    let l = land(
-        &f,
-        x0,
-        h0,
-        Place::cell(h0),
+    let l = step(
         DVec3::new(0.5, 1.25, 0.5),
         DVec3::new(0.0, 2.0, 1.0),
         &models(&f, 0.5),
@@ -195,15 +167,7 @@ fn landing_by_role() {
     // the hint is a cell holding the point (on a shared face either side will do)
     assert!(matches!(f.track(l.hint, l.x), Location::Inside(h) if h.cell == l.hint));
     // a corner: two reflections
-    let l = land(
-        &f,
-        x0,
-        h0,
-        Place::cell(h0),
-        DVec3::new(0.5, 1.2, -0.1),
-        DVec3::new(0.0, 1.0, -1.0),
-        &m1,
-    );
+    let l = step(DVec3::new(0.5, 1.2, -0.1), DVec3::new(0.0, 1.0, -1.0), &m1);
     assert!((l.x - DVec3::new(0.5, 0.8, 0.1)).length() < 1e-12, "{l:?}");
     assert!((l.v - DVec3::new(0.0, -1.0, 1.0)).length() < 1e-12);
     // roles must match the patches
