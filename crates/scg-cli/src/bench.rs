@@ -182,6 +182,7 @@ region = {{ kind = "cylinder", radius_max = {r:e}, height = [{h0:e}, {h1:e}] }}
         sort_every: scg_core::stages::mesh_flow::SORT_EVERY,
         reader: None,
         rotors: Vec::new(),
+        series: None,
     });
     Ok(scene)
 }

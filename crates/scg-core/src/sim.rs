@@ -157,6 +157,9 @@ pub enum SimError {
     /// A recorder failed.
     #[error("recorder failed: {0}")]
     Recorder(String),
+    /// A snapshot of an unsteady flow could not be read.
+    #[error("unsteady flow: {0}")]
+    Flow(String),
 }
 
 /// A ready-to-run simulation.
@@ -341,6 +344,13 @@ impl Simulation {
         }
         if let Some(e) = &self.world.resource::<Recorders>().error {
             return Err(SimError::Recorder(e.clone()));
+        }
+        if let Some(e) = self
+            .world
+            .get_resource::<crate::stages::flow_series::FlowSeries>()
+            .and_then(|s| s.failure.as_ref())
+        {
+            return Err(SimError::Flow(e.clone()));
         }
         Ok(())
     }

@@ -85,6 +85,9 @@ pub enum StepSystem {
     WallContactForces,
     /// Contact forces and torques applied as kicks (contacts).
     ApplyContactKicks,
+    /// Bring the snapshots of an unsteady mesh flow around the step's mid time into
+    /// memory (`[flow] series`).
+    AdvanceFlowSeries,
     /// Write each particle's carrier offset (carrier modifiers).
     ModifyCarrier,
     /// Relax the spin and kick by the rotational lift (`[forces] rubinow_keller`).
@@ -130,6 +133,7 @@ impl StepSystem {
             StepSystem::WallNormalForces => "wall_normal_forces",
             StepSystem::WallContactForces => "wall_contact_forces",
             StepSystem::ApplyContactKicks => "apply_contact_kicks",
+            StepSystem::AdvanceFlowSeries => "advance_flow_series",
             StepSystem::ModifyCarrier => "modify_carrier",
             StepSystem::RotationalLift => "rotational_lift",
             StepSystem::IntegrateBallistic => "integrate_ballistic",
@@ -155,7 +159,7 @@ impl StepSystem {
     /// The step table: every system with its set, in execution order. The builder places
     /// each system by its row here (whatever order the plugins add them in) and refuses a
     /// system added to another set; `scg run --plan` lists a scene's rows in this order.
-    pub const TABLE: [(StepSet, StepSystem); 22] = {
+    pub const TABLE: [(StepSet, StepSystem); 23] = {
         use StepSet::*;
         use StepSystem::*;
         [
@@ -165,6 +169,8 @@ impl StepSystem {
             (Forces, WallContactForces),
             // Contact kicks change the velocities the integrator starts from.
             (Integration, ApplyContactKicks),
+            // The snapshots of an unsteady flow the step reads.
+            (Integration, AdvanceFlowSeries),
             // The carrier offsets the integrator adds to the fluid velocity.
             (Integration, ModifyCarrier),
             // The rotational lift reads the offsets and kicks before the particles move.

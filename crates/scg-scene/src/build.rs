@@ -129,6 +129,7 @@ impl Scene {
                 flow: m.flow.clone(),
                 interactions: self.patch_models.iter().map(|p| p.interaction).collect(),
                 sort_every: m.sort_every,
+                series: m.series.as_ref().map(|s| s.spec.clone()),
             }),
             gravity: self.gravity,
             buoyancy: self.buoyancy,

@@ -548,6 +548,7 @@ pub fn check(scene: &Scene) -> Report {
     findings.extend(forces_at::findings(scene, &groups));
     findings.extend(zones::findings(scene));
     findings.extend(mesh_flow_findings(scene));
+    findings.extend(mesh::series_findings(scene, &groups));
     findings.extend(dispersion::findings(scene));
     for (code, n) in allowed {
         findings.push(Finding {

@@ -298,6 +298,22 @@ pub struct SceneMeshFlow {
     pub reader: Option<FieldReader>,
     /// The frozen-rotor zones of an MRF case (their moving faces are in `flow`).
     pub rotors: Vec<RotorZone>,
+    /// An unsteady field (`[flow] series`): `flow` is its first snapshot.
+    pub series: Option<SceneSeries>,
+}
+
+/// An unsteady field as read (`[flow] series`).
+#[derive(Clone, Debug)]
+pub struct SceneSeries {
+    /// The clock, the loader and the second snapshot.
+    pub spec: scg_core::physics::mesh_flow::series::FlowSeriesSpec,
+    /// The CFD time of the first snapshot (simulation time 0), s.
+    pub start: f64,
+    /// The time directories, in order.
+    pub dirs: Vec<std::path::PathBuf>,
+    /// With `cycle`: ‖U_last − U_first‖/‖U_first‖ over the cells (the change across the
+    /// seam).
+    pub seam: Option<f64>,
 }
 
 /// One rotor zone as read (for `scg check`).

@@ -208,6 +208,8 @@ pub struct RawFlow {
     pub file: Option<String>,
     /// openfoam: `"latest"` or a time, s.
     pub time: Option<RawTime>,
+    /// openfoam: the time directories of a window as one unsteady field.
+    pub series: Option<RawSeries>,
     pub field: Option<String>,
     #[serde(default, deserialize_with = "some_name")]
     pub interpolation: Option<RawInterpolation>,
@@ -241,6 +243,17 @@ pub enum RawWallFunctionModel {
     None,
     /// The log law of the wall below the wall-adjacent cell's centre.
     LogLaw,
+}
+
+/// `flow.series`: the case's time directories from `start` to `end` (s, CFD time; default
+/// all), linear in time between two; `cycle` repeats the window.
+#[derive(Deserialize, Debug, Clone, Default)]
+#[serde(deny_unknown_fields)]
+pub struct RawSeries {
+    pub start: Option<f64>,
+    pub end: Option<f64>,
+    #[serde(default)]
+    pub cycle: bool,
 }
 
 /// `flow.time`: a name (`"latest"`) or a number.

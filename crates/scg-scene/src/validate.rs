@@ -8,6 +8,7 @@ mod mrf;
 mod particles;
 mod patches;
 mod physics;
+mod series;
 mod size;
 
 use std::path::Path;
@@ -189,6 +190,9 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
         Some(f) => mesh_flow(f, fluid.as_ref(), &rotors, cx)?,
         None => None,
     };
+    if let Some(s) = mesh_flow.as_ref().and_then(|m| m.series.as_ref()) {
+        series::supported(&raw, s, duration, cx)?;
+    }
     let drag = match &raw.drag {
         None => None,
         Some(d) => {

@@ -152,24 +152,55 @@ impl MeshFlow {
         }
         let geom = MeshGeometry::new(&mesh)?;
         scg_mesh::interp::check_field(&mesh, field)?;
+        let loc = Arc::new(Locator::owned(Arc::new(mesh), Arc::new(geom))?);
+        Self::on(loc, field, scheme, roles, wall)
+    }
+
+    /// Another field on this flow's mesh (one snapshot of an unsteady series,
+    /// [`series`]): the same locator (mesh and geometry shared, not copied), roles and
+    /// scheme, its own interpolator, cell table and wall function (`wall`). Moving faces
+    /// are not carried over.
+    pub fn snapshot(
+        &self,
+        field: &CellField,
+        wall: Option<&WallFunctionSpec>,
+    ) -> Result<Self, scg_mesh::MeshError> {
+        scg_mesh::interp::check_field(self.mesh(), field)?;
+        Self::on(
+            Arc::clone(&self.loc),
+            field,
+            self.scheme(),
+            self.roles.clone(),
+            wall,
+        )
+    }
+
+    /// The flow of `field` on the mesh `loc` locates in.
+    fn on(
+        loc: Arc<Locator<'static>>,
+        field: &CellField,
+        scheme: Interpolation,
+        roles: Vec<PatchRole>,
+        wall: Option<&WallFunctionSpec>,
+    ) -> Result<Self, scg_mesh::MeshError> {
+        let (mesh, geom) = (loc.mesh(), loc.geometry());
         let is_wall: Vec<bool> = roles.iter().map(|r| *r == PatchRole::Wall).collect();
         let (wall, slip) = match wall {
             None => (None, None),
             Some(w) => (
                 Some(WallCells::new(
-                    &mesh,
-                    &geom,
+                    mesh,
+                    geom,
                     field,
                     &is_wall,
                     w.law,
                     w.nu,
                     &w.friction,
                 )),
-                Some(slip_wall_values(&mesh, &geom, field, &is_wall)),
+                Some(slip_wall_values(mesh, geom, field, &is_wall)),
             ),
         };
         let field = slip.as_ref().unwrap_or(field);
-        let loc = Arc::new(Locator::owned(Arc::new(mesh), Arc::new(geom))?);
         // the conservative scheme's projection takes up the balance at the outlets
         let outflow: Vec<bool> = roles.iter().map(|r| *r == PatchRole::Outlet).collect();
         let interp = Interpolator::owned_with_outflow(Arc::clone(&loc), field, scheme, &outflow)?;
@@ -189,6 +220,11 @@ impl MeshFlow {
             gradients: std::sync::OnceLock::new(),
             moving: None,
         })
+    }
+
+    /// The field's cell values, m/s.
+    pub fn cell_values(&self) -> &[DVec3] {
+        self.interp.cell_values()
     }
 
     /// The wall-adjacent cells of the wall function (`None` without one).
@@ -618,5 +654,6 @@ fn land_boundary(
 mod balance;
 mod gradient;
 pub mod moving;
+pub mod series;
 #[cfg(test)]
 mod tests;

@@ -24,9 +24,12 @@ use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+use super::flow_series::FlowSeries;
 use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
 use crate::physics::inlet::{PatchSampler, settle};
+use crate::physics::mesh_flow::MeshFlow;
 use crate::physics::mesh_flow::hint;
+use crate::physics::mesh_flow::series::blend as series_blend;
 use crate::physics::scaling::{CoarseGrainLaw, coarse_grain};
 use crate::physics::size_distribution::SizeDistribution;
 use crate::region::Region;
@@ -293,9 +296,33 @@ pub fn feed_particles(
     mut tally: ResMut<Tally>,
     mesh: Option<Res<MeshFlowState>>,
     mut owner: Option<ResMut<SpawnOwner>>,
+    mut series: Option<ResMut<FlowSeries>>,
 ) {
     let t = clock.time();
-    let flow = mesh.as_deref().map(|m| &*m.spec.flow);
+    // an unsteady flow: its snapshots at the feeding time
+    if let Some(s) = series.as_deref_mut() {
+        s.advance(t);
+    }
+    let blend = series.as_deref().map(FlowSeries::blend);
+    let flow = mesh
+        .as_deref()
+        .map(|m| blend.map_or(&*m.spec.flow, |b| b.a));
+    // where a particle starting at x next to a face of cell `owner` is, and the fluid
+    // velocity there
+    let settle_at = |flow: &MeshFlow, owner: u32, x: DVec3| {
+        let (cell, u) = settle(flow, owner, x);
+        match blend {
+            None => (cell, u),
+            Some(b) => {
+                let h = if cell < flow.mesh().n_cells as u32 {
+                    cell
+                } else {
+                    owner
+                };
+                (cell, series_blend(u, b.b.velocity(h, x).0, b.w))
+            }
+        }
+    };
     for f in feeders.list.iter_mut() {
         if !clock.step.is_multiple_of(f.spec.every.max(1)) {
             continue;
@@ -315,14 +342,15 @@ pub fn feed_particles(
             let (position, cell, u) = match (&f.spec.source, flow) {
                 (FeedSource::Region(r), _) => (r.sample(&mut f.rng), hint::UNLOCATED, None),
                 (FeedSource::Patch(p), Some(flow)) => {
-                    let bound = f
-                        .spec
-                        .by_flux
-                        .then(|| *f.flux_bound.get_or_insert_with(|| flux_bound(p, flow)));
+                    // (an unsteady flow's bound: the larger of its two snapshots')
+                    let bound = f.spec.by_flux.then(|| match blend {
+                        None => *f.flux_bound.get_or_insert_with(|| flux_bound(p, flow)),
+                        Some(b) => flux_bound(p, b.a).max(flux_bound(p, b.b)),
+                    });
                     let mut tries = 0;
                     loop {
                         let s = p.sample(&mut f.rng, radius);
-                        let (cell, u) = settle(flow, p.faces()[s.face].owner, s.centre);
+                        let (cell, u) = settle_at(flow, p.faces()[s.face].owner, s.centre);
                         let accept = match bound {
                             None => true,
                             Some(b) => {

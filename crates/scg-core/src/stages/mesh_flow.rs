@@ -22,6 +22,7 @@ use glam::DVec3;
 
 use super::carrier::CarrierModifier;
 use super::erosion::{ErosionLog, Impact};
+use super::flow_series::FlowSeries;
 use super::outlet::{OutletLog, OutletPart, remove_departed};
 use super::table::{bypass, columns_mut, reorder_particles};
 use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
@@ -29,6 +30,7 @@ use crate::components::*;
 use crate::exec::par::for_each_piece_heavy;
 use crate::physics::carrier::{Body, Carrier, Place, Scheme, WithOffset, advance};
 use crate::physics::flow::Fluid;
+use crate::physics::mesh_flow::series::FlowSeriesSpec;
 use crate::physics::mesh_flow::{MeshFlow, PatchInteraction, PatchRole, hint, land};
 use crate::state::{Health, Motion, SimClock, StepDisplacement, Tally};
 use crate::step::{StepBuilder, StepSet, StepSystem};
@@ -44,6 +46,9 @@ pub struct MeshFlowSpec {
     /// Steps between reorderings of the particle table by mesh cell ([`sort_by_cell`]);
     /// 0: never.
     pub sort_every: u64,
+    /// An unsteady flow: `flow` is its first snapshot, the others come from here
+    /// ([`super::flow_series`]).
+    pub series: Option<FlowSeriesSpec>,
 }
 
 /// The mesh flow of a simulation (resource).
@@ -95,6 +100,10 @@ impl Persist for PatchesPart {
 /// Add the mesh-flow integration and boundary systems and their resources.
 pub fn plugin(world: &mut World, b: &mut StepBuilder, spec: MeshFlowSpec, groups: usize) {
     add_integration(b);
+    if let Some(series) = &spec.series {
+        let s = super::flow_series::FlowSeries::new(series.clone(), Arc::clone(&spec.flow));
+        super::flow_series::plugin(world, b, s);
+    }
     world.insert_resource(PatchLog::new(spec.flow.mesh().patches.len(), groups));
     Persistence::register(world, PatchesPart);
     Persistence::register(world, OutletPart);
@@ -154,6 +163,7 @@ pub struct MeshInputs<'w> {
     state: Res<'w, MeshFlowState>,
     carrier: Option<Res<'w, CarrierModifier>>,
     erosion: Option<ResMut<'w, ErosionLog>>,
+    series: Option<Res<'w, FlowSeries>>,
 }
 
 /// Move every particle through the mesh flow (see the module documentation): the one
@@ -181,7 +191,9 @@ pub fn integrate_mesh_flow(mut d: MeshInputs, mut q: MeshMoveQuery) {
         (bypass(hs), bypass(ts), bypass(us)),
         (offs, (cgs, ids)),
     );
-    let flow: &MeshFlow = &d.state.spec.flow;
+    // an unsteady flow: the step's two snapshots (one mesh: either locates)
+    let blend = d.series.as_deref().map(FlowSeries::blend);
+    let flow: &MeshFlow = blend.map_or(&*d.state.spec.flow, |b| b.a);
     let sink = d.erosion.as_ref().map(|_| Mutex::new(Vec::new()));
     let scheme = Scheme {
         dt: d.clock.dt,
@@ -193,26 +205,20 @@ pub fn integrate_mesh_flow(mut d: MeshInputs, mut q: MeshMoveQuery) {
     let step = MeshStep {
         scheme,
         flow,
+        later: blend.map(|b| b.b),
         models: &d.state.spec.interactions,
         n_cells: flow.mesh().n_cells as u32,
         health: &d.health,
         erosion: d.erosion.as_deref().zip(sink.as_ref()),
     };
     // The schemes that never read the start's fluid velocity run a loop without it
-    // (unless the dispersion model reads it).
-    let keep_start = keeps_start(&d.motion, d.carrier.as_deref());
+    // (unless the dispersion model reads it). An unsteady flow reads it afresh: the
+    // value kept from the last landing is of one snapshot.
+    let keep_start = d.series.is_none() && keeps_start(&d.motion, d.carrier.as_deref());
     for_each_piece_heavy(columns, |piece| {
-        let (d2max, gone) = match (keep_start, piece.7.0) {
-            (true, None) => step.advance::<true, _>(piece, |_| flow),
-            (false, None) => step.advance::<false, _>(piece, |_| flow),
-            (true, Some(offs)) => step.advance::<true, _>(piece, |i| WithOffset {
-                inner: flow,
-                du: offs[i].0,
-            }),
-            (false, Some(offs)) => step.advance::<false, _>(piece, |i| WithOffset {
-                inner: flow,
-                du: offs[i].0,
-            }),
+        let (d2max, gone) = match blend {
+            None => step.advance_in(piece, keep_start, flow),
+            Some(b) => step.advance_in(piece, keep_start, b),
         };
         if gone > 0 {
             departures.fetch_add(gone, Ordering::Relaxed);
@@ -254,6 +260,9 @@ type MeshPiece<'a> = (
 struct MeshStep<'a> {
     scheme: Scheme,
     flow: &'a MeshFlow,
+    /// An unsteady flow's later snapshot (`flow` the earlier): its records are loaded
+    /// ahead too.
+    later: Option<&'a MeshFlow>,
     models: &'a [PatchInteraction],
     n_cells: u32,
     health: &'a Health,
@@ -262,6 +271,29 @@ struct MeshStep<'a> {
 }
 
 impl MeshStep<'_> {
+    /// [`MeshStep::advance`] in `carrier`, with each particle's offset when the piece has
+    /// them.
+    #[inline(always)]
+    fn advance_in<C: Carrier + Copy>(
+        &self,
+        piece: MeshPiece,
+        keep_start: bool,
+        carrier: C,
+    ) -> (f64, u64) {
+        match (keep_start, piece.7.0) {
+            (true, None) => self.advance::<true, _>(piece, |_| carrier),
+            (false, None) => self.advance::<false, _>(piece, |_| carrier),
+            (true, Some(offs)) => self.advance::<true, _>(piece, |i| WithOffset {
+                inner: carrier,
+                du: offs[i].0,
+            }),
+            (false, Some(offs)) => self.advance::<false, _>(piece, |i| WithOffset {
+                inner: carrier,
+                du: offs[i].0,
+            }),
+        }
+    }
+
     /// Advance the particles of a piece in the carrier `carrier(i)` gives row `i`; the
     /// largest squared displacement and the number of particles that left the mesh.
     /// `KEEP`: the scheme reads the fluid velocity at the start of the step
@@ -278,6 +310,7 @@ impl MeshStep<'_> {
         let MeshStep {
             scheme,
             flow,
+            later,
             models,
             n_cells,
             health,
@@ -293,10 +326,15 @@ impl MeshStep<'_> {
             if let Some(h) = hs.get(i + 16) {
                 flow.prefetch(h.0, false);
             }
-            if let (Some(h), Some(t)) = (hs.get(i + 8), ts.get(i + 8))
-                && !flow.prefetch_tet(t.0)
-            {
-                flow.prefetch(h.0, true);
+            if let (Some(h), Some(t)) = (hs.get(i + 8), ts.get(i + 8)) {
+                if !flow.prefetch_tet(t.0) {
+                    flow.prefetch(h.0, true);
+                }
+                if let Some(b) = later
+                    && !b.prefetch_tet(t.0)
+                {
+                    b.prefetch(h.0, true);
+                }
             }
             if let (Some(h), Some(t)) = (hs.get(i + 4), ts.get(i + 4))
                 && t.0 == scg_mesh::NO_TET

@@ -7,6 +7,7 @@ pub mod collect;
 pub mod contacts;
 pub mod erosion;
 pub mod feeder;
+pub mod flow_series;
 pub mod guard;
 pub mod impulse_walls;
 pub mod mesh_flow;

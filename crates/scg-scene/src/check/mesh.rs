@@ -114,3 +114,79 @@ pub(super) fn mesh_flow_findings(scene: &Scene) -> Vec<Finding> {
     }
     out
 }
+
+/// An unsteady field (`[flow] series`): its window, spacing and seam (a note), and
+/// warnings where the snapshot spacing exceeds a group's response time τ or the field's
+/// median cell crossing time (the changes between two snapshots are then not resolved
+/// for those particles, or for the flow's own structures).
+pub(super) fn series_findings(scene: &Scene, groups: &[GroupReport]) -> Vec<Finding> {
+    let Some(m) = &scene.mesh_flow else {
+        return Vec::new();
+    };
+    let Some(s) = &m.series else {
+        return Vec::new();
+    };
+    let c = &s.spec.clock;
+    let (lo, hi) = c.spacing();
+    let mut note = format!(
+        "unsteady field: {} snapshots (time directories {} … {}), CFD t = {} … {} s as simulation t = 0 … {} s, spacing {lo:.4e} … {hi:.4e} s, linear in time between two; in memory: the pair around t, the first (it holds the mesh) and the next, read ahead",
+        c.len(),
+        s.dirs
+            .first()
+            .map_or(String::new(), |d| d.display().to_string()),
+        s.dirs
+            .last()
+            .map_or(String::new(), |d| d.display().to_string()),
+        s.start,
+        s.start + c.span(),
+        c.span()
+    );
+    if let (Some(p), Some(jump)) = (c.period(), s.seam) {
+        note.push_str(&format!(
+            "; cycle = true: the window repeats every {p:.6e} s, the field running from the last snapshot back to the first over {:.4e} s (the mean spacing); across that seam the field changes by {:.3} % (rms over the cells, of the first snapshot's rms)",
+            c.seam(),
+            100.0 * jump
+        ));
+    }
+    let mut out = vec![Finding {
+        level: Level::Note,
+        message: note,
+    }];
+    if let Some(g) = groups
+        .iter()
+        .filter(|g| g.tau.is_finite() && g.tau > 0.0)
+        .min_by(|a, b| a.tau.total_cmp(&b.tau))
+        && hi > g.tau
+    {
+        out.push(Finding {
+            level: Level::Warning,
+            message: format!(
+                "the snapshots are up to {hi:.4e} s apart, longer than the response time τ = {:.4e} s of group `{}`: those particles follow changes of the flow between two snapshots that the series does not hold (linear in time there)",
+                g.tau, g.name
+            ),
+        });
+    }
+    let geom = m.flow.geometry();
+    let mut crossing: Vec<f64> = geom
+        .cell_volumes
+        .iter()
+        .zip(m.flow.cell_values())
+        .filter(|(v, u)| **v > 0.0 && u.length() > 0.0)
+        .map(|(v, u)| v.cbrt() / u.length())
+        .collect();
+    if !crossing.is_empty() {
+        let mid = crossing.len() / 2;
+        let median = *crossing
+            .select_nth_unstable_by(mid, |a, b| a.total_cmp(b))
+            .1;
+        if hi > median {
+            out.push(Finding {
+                level: Level::Warning,
+                message: format!(
+                    "the snapshots are up to {hi:.4e} s apart, longer than the field's median cell crossing time {median:.4e} s (cell size / speed): the flow's structures move more than a cell between two snapshots, which linear interpolation in time smears"
+                ),
+            });
+        }
+    }
+    out
+}

@@ -140,6 +140,7 @@ pub(super) fn flow_field(f: &RawFlow, cx: &Ctx) -> Result<FlowField, SceneError>
         ("flow.case", f.case.is_some()),
         ("flow.file", f.file.is_some()),
         ("flow.time", f.time.is_some()),
+        ("flow.series", f.series.is_some()),
         ("flow.field", f.field.is_some()),
         ("flow.interpolation", f.interpolation.is_some()),
         ("flow.scale", f.scale.is_some()),
@@ -206,14 +207,23 @@ pub(super) fn mesh_flow(
         Some(n) => return Err(cx.err("flow.sort_every", format!("must be ≥ 0, got {n}"))),
     };
     let translate = cx.vec3("flow.translate", f.translate.unwrap_or([0.0; 3]))?;
-    let (mut mesh, mut cells, source, reader) = match f.kind {
+    let (mut mesh, mut cells, source, reader, window) = match f.kind {
         RawFlowKind::Openfoam => {
             let case = base.join(cx.need("flow.case", &f.case)?);
             let shown = case.display().to_string();
             if !case.is_dir() {
                 return Err(cx.err("flow.case", format!("{shown}: no such case folder")));
             }
+            // a series: its first snapshot here, the window's others below
+            let window = match &f.series {
+                Some(s) => {
+                    super::series::no_time(f, cx)?;
+                    Some(super::series::window(s, &case, &field, cx)?)
+                }
+                None => None,
+            };
             let time = match &f.time {
+                _ if window.is_some() => TimeSel::Time(window.as_ref().expect("some")[0].0),
                 None => TimeSel::Latest,
                 Some(RawTime::Name(n)) if n == "latest" => TimeSel::Latest,
                 Some(RawTime::Name(n)) => match n.trim().parse::<f64>() {
@@ -234,12 +244,16 @@ pub(super) fn mesh_flow(
             let u = foam::read_vector_field(&case, &mesh, time, &field)
                 .map_err(|e| cx.err("flow.field", format!("{shown}: field `{field}`: {e}")))?;
             let reader = FieldReader::Foam { case, time };
-            (
-                mesh,
-                u,
-                format!("{shown} (field from {})", dir.display()),
-                reader,
-            )
+            let source = match &window {
+                None => format!("{shown} (field from {})", dir.display()),
+                Some(w) => format!(
+                    "{shown} (series of {} snapshots, {} … {})",
+                    w.len(),
+                    dir.display(),
+                    w[w.len() - 1].1.display()
+                ),
+            };
+            (mesh, u, source, reader, window)
         }
         RawFlowKind::Vtk => {
             let file = base.join(cx.need("flow.file", &f.file)?);
@@ -249,10 +263,19 @@ pub(super) fn mesh_flow(
             }
             let (mesh, u) = scg_mesh::vtk::read(&file, &field)
                 .map_err(|e| cx.err("flow.file", format!("{shown}: field `{field}`: {e}")))?;
-            (mesh, u, shown, FieldReader::Vtk { file })
+            if f.series.is_some() {
+                return Err(cx.err(
+                    "flow.series",
+                    "reads an OpenFOAM case's time directories; a VTK series (.pvd) is not \
+                     read yet",
+                ));
+            }
+            (mesh, u, shown, FieldReader::Vtk { file }, None)
         }
         _ => return Ok(None),
     };
+    // a series reads its later snapshots with the mesh as the case gives it
+    let read_mesh = window.as_ref().map(|_| std::sync::Arc::new(mesh.clone()));
     if scale != 1.0 || translate != DVec3::ZERO {
         for p in &mut mesh.points {
             *p = translate + scale * *p;
@@ -307,13 +330,38 @@ pub(super) fn mesh_flow(
         }
         _ => (None, Vec::new()),
     };
+    if window.is_some() && !rotors.is_empty() {
+        return Err(cx.err(
+            "flow.series",
+            "cannot be combined with an MRF case's rotor zones yet (their face fluxes are \
+             taken from one snapshot)",
+        ));
+    }
+    if window.is_some()
+        && let Some(w) = &wall
+        && matches!(w.friction, FrictionVelocity::FromK(_))
+    {
+        return Err(cx.err(
+            "flow.wall_function.k",
+            "cannot be combined with flow.series yet (k is read from one snapshot); \
+             leave it out for u_τ from the velocity",
+        ));
+    }
     let mut flow = MeshFlow::with_wall_function(mesh, &cells, scheme, roles, wall.as_ref())
         .map_err(|e| cx.err(key, format!("{source}: {e}")))?;
     if let Some(m) = moving {
         flow.set_moving_faces(m);
     }
+    let flow = std::sync::Arc::new(flow);
+    let series = match (window, &f.series, &reader, read_mesh) {
+        (Some(dirs), Some(s), FieldReader::Foam { case, .. }, Some(read_mesh)) => Some(
+            super::series::series(s, dirs, (case, &field), read_mesh, &flow, wall, cx)?,
+        ),
+        _ => None,
+    };
     Ok(Some(SceneMeshFlow {
-        flow: std::sync::Arc::new(flow),
+        flow,
+        series,
         source,
         field,
         sort_every,

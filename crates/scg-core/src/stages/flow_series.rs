@@ -1,0 +1,134 @@
+//! An unsteady mesh flow ([`crate::physics::mesh_flow::series`]): before each step's
+//! integration the clock's two snapshots around the step's mid time are in memory, and
+//! the one the clock reaches next is read on a background thread.
+//!
+//! Every snapshot is a pure function of its index (the loader), so which thread read it
+//! and when changes nothing: a run is bit-identical whatever the timing.
+
+use std::sync::Arc;
+use std::thread::JoinHandle;
+
+use bevy_ecs::prelude::*;
+
+use crate::physics::mesh_flow::MeshFlow;
+use crate::physics::mesh_flow::series::{Blend, FlowSeriesSpec, Interval};
+use crate::state::SimClock;
+use crate::step::{StepBuilder, StepSet, StepSystem};
+
+/// The snapshots of an unsteady flow in memory (resource).
+#[derive(Resource)]
+pub struct FlowSeries {
+    spec: FlowSeriesSpec,
+    /// The pair of the current interval: snapshots `now.a` and `now.b`.
+    pair: [(usize, Arc<MeshFlow>); 2],
+    now: Interval,
+    /// The snapshot being read ahead.
+    ahead: Option<(usize, JoinHandle<Result<MeshFlow, String>>)>,
+    /// Snapshots read so far (including the first, given).
+    reads: usize,
+    /// A snapshot that could not be read: the run stops ([`crate::sim::SimError::Flow`]).
+    pub failure: Option<String>,
+}
+
+impl FlowSeries {
+    /// The series of `spec` whose first snapshot is `first` (the scene's flow).
+    pub fn new(spec: FlowSeriesSpec, first: Arc<MeshFlow>) -> Self {
+        let second = Arc::clone(&spec.second);
+        FlowSeries {
+            spec,
+            pair: [(0, first), (1, second)],
+            now: Interval { a: 0, b: 1, w: 0.0 },
+            ahead: None,
+            reads: 2,
+            failure: None,
+        }
+    }
+
+    /// The clock.
+    pub fn clock(&self) -> &crate::physics::mesh_flow::series::SeriesClock {
+        &self.spec.clock
+    }
+
+    /// The interval of the last [`FlowSeries::advance`].
+    pub fn interval(&self) -> Interval {
+        self.now
+    }
+
+    /// Snapshots read so far.
+    pub fn reads(&self) -> usize {
+        self.reads
+    }
+
+    /// The carrier of the current interval.
+    pub fn blend(&self) -> Blend<'_> {
+        Blend {
+            a: &self.pair[0].1,
+            b: &self.pair[1].1,
+            w: self.now.w,
+        }
+    }
+
+    /// Snapshot `k`: one of the pair, the one read ahead, or read now.
+    fn get(&mut self, k: usize) -> Result<Arc<MeshFlow>, String> {
+        if let Some((_, f)) = self.pair.iter().find(|(i, _)| *i == k) {
+            return Ok(Arc::clone(f));
+        }
+        if self.ahead.as_ref().is_some_and(|(i, _)| *i == k) {
+            let (_, h) = self.ahead.take().expect("checked");
+            return match h.join() {
+                Ok(r) => r.map(Arc::new),
+                Err(_) => Err(format!("reading snapshot {k} panicked")),
+            };
+        }
+        self.reads += 1;
+        (self.spec.load)(k).map(Arc::new)
+    }
+
+    /// Make the two snapshots around simulation time `t` (s) current, and start reading
+    /// the next one.
+    pub fn advance(&mut self, t: f64) {
+        if self.failure.is_some() {
+            return;
+        }
+        let iv = self.spec.clock.at(t);
+        if (self.pair[0].0, self.pair[1].0) != (iv.a, iv.b) {
+            match (self.get(iv.a), self.get(iv.b)) {
+                (Ok(a), Ok(b)) => self.pair = [(iv.a, a), (iv.b, b)],
+                (Err(e), _) | (_, Err(e)) => {
+                    self.failure = Some(e);
+                    return;
+                }
+            }
+        }
+        self.now = iv;
+        let next = self.spec.clock.after(iv);
+        // a read ahead the clock no longer heads for (a restart elsewhere) is dropped
+        if self.ahead.as_ref().is_some_and(|(i, _)| Some(*i) != next) {
+            self.ahead = None;
+        }
+        if let Some(k) = next
+            && self.ahead.is_none()
+            && self.pair.iter().all(|(i, _)| *i != k)
+        {
+            let load = Arc::clone(&self.spec.load);
+            self.reads += 1;
+            self.ahead = Some((k, std::thread::spawn(move || load(k))));
+        }
+    }
+}
+
+/// Add the series' system (before the carrier modifiers and the integration).
+pub fn plugin(world: &mut World, b: &mut StepBuilder, series: FlowSeries) {
+    world.insert_resource(series);
+    b.add(
+        StepSet::Integration,
+        "flow_series",
+        StepSystem::AdvanceFlowSeries,
+        advance_flow_series,
+    );
+}
+
+/// Bring the snapshots around the coming step's mid time into memory.
+pub fn advance_flow_series(clock: Res<SimClock>, mut s: ResMut<FlowSeries>) {
+    s.advance((clock.step as f64 + 0.5) * clock.dt);
+}

@@ -1,0 +1,203 @@
+//! `[flow] series`: an OpenFOAM case's time directories as one unsteady field
+//! ([`scg_core::physics::mesh_flow::series`]).
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use scg_core::physics::mesh_flow::series::{FlowSeriesSpec, SeriesClock, SnapshotLoader};
+use scg_core::physics::mesh_flow::{MeshFlow, WallFunctionSpec};
+use scg_mesh::PolyMesh;
+use scg_mesh::foam::{self, TimeSel};
+
+use super::Ctx;
+use crate::error::SceneError;
+use crate::model::SceneSeries;
+use crate::raw::{RawFlow, RawScene, RawSeries};
+
+/// The time directories of `case` in the window of `s` (at least two), each holding
+/// `field` and no mesh of its own.
+pub(super) fn window(
+    s: &RawSeries,
+    case: &Path,
+    field: &str,
+    cx: &Ctx,
+) -> Result<Vec<(f64, PathBuf)>, SceneError> {
+    let shown = case.display();
+    let start = match s.start {
+        Some(t) => cx.finite("flow.series.start", t)?,
+        None => f64::NEG_INFINITY,
+    };
+    let end = match s.end {
+        Some(t) => cx.finite("flow.series.end", t)?,
+        None => f64::INFINITY,
+    };
+    if start >= end {
+        return Err(cx.err("flow.series.end", "must be after flow.series.start"));
+    }
+    let all = foam::time_dirs(case).map_err(|e| cx.err("flow.case", format!("{shown}: {e}")))?;
+    let tol = |t: f64| 1e-12 * t.abs().max(1.0);
+    let dirs: Vec<(f64, PathBuf)> = all
+        .into_iter()
+        .filter(|(t, _)| *t >= start - tol(start) && *t <= end + tol(end))
+        .collect();
+    if dirs.len() < 2 {
+        let window = format!(
+            "[{}, {}]",
+            s.start.map_or("first".into(), |t| t.to_string()),
+            s.end.map_or("last".into(), |t| t.to_string())
+        );
+        return Err(cx.err(
+            "flow.series",
+            format!(
+                "{shown}: {} time director{} in the window {window}: a series needs at least two",
+                dirs.len(),
+                if dirs.len() == 1 { "y" } else { "ies" }
+            ),
+        ));
+    }
+    for (_, d) in &dirs {
+        if d.join("polyMesh").exists() {
+            return Err(cx.err(
+                "flow.series",
+                format!(
+                    "{}: has a polyMesh of its own: the mesh changes in time, and a series \
+                     needs one mesh (constant/polyMesh) for all its snapshots",
+                    d.display()
+                ),
+            ));
+        }
+        let file = d.join(field);
+        let gz = d.join(format!("{field}.gz"));
+        if !file.is_file() && !gz.is_file() {
+            return Err(cx.err(
+                "flow.series",
+                format!(
+                    "{}: no field `{field}` in this time directory of the window",
+                    d.display()
+                ),
+            ));
+        }
+    }
+    Ok(dirs)
+}
+
+/// The series of the window `dirs` of `field` in `case` on the flow `first` (snapshot
+/// 0): its clock, its loader (each snapshot's field read with `read_mesh`, the mesh as the case gives it,
+/// and built on `first`'s mesh with `wall`) and snapshot 1, read now.
+pub(super) fn series(
+    s: &RawSeries,
+    dirs: Vec<(f64, PathBuf)>,
+    (case, field): (&Path, &str),
+    read_mesh: Arc<PolyMesh>,
+    first: &Arc<MeshFlow>,
+    wall: Option<WallFunctionSpec>,
+    cx: &Ctx,
+) -> Result<SceneSeries, SceneError> {
+    let times: Vec<f64> = dirs.iter().map(|(t, _)| *t).collect();
+    let clock = SeriesClock::new(&times, s.cycle).map_err(|e| cx.err("flow.series", e))?;
+    let (case, field_name) = (case.to_path_buf(), field.to_string());
+    let t = times.clone();
+    // snapshot k's field, as the case gives it
+    let read = move |k: usize| {
+        foam::read_vector_field(&case, &read_mesh, TimeSel::Time(t[k]), &field_name).map_err(|e| {
+            let dir = case.join(format!("{}", t[k]));
+            format!("{}: field `{field_name}`: {e}", dir.display())
+        })
+    };
+    // the change across the seam of a cycling window, relative to the field's rms (the
+    // last snapshot's cells only: no flow is built for it)
+    let seam = match s.cycle {
+        true => {
+            let last = read(times.len() - 1).map_err(|e| cx.err("flow.series", e))?;
+            Some(seam_change(first.cell_values(), &last.cells))
+        }
+        false => None,
+    };
+    let base = Arc::clone(first);
+    let load: Arc<SnapshotLoader> = Arc::new(move |k: usize| {
+        let u = read(k)?;
+        base.snapshot(&u, wall.as_ref())
+            .map_err(|e| format!("snapshot {k} of the series: {e}"))
+    });
+    let second = load(1).map_err(|e| cx.err("flow.series", e))?;
+    Ok(SceneSeries {
+        spec: FlowSeriesSpec {
+            clock,
+            load,
+            second: Arc::new(second),
+        },
+        start: times[0],
+        dirs: dirs.into_iter().map(|(_, d)| d).collect(),
+        seam,
+    })
+}
+
+/// ‖U_last − U_first‖ / ‖U_first‖ over the cells (rms of each).
+fn seam_change(a: &[glam::DVec3], b: &[glam::DVec3]) -> f64 {
+    let d: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (*y - *x).length_squared())
+        .sum();
+    let n: f64 = a.iter().map(|x| x.length_squared()).sum();
+    if n > 0.0 { (d / n).sqrt() } else { 0.0 }
+}
+
+/// What a series does not carry yet, refused by name; a run past the end of a window
+/// that does not cycle.
+pub(super) fn supported(
+    raw: &RawScene,
+    series: &SceneSeries,
+    duration: f64,
+    cx: &Ctx,
+) -> Result<(), SceneError> {
+    let no = |key: &str, why: &str| -> Result<(), SceneError> {
+        Err(cx.err(
+            key,
+            format!("cannot be combined with flow.series yet: {why}"),
+        ))
+    };
+    if raw.dispersion.is_some() {
+        return no(
+            "dispersion",
+            "the turbulence fields (k, ε/ω) are read from one time only",
+        );
+    }
+    if let Some(f) = &raw.forces {
+        for (key, on) in [
+            ("forces.pressure_gradient", f.pressure_gradient),
+            ("forces.added_mass", f.added_mass.is_some()),
+            ("forces.rubinow_keller", f.rubinow_keller),
+        ] {
+            if on {
+                return no(
+                    key,
+                    "it needs Du/Dt (or the fluid's spin) with the field's change in time",
+                );
+            }
+        }
+    }
+    let span = series.spec.clock.span();
+    if !series.spec.clock.cycles() && duration > span * (1.0 + 1e-12) {
+        return Err(cx.err(
+            "duration",
+            format!(
+                "{duration} s runs past the series' window ({span} s from t = {}): set \
+                 flow.series.cycle = true to repeat it, or shorten the run",
+                series.start
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The keys of `[flow]` a series refuses (`flow.time` picks one snapshot).
+pub(super) fn no_time(f: &RawFlow, cx: &Ctx) -> Result<(), SceneError> {
+    if f.time.is_some() {
+        return Err(cx.err(
+            "flow.time",
+            "picks one snapshot; flow.series reads a window of them (give one or the other)",
+        ));
+    }
+    Ok(())
+}
