@@ -13,8 +13,8 @@ use std::path::Path;
 use glam::DVec3;
 use scg::scene::Scene;
 use scg_mesh::build::{BoxMesh, CellShape, PatchNaming};
-use scg_mesh::foam::{Format, write_case, write_vector_field};
-use scg_mesh::{CellField, MeshGeometry, PolyMesh};
+use scg_mesh::foam::{Format, write_case, write_scalar_field, write_vector_field};
+use scg_mesh::{CellField, MeshGeometry, PolyMesh, ScalarField};
 
 const SIDES: &str = r#"walls = ["xmin", "xmax", "ymin", "ymax", "zmin", "zmax"]"#;
 
@@ -201,8 +201,14 @@ fn final_bits(scene: &Scene) -> Vec<[u64; 6]> {
         .collect()
 }
 
-/// Many particles spread over the box.
+/// Many particles spread over the box, in the series `series` (the body of
+/// `flow.series`).
 fn many(series: &str, duration: f64) -> String {
+    many_in(&format!("series = {{ {series} }}"), duration)
+}
+
+/// [`many`] with `flow` as the line that picks the field's time(s).
+fn many_in(flow: &str, duration: f64) -> String {
     let mut pos = Vec::new();
     let mut vel = Vec::new();
     for i in 0..64 {
@@ -212,7 +218,7 @@ fn many(series: &str, duration: f64) -> String {
     }
     format!(
         "duration = {duration:e}\ndt = {:e}\n[fluid]\ndensity = 1.2\nviscosity = 1.8e-5\n\
-         [flow]\nkind = \"openfoam\"\ncase = \"case\"\nseries = {{ {series} }}\n\
+         [flow]\nkind = \"openfoam\"\ncase = \"case\"\n{flow}\n\
          [flow.patches]\n{SIDES}\nwall_model = \"rebound\"\nrestitution = 0.8\n\
          [drag]\nlaw = \"schiller_naumann\"\n[[groups]]\nname = \"p\"\ndiameter = 1.0e-4\n\
          density = 1.0e3\npositions = [{}]\nvelocities = [{}]\n",
@@ -310,10 +316,8 @@ fn what_a_series_cannot_take_is_refused_by_key() {
         (many("start = 0.3", 0.1), "flow.series"),
         (many("", 0.75), "duration"),
         (
-            format!(
-                "{base}[dispersion]\nmodel = \"stochastic_ras\"\nk = \"k\"\nepsilon = \"epsilon\"\n"
-            ),
-            "dispersion",
+            format!("{base}[forces]\nrubinow_keller = true\n"),
+            "forces.rubinow_keller",
         ),
         (
             format!("{base}[forces]\npressure_gradient = true\n"),
@@ -335,4 +339,99 @@ fn what_a_series_cannot_take_is_refused_by_key() {
     .unwrap();
     let e = load_err(dir.path(), &base);
     assert!(e.contains("the mesh changes in time"), "{e}");
+}
+
+/// `k(t, x)` and `ε(x)` written beside the velocity of every time folder of `dir/case`.
+fn write_turbulence(
+    dir: &Path,
+    mesh: &PolyMesh,
+    times: &[f64],
+    k: impl Fn(f64, DVec3) -> f64,
+    epsilon: impl Fn(DVec3) -> f64,
+) {
+    let g = MeshGeometry::new(mesh).unwrap();
+    let scalar = |f: &dyn Fn(DVec3) -> f64| ScalarField {
+        cells: g.cell_centres.iter().map(|&c| f(c)).collect(),
+        patches: vec![None; mesh.patches.len()],
+    };
+    for &t in times {
+        let case = dir.join("case");
+        let (kt, et) = (scalar(&|x| k(t, x)), scalar(&epsilon));
+        write_scalar_field(&case, &format!("{t}"), "k", mesh, &kt, Format::Binary).unwrap();
+        write_scalar_field(&case, &format!("{t}"), "epsilon", mesh, &et, Format::Binary).unwrap();
+    }
+}
+
+/// With `[dispersion]` (either model) a series of equal snapshots moves every particle
+/// as the frozen field does, bit for bit: the blend, the turbulence read per snapshot and
+/// the mean velocity read afresh change no bit.
+#[test]
+fn dispersion_over_equal_snapshots_equals_the_frozen_field() {
+    let mesh = unit_box();
+    let dir = tempfile::tempdir().unwrap();
+    let times = [0.0, 0.25, 0.5, 0.75];
+    series_case(dir.path(), &mesh, &times, |_| wavy(&mesh, 1));
+    write_turbulence(
+        dir.path(),
+        &mesh,
+        &times,
+        |_, x| 0.02 * (1.0 + x.x * x.y),
+        |x| 0.5 + x.z,
+    );
+    for model in ["stochastic_ras", "langevin"] {
+        let disp = format!("[dispersion]\nmodel = \"{model}\"\nk = \"k\"\nepsilon = \"epsilon\"\n");
+        let series = load(dir.path(), &(many("", 0.6) + &disp));
+        let frozen = load(dir.path(), &(many_in("time = 0", 0.6) + &disp));
+        let (a, b) = (final_bits(&series), final_bits(&frozen));
+        assert_eq!(a, b, "{model}: the series differs from its frozen snapshot");
+        // and dispersion moved them (the run without it ends elsewhere)
+        let plain = load(dir.path(), &many_in("time = 0", 0.6));
+        assert_ne!(final_bits(&plain), a, "{model} changed nothing");
+    }
+}
+
+/// Tracers at rest in still air, the Langevin walk with k = 0.01 + 0.12·t m²/s² (0.01
+/// at t = 0, 0.04 at 0.25 s, uniform in space), ε = 1 m²/s³: the normalised walk's
+/// fluctuation u′ = σ·w has the variance 2k/3 per direction of the k at the step's mid
+/// time; measured over 3000 tracers × 3 directions against that, and against the first
+/// snapshot's k frozen.
+#[test]
+fn the_langevin_walk_follows_k_in_time() {
+    let mesh = unit_box();
+    let dir = tempfile::tempdir().unwrap();
+    let times = [0.0, 0.25];
+    series_case(dir.path(), &mesh, &times, |_| {
+        affine(&mesh, |_| DVec3::ZERO)
+    });
+    let k = |t: f64| 0.01 + 0.12 * t;
+    write_turbulence(dir.path(), &mesh, &times, |t, _| k(t), |_| 1.0);
+    let dt = 1.0 / 1024.0;
+    let duration = 0.125;
+    let text = format!(
+        "duration = {duration:e}\ndt = {dt:e}\nseed = 3\n[fluid]\ndensity = 1.2\n\
+         viscosity = 1.8e-5\n[flow]\nkind = \"openfoam\"\ncase = \"case\"\nseries = {{}}\n\
+         [flow.patches]\n{SIDES}\nwall_model = \"rebound\"\n[drag]\nlaw = \"stokes\"\n\
+         [dispersion]\nmodel = \"langevin\"\nk = \"k\"\nepsilon = \"epsilon\"\n\
+         [[groups]]\nname = \"tracer\"\ndiameter = 1.0e-6\ndensity = 1.0e3\ncount = 3000\n\
+         region = {{ kind = \"box\", min = [0.3, 0.3, 0.3], max = [0.7, 0.7, 0.7] }}\n"
+    );
+    let sc = load(dir.path(), &text);
+    let mut sim = sc.build(false);
+    sim.run(sc.steps(), |_| true).unwrap();
+    let mut q = sim.world.query::<&scg::core::components::CarrierOffset>();
+    let offs: Vec<DVec3> = q.iter(&sim.world).map(|o| o.0).collect();
+    assert_eq!(offs.len(), 3000);
+    let n = 3.0 * offs.len() as f64;
+    let var = offs.iter().map(|u| u.length_squared()).sum::<f64>() / n;
+    // the variance of a variance estimate from n normal draws: 2σ⁴/n
+    let t_mid = (sc.steps() as f64 - 0.5) * dt;
+    let want = 2.0 * k(t_mid) / 3.0;
+    let half = 3.0 * want * (2.0 / n).sqrt();
+    println!(
+        "⟨u′²⟩ = {var:.5e} m²/s², 2k/3 at t = {t_mid:.5} s: {want:.5e} ± {half:.1e} (3σ); \
+         the first snapshot's: {:.5e}",
+        2.0 * k(0.0) / 3.0
+    );
+    assert!((var - want).abs() <= half, "{var} vs {want} ± {half}");
+    assert!((var - 2.0 * k(0.0) / 3.0).abs() > 10.0 * half);
 }

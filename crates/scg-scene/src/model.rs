@@ -309,6 +309,8 @@ pub struct SceneSeries {
     pub spec: scg_core::physics::mesh_flow::series::FlowSeriesSpec,
     /// The CFD time of the first snapshot (simulation time 0), s.
     pub start: f64,
+    /// The CFD time of every snapshot, s.
+    pub times: Vec<f64>,
     /// The time directories, in order.
     pub dirs: Vec<std::path::PathBuf>,
     /// With `cycle`: ‖U_last − U_first‖/‖U_first‖ over the cells (the change across the

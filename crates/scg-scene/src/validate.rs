@@ -186,7 +186,7 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
         Some(f) => flow_field(f, cx)?,
     };
     let rotors = frame::case_frame(&raw, cx)?;
-    let mesh_flow = match &raw.flow {
+    let mut mesh_flow = match &raw.flow {
         Some(f) => mesh_flow(f, fluid.as_ref(), &rotors, cx)?,
         None => None,
     };
@@ -211,7 +211,13 @@ fn validate(raw: RawScene, cx: &Ctx, stem: &str) -> Result<Scene, SceneError> {
                     "turbulent dispersion acts through the drag: it needs a [drag] table",
                 ));
             }
-            let (d, src) = dispersion::dispersion(d, mesh_flow.as_ref(), seed, cx)?;
+            let (d, src, fields) = dispersion::dispersion(d, mesh_flow.as_ref(), seed, cx)?;
+            // an unsteady series reads the same fields from every snapshot
+            if let (Some(m), Some(fields)) = (mesh_flow.as_mut(), fields)
+                && m.series.is_some()
+            {
+                series::with_turbulence(m, &d, fields, cx)?;
+            }
             (Some(d), src)
         }
     };

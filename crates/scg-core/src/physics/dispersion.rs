@@ -274,17 +274,23 @@ impl Turbulence {
                 grad_sigma: DVec3::ZERO,
             },
             Turbulence::Profile(p) => p.at(x),
-            Turbulence::Cells(c) => {
-                let i = cell as usize;
-                match (c.k.get(i), c.epsilon.get(i)) {
-                    (Some(&k), Some(&epsilon)) => Local {
-                        k,
-                        epsilon,
-                        grad_sigma: c.grad_sigma.get(i).copied().unwrap_or(DVec3::ZERO),
-                    },
-                    _ => Local::default(),
-                }
-            }
+            Turbulence::Cells(c) => c.local(cell),
+        }
+    }
+}
+
+impl CellTurbulence {
+    /// The turbulence of mesh cell `cell` (none past the mesh: a particle not located).
+    #[inline]
+    pub fn local(&self, cell: u32) -> Local {
+        let i = cell as usize;
+        match (self.k.get(i), self.epsilon.get(i)) {
+            (Some(&k), Some(&epsilon)) => Local {
+                k,
+                epsilon,
+                grad_sigma: self.grad_sigma.get(i).copied().unwrap_or(DVec3::ZERO),
+            },
+            _ => Local::default(),
         }
     }
 }

@@ -12,6 +12,7 @@
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 
+use super::flow_series::FlowSeries;
 use super::mesh_flow::MeshFlowState;
 use super::table::{bypass, columns, columns_mut};
 use crate::components::{
@@ -122,6 +123,7 @@ pub fn disperse(
         Option<&FlowAtCentre>,
     )>,
     mut state: Query<(&mut Eddy, &mut CarrierOffset)>,
+    series: Option<Res<FlowSeries>>,
 ) {
     let Some(d) = m.dispersion() else { return };
     let (Some((ids, xs, vs, cells, known)), Some((eddies, offs))) =
@@ -131,16 +133,27 @@ pub fn disperse(
     };
     let (dt, step) = (clock.dt, clock.step);
     let mesh = mesh.as_ref().map(|m| &*m.spec.flow);
-    let mean = |cell: u32, x: DVec3| match mesh {
-        Some(mf) => Carrier::at(mf, Place::cell(cell), x).0,
-        None => flow.velocity(x),
+    // an unsteady flow: its two snapshots' velocity and turbulence at the step's mid time
+    // (the value the last landing kept is of one snapshot: not read)
+    let series = series.as_deref();
+    let blend = series.map(FlowSeries::blend);
+    let known = known.filter(|_| series.is_none());
+    let mean = |cell: u32, x: DVec3| match (blend, mesh) {
+        (Some(b), _) => Carrier::at(&b, Place::cell(cell), x).0,
+        (None, Some(mf)) => Carrier::at(mf, Place::cell(cell), x).0,
+        (None, None) => flow.velocity(x),
+    };
+    let turbulence = |cell: u32, x: DVec3| {
+        series
+            .and_then(|s| s.turbulence(cell))
+            .unwrap_or_else(|| d.turbulence.at(cell, x))
     };
     let cols = (ids, xs, vs, cells, known, bypass(eddies), bypass(offs));
     for_each_piece(cols, |(ids, xs, vs, cells, known, eddies, offs)| {
         for i in 0..ids.len() {
             let cell = cells.map_or(0, |c| c[i].0);
             let x = xs[i].0;
-            let t = d.turbulence.at(cell, x);
+            let t = turbulence(cell, x);
             let mut s = State {
                 u: offs[i].0,
                 age: eddies[i].age,

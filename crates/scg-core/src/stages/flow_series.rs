@@ -10,8 +10,11 @@ use std::thread::JoinHandle;
 
 use bevy_ecs::prelude::*;
 
+use crate::physics::dispersion::Local;
 use crate::physics::mesh_flow::MeshFlow;
-use crate::physics::mesh_flow::series::{Blend, FlowSeriesSpec, Interval};
+use crate::physics::mesh_flow::series::{
+    Blend, FlowSeriesSpec, Interval, Snapshot, blend_turbulence,
+};
 use crate::state::SimClock;
 use crate::step::{StepBuilder, StepSet, StepSystem};
 
@@ -20,10 +23,10 @@ use crate::step::{StepBuilder, StepSet, StepSystem};
 pub struct FlowSeries {
     spec: FlowSeriesSpec,
     /// The pair of the current interval: snapshots `now.a` and `now.b`.
-    pair: [(usize, Arc<MeshFlow>); 2],
+    pair: [(usize, Snapshot); 2],
     now: Interval,
     /// The snapshot being read ahead.
-    ahead: Option<(usize, JoinHandle<Result<MeshFlow, String>>)>,
+    ahead: Option<(usize, JoinHandle<Result<Snapshot, String>>)>,
     /// Snapshots read so far (including the first, given).
     reads: usize,
     /// A snapshot that could not be read: the run stops ([`crate::sim::SimError::Flow`]).
@@ -33,7 +36,11 @@ pub struct FlowSeries {
 impl FlowSeries {
     /// The series of `spec` whose first snapshot is `first` (the scene's flow).
     pub fn new(spec: FlowSeriesSpec, first: Arc<MeshFlow>) -> Self {
-        let second = Arc::clone(&spec.second);
+        let first = Snapshot {
+            flow: first,
+            turbulence: spec.first_turbulence.clone(),
+        };
+        let second = spec.second.clone();
         FlowSeries {
             spec,
             pair: [(0, first), (1, second)],
@@ -62,26 +69,36 @@ impl FlowSeries {
     /// The carrier of the current interval.
     pub fn blend(&self) -> Blend<'_> {
         Blend {
-            a: &self.pair[0].1,
-            b: &self.pair[1].1,
+            a: &self.pair[0].1.flow,
+            b: &self.pair[1].1.flow,
             w: self.now.w,
         }
     }
 
+    /// k, ε and ∇σ of mesh cell `cell` at the current weight, when the snapshots carry
+    /// turbulence (`[dispersion]` by the CFD's fields).
+    #[inline]
+    pub fn turbulence(&self, cell: u32) -> Option<Local> {
+        match (&self.pair[0].1.turbulence, &self.pair[1].1.turbulence) {
+            (Some(a), Some(b)) => Some(blend_turbulence(a.local(cell), b.local(cell), self.now.w)),
+            _ => None,
+        }
+    }
+
     /// Snapshot `k`: one of the pair, the one read ahead, or read now.
-    fn get(&mut self, k: usize) -> Result<Arc<MeshFlow>, String> {
+    fn get(&mut self, k: usize) -> Result<Snapshot, String> {
         if let Some((_, f)) = self.pair.iter().find(|(i, _)| *i == k) {
-            return Ok(Arc::clone(f));
+            return Ok(f.clone());
         }
         if self.ahead.as_ref().is_some_and(|(i, _)| *i == k) {
             let (_, h) = self.ahead.take().expect("checked");
             return match h.join() {
-                Ok(r) => r.map(Arc::new),
+                Ok(r) => r,
                 Err(_) => Err(format!("reading snapshot {k} panicked")),
             };
         }
         self.reads += 1;
-        (self.spec.load)(k).map(Arc::new)
+        (self.spec.load)(k)
     }
 
     /// Make the two snapshots around simulation time `t` (s) current, and start reading

@@ -17,13 +17,14 @@ use crate::error::SceneError;
 use crate::model::{FieldReader, SceneMeshFlow};
 use crate::raw::{RawDispersion, RawDispersionModel, RawProfile, RawTurbulenceValue};
 
-/// `[dispersion]` → the carrier modifier and a line saying where its turbulence came from.
+/// `[dispersion]` → the carrier modifier, a line saying where its turbulence came from and,
+/// on a mesh, the fields it was read from.
 pub(super) fn dispersion(
     d: &RawDispersion,
     mesh: Option<&SceneMeshFlow>,
     seed: u64,
     cx: &Ctx,
-) -> Result<(Dispersion, String), SceneError> {
+) -> Result<(Dispersion, String, Option<TurbulenceFields>), SceneError> {
     let model = match d.model {
         RawDispersionModel::StochasticRas => {
             if d.c0.is_some() {
@@ -44,6 +45,7 @@ pub(super) fn dispersion(
             "give either `epsilon` or `omega`, not both",
         ));
     }
+    let mut fields = None;
     let (turbulence, source, mask) = match (mesh, &d.profile) {
         (Some(_), Some(_)) => {
             return Err(cx.err(
@@ -115,7 +117,8 @@ pub(super) fn dispersion(
             (Turbulence::Uniform { k, epsilon }, src, DVec3::ONE)
         }
         (Some(m), None) => {
-            let (t, src) = mesh_turbulence(d, m, matches!(model, Model::Langevin { .. }), cx)?;
+            let (t, src, f) = mesh_turbulence(d, m, matches!(model, Model::Langevin { .. }), cx)?;
+            fields = Some(f);
             (
                 Turbulence::Cells(Arc::new(t)),
                 src,
@@ -131,6 +134,7 @@ pub(super) fn dispersion(
             mask,
         },
         source,
+        fields,
     ))
 }
 
@@ -255,17 +259,33 @@ fn profile(p: &RawProfile, cx: &Ctx) -> Result<(Profile, String), SceneError> {
     ))
 }
 
-/// k and ε per cell from the mesh flow's source.
+/// The fields a mesh flow's turbulence is read from.
+#[derive(Clone, Debug)]
+pub(super) struct TurbulenceFields {
+    k: String,
+    dissipation: Dissipation,
+    /// ∇σ as well (the Langevin walk's drift).
+    gradient: bool,
+}
+
+/// ε directly, or ω with ε = C_μ·k·ω.
+#[derive(Clone, Debug)]
+enum Dissipation {
+    Epsilon(String),
+    Omega(String),
+}
+
+/// k and ε per cell from the mesh flow's source, the line saying so, and the fields'
+/// names (an unsteady series reads the same fields from each of its snapshots).
 fn mesh_turbulence(
     d: &RawDispersion,
     m: &SceneMeshFlow,
     gradient: bool,
     cx: &Ctx,
-) -> Result<(CellTurbulence, String), SceneError> {
+) -> Result<(CellTurbulence, String, TurbulenceFields), SceneError> {
     let Some(reader) = &m.reader else {
         return Err(cx.err("dispersion", "this flow has no source to read k and ε from"));
     };
-    let mesh = m.flow.mesh();
     let field_name = |key: &str, v: &Option<RawTurbulenceValue>| match v {
         Some(RawTurbulenceValue::Field(f)) if !f.is_empty() => Ok(Some(f.clone())),
         Some(RawTurbulenceValue::Field(_)) => {
@@ -284,7 +304,47 @@ fn mesh_turbulence(
             "missing: the name of the turbulent kinetic energy field (e.g. `k = \"k\"`)",
         )
     })?;
-    let read = |key: &str, name: &str| -> Result<ScalarField, SceneError> {
+    let (dissipation, src) = match (
+        field_name("epsilon", &d.epsilon)?,
+        field_name("omega", &d.omega)?,
+    ) {
+        (Some(e), _) => (
+            Dissipation::Epsilon(e.clone()),
+            format!("k and ε from the fields `{k_name}` and `{e}`"),
+        ),
+        (None, Some(w)) => (
+            Dissipation::Omega(w.clone()),
+            format!(
+                "k from the field `{k_name}`, ε = {C_MU}·k·ω from the field `{w}` (no ε given)"
+            ),
+        ),
+        (None, None) => {
+            return Err(cx.err(
+                "dispersion.epsilon",
+                "missing: the name of the dissipation field (`epsilon = \"epsilon\"`) or of \
+                 the specific dissipation (`omega = \"omega\"`, ε = 0.09·k·ω)",
+            ));
+        }
+    };
+    let fields = TurbulenceFields {
+        k: k_name,
+        dissipation,
+        gradient,
+    };
+    let t = read_turbulence(&fields, reader, m.flow.mesh(), m.flow.geometry())
+        .map_err(|(key, e)| cx.err(key, e))?;
+    Ok((t, src, fields))
+}
+
+/// The turbulence of `fields` read by `reader` on `mesh`: k, ε (from ω when given so) and,
+/// when asked, ∇σ per cell. An error gives its scene key and the message (file, field).
+pub(super) fn read_turbulence(
+    fields: &TurbulenceFields,
+    reader: &FieldReader,
+    mesh: &PolyMesh,
+    geom: &MeshGeometry,
+) -> Result<CellTurbulence, (&'static str, String)> {
+    let read = |key: &'static str, name: &str| -> Result<ScalarField, (&'static str, String)> {
         let (shown, r) = match reader {
             FieldReader::Foam { case, time } => (
                 case.display().to_string(),
@@ -295,27 +355,16 @@ fn mesh_turbulence(
                 scg_mesh::vtk::read_scalar(file, name),
             ),
         };
-        let f = r.map_err(|e| {
-            cx.err(
-                &format!("dispersion.{key}"),
-                format!("{shown}: field `{name}`: {e}"),
-            )
-        })?;
+        let f = r.map_err(|e| (key, format!("{shown}: field `{name}`: {e}")))?;
         f.check_non_negative(&shown, name, mesh)
-            .map_err(|e| cx.err(&format!("dispersion.{key}"), format!("field `{name}`: {e}")))?;
+            .map_err(|e| (key, format!("field `{name}`: {e}")))?;
         Ok(f)
     };
-    let k = read("k", &k_name)?;
-    let (epsilon, src) = match (
-        field_name("epsilon", &d.epsilon)?,
-        field_name("omega", &d.omega)?,
-    ) {
-        (Some(e), _) => (
-            read("epsilon", &e)?,
-            format!("k and ε from the fields `{k_name}` and `{e}`"),
-        ),
-        (None, Some(w)) => {
-            let omega = read("omega", &w)?;
+    let k = read("dispersion.k", &fields.k)?;
+    let epsilon = match &fields.dissipation {
+        Dissipation::Epsilon(e) => read("dispersion.epsilon", e)?,
+        Dissipation::Omega(w) => {
+            let omega = read("dispersion.omega", w)?;
             let times = |a: &[f64], b: &[f64]| -> Vec<f64> {
                 a.iter()
                     .zip(b)
@@ -331,37 +380,22 @@ fn mesh_turbulence(
                     _ => None,
                 })
                 .collect();
-            (
-                ScalarField {
-                    cells: times(&k.cells, &omega.cells),
-                    patches,
-                },
-                format!(
-                    "k from the field `{k_name}`, ε = {C_MU}·k·ω from the field `{w}` (no ε given)"
-                ),
-            )
-        }
-        (None, None) => {
-            return Err(cx.err(
-                "dispersion.epsilon",
-                "missing: the name of the dissipation field (`epsilon = \"epsilon\"`) or of \
-                 the specific dissipation (`omega = \"omega\"`, ε = 0.09·k·ω)",
-            ));
+            ScalarField {
+                cells: times(&k.cells, &omega.cells),
+                patches,
+            }
         }
     };
-    let grad_sigma = if gradient {
-        gauss_gradient_of_sigma(mesh, m.flow.geometry(), &k)
+    let grad_sigma = if fields.gradient {
+        gauss_gradient_of_sigma(mesh, geom, &k)
     } else {
         Vec::new()
     };
-    Ok((
-        CellTurbulence {
-            k: k.cells,
-            epsilon: epsilon.cells,
-            grad_sigma,
-        },
-        src,
-    ))
+    Ok(CellTurbulence {
+        k: k.cells,
+        epsilon: epsilon.cells,
+        grad_sigma,
+    })
 }
 
 /// ∇σ per cell, σ = √(2k/3), by the Gauss theorem: (1/V)·Σ_f σ_f·A_f, with σ_f linear

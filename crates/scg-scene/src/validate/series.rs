@@ -9,9 +9,14 @@ use scg_core::physics::mesh_flow::{MeshFlow, WallFunctionSpec};
 use scg_mesh::PolyMesh;
 use scg_mesh::foam::{self, TimeSel};
 
+use scg_core::physics::dispersion::Turbulence;
+use scg_core::physics::mesh_flow::series::Snapshot;
+use scg_core::stages::carrier::Dispersion;
+
 use super::Ctx;
+use super::dispersion::{TurbulenceFields, read_turbulence};
 use crate::error::SceneError;
-use crate::model::SceneSeries;
+use crate::model::{FieldReader, SceneMeshFlow, SceneSeries};
 use crate::raw::{RawFlow, RawScene, RawSeries};
 
 /// The time directories of `case` in the window of `s` (at least two), each holding
@@ -116,17 +121,24 @@ pub(super) fn series(
     let base = Arc::clone(first);
     let load: Arc<SnapshotLoader> = Arc::new(move |k: usize| {
         let u = read(k)?;
-        base.snapshot(&u, wall.as_ref())
-            .map_err(|e| format!("snapshot {k} of the series: {e}"))
+        let flow = base
+            .snapshot(&u, wall.as_ref())
+            .map_err(|e| format!("snapshot {k} of the series: {e}"))?;
+        Ok(Snapshot {
+            flow: Arc::new(flow),
+            turbulence: None,
+        })
     });
     let second = load(1).map_err(|e| cx.err("flow.series", e))?;
     Ok(SceneSeries {
         spec: FlowSeriesSpec {
             clock,
             load,
-            second: Arc::new(second),
+            second,
+            first_turbulence: None,
         },
         start: times[0],
+        times: times.clone(),
         dirs: dirs.into_iter().map(|(_, d)| d).collect(),
         seam,
     })
@@ -143,6 +155,42 @@ fn seam_change(a: &[glam::DVec3], b: &[glam::DVec3]) -> f64 {
     if n > 0.0 { (d / n).sqrt() } else { 0.0 }
 }
 
+/// A series under `[dispersion]` by the CFD's fields: each snapshot reads the same k and
+/// ε (or ω) fields from its own time folder, snapshot 0's being the dispersion's.
+pub(super) fn with_turbulence(
+    m: &mut SceneMeshFlow,
+    d: &Dispersion,
+    fields: TurbulenceFields,
+    cx: &Ctx,
+) -> Result<(), SceneError> {
+    let (Some(FieldReader::Foam { case, .. }), Some(s)) = (m.reader.clone(), m.series.as_mut())
+    else {
+        return Ok(());
+    };
+    let Turbulence::Cells(first) = &d.turbulence else {
+        return Ok(());
+    };
+    let base = Arc::clone(&m.flow);
+    let times = s.times.clone();
+    let read = move |k: usize| {
+        let reader = FieldReader::Foam {
+            case: case.clone(),
+            time: TimeSel::Time(times[k]),
+        };
+        read_turbulence(&fields, &reader, base.mesh(), base.geometry()).map(Arc::new)
+    };
+    let second = read(1).map_err(|(key, e)| cx.err(key, format!("series snapshot 1: {e}")))?;
+    let flows = Arc::clone(&s.spec.load);
+    s.spec.load = Arc::new(move |k: usize| {
+        let mut snap = flows(k)?;
+        snap.turbulence = Some(read(k).map_err(|(key, e)| format!("{key}: {e}"))?);
+        Ok(snap)
+    });
+    s.spec.second.turbulence = Some(second);
+    s.spec.first_turbulence = Some(Arc::clone(first));
+    Ok(())
+}
+
 /// What a series does not carry yet, refused by name; a run past the end of a window
 /// that does not cycle.
 pub(super) fn supported(
@@ -157,12 +205,6 @@ pub(super) fn supported(
             format!("cannot be combined with flow.series yet: {why}"),
         ))
     };
-    if raw.dispersion.is_some() {
-        return no(
-            "dispersion",
-            "the turbulence fields (k, ε/ω) are read from one time only",
-        );
-    }
     if let Some(f) = &raw.forces {
         for (key, on) in [
             ("forces.pressure_gradient", f.pressure_gradient),

@@ -13,6 +13,7 @@ use glam::{DMat3, DVec3};
 
 use super::MeshFlow;
 use crate::physics::carrier::{Carrier, Place};
+use crate::physics::dispersion::{CellTurbulence, Local};
 
 /// The snapshot times of a series and how simulation time runs through them.
 ///
@@ -162,9 +163,18 @@ impl SeriesClock {
     }
 }
 
-/// Reads snapshot k of a series as a [`MeshFlow`] on the series' mesh (an error names the
-/// file and what is wrong with it).
-pub type SnapshotLoader = dyn Fn(usize) -> Result<MeshFlow, String> + Send + Sync;
+/// One snapshot of a series: its flow and, with turbulent dispersion, its k and ε per
+/// cell.
+#[derive(Clone, Debug)]
+pub struct Snapshot {
+    /// The flow on the series' mesh.
+    pub flow: Arc<MeshFlow>,
+    /// k, ε (and ∇σ) per cell, when the scene disperses by the CFD's fields.
+    pub turbulence: Option<Arc<CellTurbulence>>,
+}
+
+/// Reads snapshot k of a series (an error names the file and what is wrong with it).
+pub type SnapshotLoader = dyn Fn(usize) -> Result<Snapshot, String> + Send + Sync;
 
 /// A series as a scene gives it: the clock, the reader of its snapshots and the second
 /// snapshot, read when the scene was (the first is the scene's flow).
@@ -175,7 +185,9 @@ pub struct FlowSeriesSpec {
     /// Reads snapshot k.
     pub load: Arc<SnapshotLoader>,
     /// Snapshot 1.
-    pub second: Arc<MeshFlow>,
+    pub second: Snapshot,
+    /// The first snapshot's turbulence (its flow is the scene's).
+    pub first_turbulence: Option<Arc<CellTurbulence>>,
 }
 
 impl fmt::Debug for FlowSeriesSpec {
@@ -210,6 +222,18 @@ impl Carrier for Blend<'_> {
     fn gradient(&self, cell: u32, _x: DVec3) -> DMat3 {
         let (ga, gb) = (self.a.cell_gradient(cell), self.b.cell_gradient(cell));
         ga + (gb - ga) * self.w
+    }
+}
+
+/// The turbulence of two snapshots blended like their velocities: k, ε and ∇σ each
+/// `(1 − w)·a + w·b`.
+#[inline]
+pub fn blend_turbulence(a: Local, b: Local, w: f64) -> Local {
+    let s = |x: f64, y: f64| if w >= 1.0 { y } else { x + (y - x) * w };
+    Local {
+        k: s(a.k, b.k),
+        epsilon: s(a.epsilon, b.epsilon),
+        grad_sigma: blend(a.grad_sigma, b.grad_sigma, w),
     }
 }
 
@@ -275,5 +299,21 @@ mod tests {
         assert_eq!(blend(a, b, 0.0), a);
         assert_eq!(blend(a, b, 1.0), b);
         assert!((blend(a, b, 0.5) - (a + b) * 0.5).length() < 1e-15);
+        let (ta, tb) = (
+            Local {
+                k: 0.5,
+                epsilon: 2.0,
+                grad_sigma: a,
+            },
+            Local {
+                k: 1.5,
+                epsilon: 1.0,
+                grad_sigma: b,
+            },
+        );
+        assert_eq!(blend_turbulence(ta, tb, 0.0), ta);
+        assert_eq!(blend_turbulence(ta, tb, 1.0), tb);
+        let h = blend_turbulence(ta, tb, 0.25);
+        assert_eq!((h.k, h.epsilon), (0.75, 1.75));
     }
 }
