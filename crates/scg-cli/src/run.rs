@@ -242,38 +242,19 @@ pub fn run(args: RunArgs) -> i32 {
     let mut paths = Vec::new();
     if frames {
         let meta = scene.run_meta(report.messages());
-        let mut sinks: Vec<Box<dyn FrameSink>> = Vec::new();
-        if record {
-            let rrd = args.out.join(format!("{stem}.rrd"));
-            let mcap = args.out.join(format!("{stem}.mcap"));
-            match scg_record::RrdSink::create(&rrd, &meta) {
-                Ok(s) => sinks.push(Box::new(s)),
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return 1;
-                }
+        let sinks = match frame_sinks(&meta, &args.out, &stem, record, &args.vtk, &args.frames_csv)
+        {
+            Ok((sinks, written)) => {
+                paths = written;
+                sinks
             }
-            match scg_record::McapSink::create(&mcap, &meta) {
-                Ok(s) => sinks.push(Box::new(s)),
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return 1;
-                }
-            }
-            paths.push(rrd);
-            paths.push(mcap);
-        }
-        match extra_sinks(&args.vtk, &args.frames_csv, &RunMeta { case: stem, ..meta }) {
-            Ok(extra) => sinks.extend(extra),
             Err(e) => {
                 eprintln!("error: {e}");
                 return 1;
             }
-        }
+        };
         // Encoding and compression run on a writer thread, overlapping the simulation.
         sim.add_recorder(Box::new(scg_record::Background::spawn(sinks)));
-        paths.extend(args.vtk.iter().cloned());
-        paths.extend(args.frames_csv.iter().cloned());
     }
 
     let stop = Arc::new(AtomicBool::new(false));
@@ -406,6 +387,39 @@ pub fn run(args: RunArgs) -> i32 {
 }
 
 pub use crate::stem::{recording_stem, set_suffix};
+
+/// Writers of frames, written in order.
+pub type Sinks = Vec<Box<dyn FrameSink>>;
+
+/// The writers of a run's frames: with `record`, `<out>/<stem>.rrd` and `.mcap`; the VTK
+/// and per-frame CSV folders when given. Returns them with what they write.
+pub fn frame_sinks(
+    meta: &RunMeta,
+    out: &Path,
+    stem: &str,
+    record: bool,
+    vtk: &Option<PathBuf>,
+    csv: &Option<PathBuf>,
+) -> Result<(Sinks, Vec<PathBuf>), scg_record::RecordError> {
+    let mut sinks: Vec<Box<dyn FrameSink>> = Vec::new();
+    let mut paths = Vec::new();
+    if record {
+        let rrd = out.join(format!("{stem}.rrd"));
+        let mcap = out.join(format!("{stem}.mcap"));
+        sinks.push(Box::new(scg_record::RrdSink::create(&rrd, meta)?));
+        sinks.push(Box::new(scg_record::McapSink::create(&mcap, meta)?));
+        paths.push(rrd);
+        paths.push(mcap);
+    }
+    let meta = RunMeta {
+        case: stem.to_string(),
+        ..meta.clone()
+    };
+    sinks.extend(extra_sinks(vtk, csv, &meta)?);
+    paths.extend(vtk.iter().cloned());
+    paths.extend(csv.iter().cloned());
+    Ok((sinks, paths))
+}
 
 /// The VTK and per-frame CSV writers asked for (folders `vtk` and `csv`), named after
 /// `meta.case`.

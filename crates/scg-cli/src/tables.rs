@@ -54,27 +54,40 @@ pub fn write_summary(
     run: &RunFigures,
 ) -> bool {
     if let Some(path) = &args.summary_json {
-        let counts = GroupCounts::of(sim);
-        let groups: Vec<(&str, f64, f64)> = scene
-            .groups
-            .iter()
-            .map(|g| (g.name.as_str(), g.diameter, g.density))
-            .collect();
-        let mut json = summary_json(&scene.name, &groups, &counts, run);
-        if let Some(gs) = json["groups"].as_array_mut() {
-            for (g, f) in gs.iter_mut().zip(fates) {
-                g["fates"] = crate::fates::json(f);
-            }
-        }
-        if !by_mass.is_empty() {
-            json["distributions"] = crate::distribution::json(by_mass);
-        }
+        let json = summary(scene, sim, fates, by_mass, run);
         let text = serde_json::to_string_pretty(&json).unwrap_or_default();
         if !write_text(path, &(text + "\n")) {
             return false;
         }
     }
     true
+}
+
+/// The `--summary-json` document of a finished run: [`summary_json`] with each group's
+/// fates and (when the scene has size distributions) the distributions by mass.
+pub fn summary(
+    scene: &Scene,
+    sim: &mut Simulation,
+    fates: &[GroupFates],
+    by_mass: &[ByMass],
+    run: &RunFigures,
+) -> serde_json::Value {
+    let counts = GroupCounts::of(sim);
+    let groups: Vec<(&str, f64, f64)> = scene
+        .groups
+        .iter()
+        .map(|g| (g.name.as_str(), g.diameter, g.density))
+        .collect();
+    let mut json = summary_json(&scene.name, &groups, &counts, run);
+    if let Some(gs) = json["groups"].as_array_mut() {
+        for (g, f) in gs.iter_mut().zip(fates) {
+            g["fates"] = crate::fates::json(f);
+        }
+    }
+    if !by_mass.is_empty() {
+        json["distributions"] = crate::distribution::json(by_mass);
+    }
+    json
 }
 
 /// Figures of a whole run for [`summary_json`].

@@ -32,7 +32,7 @@ mod rrd_write;
 pub mod vtk;
 
 pub use background::Background;
-pub use mcap_read::read_mcap;
+pub use mcap_read::{McapFrames, read_mcap};
 pub use mcap_write::{McapOptions, McapSink};
 pub use rrd_write::{RrdSink, write_rrd};
 pub use vtk::{CsvSink, VtkSink};

@@ -34,102 +34,222 @@ const READ_BLOCK: usize = 4 << 20;
 /// so far, at the first damaged record (bad CRC…).
 ///
 /// Errors: the file cannot be read, is not an MCAP file, or holds no `scg` metadata record.
+/// [`McapFrames`] reads the same file one frame at a time.
 pub fn read_mcap(path: &Path) -> Result<Recording, RecordError> {
-    let io = |e| RecordError::io(path, e);
-    let format = |reason: String| RecordError::Format {
-        path: path.to_path_buf(),
-        reason,
-    };
-    let mut file = File::open(path).map_err(io)?;
-    let file_len = file.metadata().map_err(io)?.len();
-    // A record can't be longer than the file; a chunk can decompress to more, but not
-    // absurdly more.
-    let limit = usize::try_from(file_len.saturating_mul(100).max(64 << 20)).unwrap_or(usize::MAX);
-    let mut reader = LinearReader::new_with_options(
-        LinearReaderOptions::default()
-            .with_emit_chunks(false)
-            .with_validate_chunk_crcs(true)
-            .with_prevalidate_chunk_crcs(true)
-            .with_validate_data_section_crc(true)
-            .with_validate_summary_section_crc(true)
-            .with_record_length_limit(limit),
-    );
-
-    let mut state = ReadState::default();
-    let outcome: Result<(), String> = loop {
-        match reader.next_event() {
-            None => break Ok(()),
-            Some(Err(err)) => break Err(err.to_string()),
-            Some(Ok(LinearReadEvent::ReadRequest(need))) => {
-                let buf = reader.insert(need.clamp(1, READ_BLOCK));
-                let got = loop {
-                    match file.read(buf) {
-                        Ok(n) => break n,
-                        Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-                        Err(e) => return Err(io(e)),
-                    }
-                };
-                reader.notify_read(got);
-            }
-            Some(Ok(LinearReadEvent::Record { opcode, data })) => {
-                let handled = mcap::parse_record(opcode, data)
-                    .map_err(|e| e.to_string())
-                    .and_then(|record| state.handle(record));
-                if let Err(err) = handled {
-                    break Err(err);
-                }
-            }
-        }
-    };
-
-    if !state.saw_header {
-        return Err(format(match outcome {
-            Err(err) => format!("not an MCAP file ({err})"),
-            Ok(()) => "not an MCAP file".to_owned(),
-        }));
+    let mut frames_in = McapFrames::open(path)?;
+    let mut frames = Vec::new();
+    for f in frames_in.by_ref() {
+        frames.push(f?);
     }
-    let Some(mut meta) = state.meta.take() else {
-        return Err(format(format!(
-            "no `{METADATA_NAME}` metadata record{}",
-            outcome.err().map_or(String::new(), |e| format!(" ({e})"))
-        )));
-    };
-    meta.scene_toml = state.scene_toml.take().unwrap_or_default();
-    meta.patches = std::mem::take(&mut state.patches);
-    let complete = outcome.is_ok() && state.saw_footer;
-
-    let mut frames = Vec::with_capacity(state.pending.len());
-    for (sequence, pending) in std::mem::take(&mut state.pending) {
-        match pending {
-            Pending {
-                particles: Some(mut frame),
-                stats: Some(stats),
-            } => {
-                frame.step = stats.step;
-                frame.time = stats.time;
-                frame.stats = stats.values.0;
-                frames.push(frame);
-            }
-            // A killed run can't separate the two messages of a frame (they share a chunk),
-            // so this is damage; in a file that was closed properly it is an error.
-            _ if complete => {
-                return Err(format(format!(
-                    "frame {sequence} lacks its `{TOPIC_PARTICLES}` or `{TOPIC_STATS}` message"
-                )));
-            }
-            _ => {}
-        }
-    }
+    let (meta, complete, wear) = frames_in.into_parts();
     let rec = Recording {
         meta,
         frames,
         complete,
-        wear: state.wear.take(),
+        wear,
     };
     if rec.meta.parts.is_empty() {
         Ok(rec)
     } else {
         crate::parts::merge_parts(path, rec)
+    }
+}
+
+/// An MCAP recording read one frame at a time, in the order written, holding one frame
+/// (one chunk) in memory: what [`read_mcap`] collects. The run description
+/// ([`McapFrames::meta`]: groups, scene text, patches) is read on opening; the wear of an
+/// erosion run ([`McapFrames::wear`]) and whether the file was closed properly
+/// ([`McapFrames::complete`]) are known once the last frame was read. A per-rank
+/// recording's index (its `parts`) holds no frames of its own: [`read_mcap`] merges them.
+pub struct McapFrames {
+    path: std::path::PathBuf,
+    file: File,
+    reader: LinearReader,
+    state: ReadState,
+    meta: RunMeta,
+    /// `Some` once the file was read to its end or to its first damaged record.
+    outcome: Option<Result<(), String>>,
+    /// A frame assembled while opening (the reader stops at the first particles).
+    ready: std::collections::VecDeque<Frame>,
+}
+
+impl McapFrames {
+    /// Open `path` and read its run description (up to its first frame).
+    ///
+    /// Errors: the file cannot be read, is not an MCAP file, or holds no `scg` metadata
+    /// record.
+    pub fn open(path: &Path) -> Result<Self, RecordError> {
+        let io = |e| RecordError::io(path, e);
+        let file = File::open(path).map_err(io)?;
+        let file_len = file.metadata().map_err(io)?.len();
+        // A record can't be longer than the file; a chunk can decompress to more, but not
+        // absurdly more.
+        let limit =
+            usize::try_from(file_len.saturating_mul(100).max(64 << 20)).unwrap_or(usize::MAX);
+        let reader = LinearReader::new_with_options(
+            LinearReaderOptions::default()
+                .with_emit_chunks(false)
+                .with_validate_chunk_crcs(true)
+                .with_prevalidate_chunk_crcs(true)
+                .with_validate_data_section_crc(true)
+                .with_validate_summary_section_crc(true)
+                .with_record_length_limit(limit),
+        );
+        let mut frames = McapFrames {
+            path: path.to_path_buf(),
+            file,
+            reader,
+            state: ReadState::default(),
+            meta: RunMeta::default(),
+            outcome: None,
+            ready: Default::default(),
+        };
+        while frames.outcome.is_none() && frames.state.pending.is_empty() {
+            frames.advance()?;
+        }
+        let format = |reason: String| RecordError::Format {
+            path: path.to_path_buf(),
+            reason,
+        };
+        if !frames.state.saw_header {
+            return Err(format(match &frames.outcome {
+                Some(Err(err)) => format!("not an MCAP file ({err})"),
+                _ => "not an MCAP file".to_owned(),
+            }));
+        }
+        let Some(mut meta) = frames.state.meta.take() else {
+            let why = match &frames.outcome {
+                Some(Err(e)) => format!(" ({e})"),
+                _ => String::new(),
+            };
+            return Err(format(format!("no `{METADATA_NAME}` metadata record{why}")));
+        };
+        meta.scene_toml = frames.state.scene_toml.take().unwrap_or_default();
+        meta.patches = std::mem::take(&mut frames.state.patches);
+        frames.meta = meta;
+        frames.collect_ready();
+        Ok(frames)
+    }
+
+    /// The run description: groups, dt, the scene's text, the patches (a per-rank
+    /// index's `parts`).
+    pub fn meta(&self) -> &RunMeta {
+        &self.meta
+    }
+
+    /// True once the file was read to its end and was closed properly (summary and
+    /// footer present and valid); false before, and for a file cut short.
+    pub fn complete(&self) -> bool {
+        matches!(self.outcome, Some(Ok(()))) && self.state.saw_footer
+    }
+
+    /// The wear of the walls at the end of a run with `[erosion]`, once read (`None`
+    /// without, or before the last frame was read).
+    pub fn wear(&self) -> Option<&scg_core::frame::WearMap> {
+        self.state.wear.as_ref()
+    }
+
+    /// The run description, whether the file was closed properly and the wear.
+    pub fn into_parts(mut self) -> (RunMeta, bool, Option<scg_core::frame::WearMap>) {
+        let complete = self.complete();
+        (self.meta, complete, self.state.wear.take())
+    }
+
+    /// Read one record (or a block of the file); sets `outcome` at the end.
+    fn advance(&mut self) -> Result<(), RecordError> {
+        match self.reader.next_event() {
+            None => self.outcome = Some(Ok(())),
+            Some(Err(err)) => self.outcome = Some(Err(err.to_string())),
+            Some(Ok(LinearReadEvent::ReadRequest(need))) => {
+                let buf = self.reader.insert(need.clamp(1, READ_BLOCK));
+                let got = loop {
+                    match self.file.read(buf) {
+                        Ok(n) => break n,
+                        Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                        Err(e) => return Err(RecordError::io(&self.path, e)),
+                    }
+                };
+                self.reader.notify_read(got);
+            }
+            Some(Ok(LinearReadEvent::Record { opcode, data })) => {
+                let handled = mcap::parse_record(opcode, data)
+                    .map_err(|e| e.to_string())
+                    .and_then(|record| self.state.handle(record));
+                if let Err(err) = handled {
+                    self.outcome = Some(Err(err));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Move the frames whose two halves arrived (in order of sequence) to `ready`.
+    fn collect_ready(&mut self) {
+        while let Some(entry) = self.state.pending.first_entry() {
+            let p = entry.get();
+            if p.particles.is_none() || p.stats.is_none() {
+                break;
+            }
+            if let Pending {
+                particles: Some(frame),
+                stats: Some(stats),
+            } = entry.remove()
+            {
+                self.ready.push_back(assemble(frame, stats));
+            }
+        }
+    }
+}
+
+/// A frame's particles with its step, time and stats.
+fn assemble(mut frame: Frame, stats: StatsIn) -> Frame {
+    frame.step = stats.step;
+    frame.time = stats.time;
+    frame.stats = stats.values.0;
+    frame
+}
+
+impl Iterator for McapFrames {
+    type Item = Result<Frame, RecordError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        loop {
+            if let Some(f) = self.ready.pop_front() {
+                return Some(Ok(f));
+            }
+            if self.outcome.is_some() {
+                break;
+            }
+            if let Err(e) = self.advance() {
+                self.outcome = Some(Err(e.to_string()));
+                return Some(Err(e));
+            }
+            self.collect_ready();
+        }
+        // The end: the frames left whole (after a half one, in a file cut short) in order;
+        // a half frame in a file closed properly is an error.
+        let complete = self.complete();
+        while let Some((sequence, p)) = self.state.pending.pop_first() {
+            match p {
+                Pending {
+                    particles: Some(frame),
+                    stats: Some(stats),
+                } => return Some(Ok(assemble(frame, stats))),
+                // A killed run can't separate the two messages of a frame (they share a
+                // chunk), so this is damage; in a file that was closed properly it is an
+                // error.
+                _ if complete => {
+                    return Some(Err(RecordError::Format {
+                        path: self.path.clone(),
+                        reason: format!(
+                            "frame {sequence} lacks its `{TOPIC_PARTICLES}` or `{TOPIC_STATS}` message"
+                        ),
+                    }));
+                }
+                _ => {}
+            }
+        }
+        None
     }
 }
 
