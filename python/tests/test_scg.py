@@ -216,3 +216,16 @@ def test_a_bad_recording_is_a_recording_error(tmp_path):
     bad.write_bytes(b"not an mcap file")
     with pytest.raises(scg.RecordingError):
         scg.open_recording(bad)
+
+
+def test_a_study_s_summary_and_tables_are_read_back(tmp_path):
+    st = scg.study("elbow", quick=True, out=tmp_path / "elbow")
+    assert st.summary is not None
+    assert {"variants", "tracers", "verdicts"} <= set(st.summary)
+    # the same numbers as the files the study wrote
+    on_disk = json.loads((tmp_path / "elbow" / "summary.json").read_text())
+    assert st.summary == on_disk
+    assert "wear" in st.tables and len(st.tables["wear"]) > 0
+    assert "report" in st.markdown
+    with pytest.raises(scg.RunError):
+        scg.study("no-such-study", out=tmp_path / "x")
