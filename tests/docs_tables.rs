@@ -90,17 +90,11 @@ fn the_wheel_table_is_the_studys_output() {
 fn markdown_needs_a_finished_study() {
     use scg::cli::study::StudyArgs;
     let args = |from: Option<&str>, run: Option<&str>, study: &str| StudyArgs {
-        study: study.into(),
-        quick: false,
-        out: None,
         no_record: true,
-        set: Vec::new(),
-        openfoam: None,
         from: from.map(common::repo),
         run: run.map(str::to_string),
-        cg_feed: 1.0,
         markdown: true,
-        loadings: None,
+        ..StudyArgs::new(study)
     };
     let local = scg::cli::points::Local;
     assert_eq!(

@@ -123,17 +123,10 @@ fn elbow_fates_and_wear_agree_with_openfoams_tracker() {
 fn the_quick_elbow_study_runs_and_scg_agrees() {
     let out = std::env::temp_dir().join(format!("scg-elbow-study-{}", std::process::id()));
     let a = scg::cli::study::StudyArgs {
-        study: "elbow".into(),
         quick: true,
         out: Some(out.clone()),
         no_record: true,
-        set: Vec::new(),
-        openfoam: None,
-        from: None,
-        run: None,
-        cg_feed: 1.0,
-        markdown: false,
-        loadings: None,
+        ..scg::cli::study::StudyArgs::new("elbow")
     };
     assert_eq!(scg::cli::study::study(a, &scg::cli::points::Local), 0);
     let (runs, tracers) = elbow::read_summary(&out).unwrap();

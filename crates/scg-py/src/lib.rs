@@ -453,17 +453,11 @@ fn study(
         ..*exec::settings()
     };
     let args = scg_cli::study::StudyArgs {
-        study: name,
         quick,
         out: Some(out),
         no_record: !record,
         set: sets,
-        openfoam: None,
-        from: None,
-        run: None,
-        cg_feed: 1.0,
-        markdown: false,
-        loadings: None,
+        ..scg_cli::study::StudyArgs::new(&name)
     };
     py.detach(|| {
         exec::with_settings(settings, || {

@@ -307,15 +307,20 @@ pub struct SceneMeshFlow {
 pub struct SceneSeries {
     /// The clock, the loader and the second snapshot.
     pub spec: scg_core::physics::mesh_flow::series::FlowSeriesSpec,
-    /// The CFD time of the first snapshot (simulation time 0), s.
-    pub start: f64,
-    /// The CFD time of every snapshot, s.
+    /// The CFD time of every snapshot, s (the first is simulation time 0).
     pub times: Vec<f64>,
     /// The time directories, in order.
     pub dirs: Vec<std::path::PathBuf>,
     /// With `cycle`: ‖U_last − U_first‖/‖U_first‖ over the cells (the change across the
     /// seam).
     pub seam: Option<f64>,
+}
+
+impl SceneSeries {
+    /// The CFD time of the first snapshot (simulation time 0), s.
+    pub fn start(&self) -> f64 {
+        self.times[0]
+    }
 }
 
 /// One rotor zone as read (for `scg check`).

@@ -10,6 +10,7 @@ mod patches;
 mod physics;
 mod series;
 mod size;
+mod walls;
 
 use std::path::Path;
 
@@ -26,8 +27,9 @@ use crate::overrides::apply_overrides;
 use crate::raw::{RawDt, RawScene};
 use particles::{feeder, group};
 use patches::{patch_models, patch_walls};
-use physics::{contacts, flow_field, material, mesh_flow, outlet, wall};
+use physics::{contacts, flow_field, material, mesh_flow, outlet};
 use scg_core::stages::impulse_walls::ImpulseWall;
+use walls::wall;
 
 /// The embedded default scene (the paper's vortex case), run by `scg run` with no file.
 pub const DEFAULT_SCENE: &str = include_str!("../../../cases/vortex.toml");

@@ -88,6 +88,25 @@ pub struct StudyArgs {
     pub loadings: Option<Vec<f64>>,
 }
 
+impl StudyArgs {
+    /// `scg study NAME` with every flag at its command-line default.
+    pub fn new(study: &str) -> Self {
+        StudyArgs {
+            study: study.to_string(),
+            quick: false,
+            out: None,
+            no_record: false,
+            set: Vec::new(),
+            openfoam: None,
+            from: None,
+            run: None,
+            cg_feed: 1.0,
+            markdown: false,
+            loadings: None,
+        }
+    }
+}
+
 /// One study: its scene and windows.
 #[derive(Clone, Debug)]
 pub struct StudySpec {

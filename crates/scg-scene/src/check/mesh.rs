@@ -137,8 +137,8 @@ pub(super) fn series_findings(scene: &Scene, groups: &[GroupReport]) -> Vec<Find
         s.dirs
             .last()
             .map_or(String::new(), |d| d.display().to_string()),
-        s.start,
-        s.start + c.span(),
+        s.start(),
+        s.start() + c.span(),
         c.span()
     );
     if let (Some(p), Some(jump)) = (c.period(), s.seam) {

@@ -137,7 +137,6 @@ pub(super) fn series(
             second,
             first_turbulence: None,
         },
-        start: times[0],
         times: times.clone(),
         dirs: dirs.into_iter().map(|(_, d)| d).collect(),
         seam,
@@ -226,7 +225,7 @@ pub(super) fn supported(
             format!(
                 "{duration} s runs past the series' window ({span} s from t = {}): set \
                  flow.series.cycle = true to repeat it, or shorten the run",
-                series.start
+                series.start()
             ),
         ));
     }
