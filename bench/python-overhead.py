@@ -1,6 +1,6 @@
 """What the Python package costs over the CLI (issue 57), measured.
 
-    python bench/python-overhead.py [--repeat 5]      # from the repository's root
+    python bench/python-overhead.py [--repeat 5] [--only elbow|frames]   # from the root
 
 1. cases/elbow.toml on one thread, alternated with `target/release/scg run --no-record`,
    best of --repeat: the steps' wall time (`wall_s` of the summary, the CLI's "done: …
@@ -25,7 +25,7 @@ import scg
 
 MILLION = """
 name = "million"
-duration = 5.0e-3
+duration = 3.0e-2
 dt = 1.0e-3
 record_every = 1
 [fluid]
@@ -49,7 +49,15 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--bin", default="target/release/scg")
+    ap.add_argument("--only", choices=["elbow", "frames"], help="one of the two parts")
     a = ap.parse_args()
+    if a.only != "frames":
+        elbow(a)
+    if a.only != "elbow":
+        frames()
+
+
+def elbow(a: argparse.Namespace) -> None:
 
     cli_steps, cli_all, py_steps, py_all = [], [], [], []
     for _ in range(a.repeat):
@@ -71,6 +79,9 @@ def main() -> None:
     print(f"  steps:      CLI {min(cli_steps):.3f} s   Python {min(py_steps):.3f} s   ({min(py_steps) / min(cli_steps) - 1:+.1%})")
     print(f"  load + run: CLI {min(cli_all):.3f} s (whole process)   Python {min(py_all):.3f} s   ({min(py_all) / min(cli_all) - 1:+.1%})")
     print(f"  a Python process's start + `import scg` (numpy, pandas): {start_import:.3f} s")
+
+
+def frames() -> None:
 
     scene = scg.Scene.from_toml(MILLION)
     best_plain, best_frames, records = [], [], 0

@@ -141,7 +141,8 @@ class Frame:
     ``id``, ``group``: uint32 (n); ``position`` m, ``velocity`` m/s: float64 (n, 3);
     ``diameter`` m, ``density`` kg/m³ (as simulated, after coarse graining): float64 (n);
     ``fluctuation``: |u′| m/s (n), empty without dispersion; ``stats``: the frame's
-    scalars (``count/<group>``…).
+    scalars (``count/<group>``…). The arrays are read-only views of the engine's own
+    buffers (no copy is made); ``np.array(frame.position)`` gives a copy to change.
     """
 
     step: int
@@ -180,17 +181,17 @@ class Frame:
 
 
 def _frame(d: Dict[str, Any]) -> Frame:
-    f8, u4 = np.dtype("=f8"), np.dtype("=u4")
+    # each column is numpy's view of the engine's own buffer (read-only, no copy)
     return Frame(
         step=d["step"],
         time=d["time"],
-        id=np.frombuffer(d["id"], dtype=u4),
-        group=np.frombuffer(d["group"], dtype=u4),
-        position=np.frombuffer(d["position"], dtype=f8).reshape(-1, 3),
-        velocity=np.frombuffer(d["velocity"], dtype=f8).reshape(-1, 3),
-        diameter=np.frombuffer(d["diameter"], dtype=f8),
-        density=np.frombuffer(d["density"], dtype=f8),
-        fluctuation=np.frombuffer(d["fluctuation"], dtype=f8),
+        id=np.asarray(d["id"]),
+        group=np.asarray(d["group"]),
+        position=np.asarray(d["position"]),
+        velocity=np.asarray(d["velocity"]),
+        diameter=np.asarray(d["diameter"]),
+        density=np.asarray(d["density"]),
+        fluctuation=np.asarray(d["fluctuation"]),
         stats=d["stats"],
     )
 

@@ -150,6 +150,15 @@ def test_frames_streamed_from_a_run_equal_the_mcap_s(tmp_path):
     assert rec.complete
     assert rec.meta["case"] == "elbow"
     assert run.paths[0].name == "elbow-feed_scale=0.05.rrd"  # as `scg run --set` names it
+    # arrays are read-only views; a frame nobody keeps is refilled for the next, and the
+    # copies taken from such frames are the kept frames
+    assert not live[-1].position.flags.writeable
+    copies = []
+    scene.run(on_frame=lambda f: copies.append({n: np.array(getattr(f, n)) for n in ("id", "position", "velocity")}))
+    assert len(copies) == len(live)
+    for a, c in zip(live, copies):
+        for name, y in c.items():
+            assert np.array_equal(getattr(a, name), y), name
     assert "[flow]" in rec.scene
     wear = rec.wear
     assert wear is not None and {"patch", "volume", "depth_rate"} <= set(wear.columns)

@@ -221,6 +221,12 @@ impl WearMap {
 pub trait FrameSink: Send + Sync {
     /// Store one frame. An error stops the run.
     fn write_frame(&mut self, frame: &Frame) -> Result<(), String>;
+    /// Store one frame that the sink may keep (without copying it) past the call: the
+    /// recording system hands frames this way, and refills a frame's buffers only when
+    /// no sink kept it. By default, [`FrameSink::write_frame`].
+    fn write_shared(&mut self, frame: &std::sync::Arc<Frame>) -> Result<(), String> {
+        self.write_frame(frame)
+    }
     /// Store the wear of the run's walls (called once before [`FrameSink::finish`] when
     /// the run logs erosion). By default, ignored.
     fn write_wear(&mut self, _wear: &WearMap) -> Result<(), String> {
@@ -238,6 +244,8 @@ pub struct Recorders {
     pub sinks: Vec<Box<dyn FrameSink>>,
     /// The first error a sink returned, if any (the run loop stops on it).
     pub error: Option<String>,
+    /// The last frame handed to the sinks: refilled for the next when none kept it.
+    pub spare: Option<std::sync::Arc<Frame>>,
 }
 
 /// A sink that keeps every frame in memory (tests, analysis of a live run).

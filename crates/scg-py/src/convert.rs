@@ -1,26 +1,94 @@
 //! Frames, run descriptions and TOML values as Python objects.
 
 use pyo3::prelude::*;
-use pyo3::types::{PyByteArray, PyDict, PyList};
+use std::sync::Arc;
+
+use pyo3::types::{PyDict, PyList};
 
 use scg_core::frame::{Frame, RunMeta};
 
-/// A frame as a dict: `step`, `time`, the per-particle arrays as `bytearray`s in the
-/// machine's byte order (`id`, `group`: uint32; `position`, `velocity`: float64 × 3;
-/// `diameter`, `density`, `fluctuation`: float64) for `numpy.frombuffer`, and `stats`.
-pub fn frame_dict<'py>(py: Python<'py>, f: &Frame) -> PyResult<Bound<'py, PyDict>> {
+/// A column of a frame, as numpy reads it: [`Column::__array_interface__`] points into the
+/// frame's own buffer, which the column (the array's `base`) keeps alive; no copy is made.
+/// Read-only: the frame may be shared with the run's recorders.
+#[pyclass(frozen, module = "scg._scg")]
+pub struct Column {
+    frame: Arc<Frame>,
+    which: Which,
+}
+
+#[derive(Clone, Copy)]
+enum Which {
+    Id,
+    Group,
+    Position,
+    Velocity,
+    Diameter,
+    Density,
+    Fluctuation,
+}
+
+#[pymethods]
+impl Column {
+    /// numpy's array interface (version 3): shape, type, address, read-only.
+    #[getter]
+    fn __array_interface__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let f = &*self.frame;
+        let end = if cfg!(target_endian = "little") {
+            "<"
+        } else {
+            ">"
+        };
+        let (ptr, rows, wide, ty) = match self.which {
+            Which::Id => (f.id.as_ptr() as usize, f.id.len(), false, "u4"),
+            Which::Group => (f.group.as_ptr() as usize, f.group.len(), false, "u4"),
+            Which::Position => (f.position.as_ptr() as usize, f.position.len(), true, "f8"),
+            Which::Velocity => (f.velocity.as_ptr() as usize, f.velocity.len(), true, "f8"),
+            Which::Diameter => (f.diameter.as_ptr() as usize, f.diameter.len(), false, "f8"),
+            Which::Density => (f.density.as_ptr() as usize, f.density.len(), false, "f8"),
+            Which::Fluctuation => (
+                f.fluctuation.as_ptr() as usize,
+                f.fluctuation.len(),
+                false,
+                "f8",
+            ),
+        };
+        let d = PyDict::new(py);
+        d.set_item("version", 3)?;
+        if wide {
+            d.set_item("shape", (rows, 3))?;
+        } else {
+            d.set_item("shape", (rows,))?;
+        }
+        d.set_item("typestr", format!("{end}{ty}"))?;
+        d.set_item("data", (ptr, true))?;
+        Ok(d)
+    }
+}
+
+/// A frame as a dict: `step`, `time`, `n`, the per-particle columns as [`Column`]s
+/// (`numpy.asarray` of each is the array, without a copy: `id`, `group`: uint32;
+/// `position`, `velocity`: float64 × 3; `diameter`, `density`, `fluctuation`: float64),
+/// and `stats`.
+pub fn frame_dict<'py>(py: Python<'py>, f: &Arc<Frame>) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("step", f.step)?;
     d.set_item("time", f.time)?;
     d.set_item("n", f.id.len())?;
-    let bytes = |b: &[u8]| PyByteArray::new(py, b);
-    d.set_item("id", bytes(bytemuck::cast_slice(&f.id)))?;
-    d.set_item("group", bytes(bytemuck::cast_slice(&f.group)))?;
-    d.set_item("position", bytes(bytemuck::cast_slice(&f.position)))?;
-    d.set_item("velocity", bytes(bytemuck::cast_slice(&f.velocity)))?;
-    d.set_item("diameter", bytes(bytemuck::cast_slice(&f.diameter)))?;
-    d.set_item("density", bytes(bytemuck::cast_slice(&f.density)))?;
-    d.set_item("fluctuation", bytes(bytemuck::cast_slice(&f.fluctuation)))?;
+    for (name, which) in [
+        ("id", Which::Id),
+        ("group", Which::Group),
+        ("position", Which::Position),
+        ("velocity", Which::Velocity),
+        ("diameter", Which::Diameter),
+        ("density", Which::Density),
+        ("fluctuation", Which::Fluctuation),
+    ] {
+        let column = Column {
+            frame: Arc::clone(f),
+            which,
+        };
+        d.set_item(name, Bound::new(py, column)?)?;
+    }
     let stats = PyDict::new(py);
     for (k, v) in &f.stats {
         stats.set_item(k, v)?;

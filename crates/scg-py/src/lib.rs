@@ -107,6 +107,10 @@ struct CallbackSink {
 
 impl FrameSink for CallbackSink {
     fn write_frame(&mut self, frame: &Frame) -> Result<(), String> {
+        self.write_shared(&Arc::new(frame.clone()))
+    }
+
+    fn write_shared(&mut self, frame: &Arc<Frame>) -> Result<(), String> {
         Python::attach(|py| {
             let called = frame_dict(py, frame).and_then(|d| self.callback.call1(py, (d,)));
             called.map(|_| ()).map_err(|e| {
@@ -424,7 +428,7 @@ impl NativeRecording {
         };
         match next {
             None => Ok(None),
-            Some(Ok(f)) => frame_dict(py, &f).map(Some),
+            Some(Ok(f)) => frame_dict(py, &Arc::new(f)).map(Some),
             Some(Err(e)) => Err(package_error(py, "RecordingError", e)),
         }
     }
@@ -476,6 +480,7 @@ fn version() -> &'static str {
 fn _scg(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<NativeScene>()?;
     m.add_class::<NativeRecording>()?;
+    m.add_class::<convert::Column>()?;
     m.add_function(wrap_pyfunction!(load_scene, m)?)?;
     m.add_function(wrap_pyfunction!(parse_scene, m)?)?;
     m.add_function(wrap_pyfunction!(embedded_scene, m)?)?;

@@ -9,7 +9,7 @@ use scg_core::frame::{Frame, FrameSink, WearMap};
 
 /// What the writer thread is handed.
 enum Msg {
-    Frame(Frame),
+    Frame(Arc<Frame>),
     Wear(WearMap),
 }
 
@@ -18,7 +18,7 @@ const QUEUE: usize = 2;
 
 /// A [`FrameSink`] that hands frames to a writer thread owning the real sinks.
 ///
-/// `write_frame` copies the frame into the queue and returns; an error of a sink surfaces
+/// `write_shared` queues the frame itself (`write_frame` a copy) and returns; an error of a sink surfaces
 /// at the next `write_frame` or at `finish`, which closes the queue, waits for the writer
 /// and finishes every sink (so the files are complete when it returns).
 pub struct Background {
@@ -93,7 +93,11 @@ impl Background {
 
 impl FrameSink for Background {
     fn write_frame(&mut self, frame: &Frame) -> Result<(), String> {
-        self.send(Msg::Frame(frame.clone()))
+        self.send(Msg::Frame(Arc::new(frame.clone())))
+    }
+
+    fn write_shared(&mut self, frame: &Arc<Frame>) -> Result<(), String> {
+        self.send(Msg::Frame(Arc::clone(frame)))
     }
 
     fn write_wear(&mut self, wear: &WearMap) -> Result<(), String> {
