@@ -7,7 +7,7 @@ use pyo3::types::{PyDict, PyList};
 
 use scg_core::frame::{Frame, RunMeta};
 
-/// A column of a frame, as numpy reads it: [`Column::__array_interface__`] points into the
+/// A column of a frame, as numpy reads it: its `__array_interface__` points into the
 /// frame's own buffer, which the column (the array's `base`) keeps alive; no copy is made.
 /// Read-only: the frame may be shared with the run's recorders.
 #[pyclass(frozen, module = "scg._scg")]
