@@ -57,6 +57,18 @@ impl Frame {
     pub fn is_empty(&self) -> bool {
         self.id.is_empty()
     }
+
+    /// Empty every column and the stats, keeping the buffers (step and time unchanged).
+    pub fn clear(&mut self) {
+        self.id.clear();
+        self.group.clear();
+        self.position.clear();
+        self.velocity.clear();
+        self.diameter.clear();
+        self.density.clear();
+        self.fluctuation.clear();
+        self.stats.clear();
+    }
 }
 
 /// Description of one particle group, as recorded.

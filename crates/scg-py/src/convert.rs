@@ -1,8 +1,8 @@
 //! Frames, run descriptions and TOML values as Python objects.
 
-use pyo3::prelude::*;
 use std::sync::Arc;
 
+use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use scg_core::frame::{Frame, RunMeta};
@@ -38,19 +38,17 @@ impl Column {
         } else {
             ">"
         };
-        let (ptr, rows, wide, ty) = match self.which {
-            Which::Id => (f.id.as_ptr() as usize, f.id.len(), false, "u4"),
-            Which::Group => (f.group.as_ptr() as usize, f.group.len(), false, "u4"),
-            Which::Position => (f.position.as_ptr() as usize, f.position.len(), true, "f8"),
-            Which::Velocity => (f.velocity.as_ptr() as usize, f.velocity.len(), true, "f8"),
-            Which::Diameter => (f.diameter.as_ptr() as usize, f.diameter.len(), false, "f8"),
-            Which::Density => (f.density.as_ptr() as usize, f.density.len(), false, "f8"),
-            Which::Fluctuation => (
-                f.fluctuation.as_ptr() as usize,
-                f.fluctuation.len(),
-                false,
-                "f8",
-            ),
+        fn raw<T>(v: &[T]) -> (usize, usize) {
+            (v.as_ptr() as usize, v.len())
+        }
+        let ((ptr, rows), wide, ty) = match self.which {
+            Which::Id => (raw(&f.id), false, "u4"),
+            Which::Group => (raw(&f.group), false, "u4"),
+            Which::Position => (raw(&f.position), true, "f8"),
+            Which::Velocity => (raw(&f.velocity), true, "f8"),
+            Which::Diameter => (raw(&f.diameter), false, "f8"),
+            Which::Density => (raw(&f.density), false, "f8"),
+            Which::Fluctuation => (raw(&f.fluctuation), false, "f8"),
         };
         let d = PyDict::new(py);
         d.set_item("version", 3)?;

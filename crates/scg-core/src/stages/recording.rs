@@ -97,7 +97,7 @@ pub struct FrameScratch {
 
 /// Fill `fr` (its buffers reused) with the frame of the particles of `q` at `step` and
 /// `time` (s), sorted by id, with the standard stats; the same frame, bit for bit, as
-/// [`frame_from_rows`] makes of the same particles' [`frame_row`]s.
+/// [`frame_from_rows`] makes of the same particles' `frame_row`s.
 pub fn fill_frame(
     fr: &mut Frame,
     (step, time): (u64, f64),
@@ -106,72 +106,47 @@ pub fn fill_frame(
     q: &FrameQuery,
     s: &mut FrameScratch,
 ) {
+    fr.clear();
     fr.step = step;
     fr.time = time;
-    for v in [&mut fr.id, &mut fr.group] {
-        v.clear();
-    }
-    for v in [&mut fr.position, &mut fr.velocity] {
-        v.clear();
-    }
-    for v in [
-        &mut fr.diameter,
-        &mut fr.density,
-        &mut fr.fluctuation,
-        &mut s.mass,
-    ] {
-        v.clear();
-    }
-    fr.stats.clear();
+    s.mass.clear();
     let mut sums = Sums::new(params.groups.len());
-    match q.contiguous_iter() {
-        // whole columns of each storage table at once (a scene's particles are in one)
-        Ok(tables) => {
-            for (ids, gs, xs, vs, ds, rhos, ms, turb) in tables {
-                fr.velocity.reserve(vs.len());
-                // the velocities copied and summed in one pass (the sums in table order:
-                // the frame's when the table is in id order)
-                for ((v, m), g) in vs.iter().zip(ms).zip(gs) {
-                    fr.velocity.push(v.0.to_array());
-                    sums.add(g.0, m.0, v.0);
-                }
-                let k = fr.id.len();
-                fr.id.extend(ids.iter().map(|i| i.0));
-                fr.group.extend(gs.iter().map(|g| g.0));
-                fr.position.extend(xs.iter().map(|x| x.0.to_array()));
-                fr.diameter.extend(ds.iter().map(|d| d.0));
-                fr.density.extend(rhos.iter().map(|r| r.0));
-                s.mass.extend(ms.iter().map(|m| m.0));
-                if let Some((_, us)) = turb {
-                    // the rows before the first with a fluctuation have none: 0 (as a
-                    // row's `fluctuation: None` in `frame_from_rows`)
-                    fr.fluctuation.resize(k, 0.0);
-                    fr.fluctuation.extend(us.iter().map(|u| u.0.length()));
-                }
-            }
-        }
-        Err(_) => {
-            for (k, (id, g, x, v, d, rho, m, turb)) in q.iter().enumerate() {
-                fr.id.push(id.0);
-                fr.group.push(g.0);
-                fr.position.push(x.0.to_array());
+    // Whole columns of each storage table at once (a scene's particles are in one). While
+    // the rows so far are in id order, the stats are summed in the pass that copies the
+    // velocities; after the first row out of order, once the frame is in id order.
+    let mut in_order = true;
+    let tables = q
+        .contiguous_iter()
+        .expect("a frame's components are all in table storage");
+    for (ids, gs, xs, vs, ds, rhos, ms, turb) in tables {
+        let k = fr.id.len();
+        fr.id.extend(ids.iter().map(|i| i.0));
+        in_order = in_order && fr.id[k.saturating_sub(1)..].is_sorted();
+        if in_order {
+            fr.velocity.reserve(vs.len());
+            for ((v, m), g) in vs.iter().zip(ms).zip(gs) {
                 fr.velocity.push(v.0.to_array());
                 sums.add(g.0, m.0, v.0);
-                fr.diameter.push(d.0);
-                fr.density.push(rho.0);
-                s.mass.push(m.0);
-                if let Some((_, u)) = turb {
-                    fr.fluctuation.resize(k, 0.0);
-                    fr.fluctuation.push(u.0.length());
-                }
             }
+        } else {
+            fr.velocity.extend(vs.iter().map(|v| v.0.to_array()));
+        }
+        fr.group.extend(gs.iter().map(|g| g.0));
+        fr.position.extend(xs.iter().map(|x| x.0.to_array()));
+        fr.diameter.extend(ds.iter().map(|d| d.0));
+        fr.density.extend(rhos.iter().map(|r| r.0));
+        s.mass.extend(ms.iter().map(|m| m.0));
+        if let Some((_, us)) = turb {
+            // the rows before the first with a fluctuation have none: 0 (as a row's
+            // `fluctuation: None` in `frame_from_rows`)
+            fr.fluctuation.resize(k, 0.0);
+            fr.fluctuation.extend(us.iter().map(|u| u.0.length()));
         }
     }
-    let n = fr.id.len();
     if !fr.fluctuation.is_empty() {
-        fr.fluctuation.resize(n, 0.0);
+        fr.fluctuation.resize(fr.id.len(), 0.0);
     }
-    if !fr.id.is_sorted() {
+    if !in_order {
         id_order(&fr.id, s);
         let FrameScratch {
             order,
@@ -191,7 +166,6 @@ pub fn fill_frame(
         if !fr.fluctuation.is_empty() {
             permute(&mut fr.fluctuation, order, tmp_f64);
         }
-        // the sums again, in id order
         sums = Sums::new(params.groups.len());
         for ((g, v), m) in fr.group.iter().zip(&fr.velocity).zip(mass.iter()) {
             sums.add(*g, *m, glam::DVec3::from_array(*v));
@@ -358,20 +332,21 @@ pub fn record_frame(
         return;
     }
     let recorders = &mut *recorders;
-    let mut frame = match recorders.spare.take() {
-        Some(f) if std::sync::Arc::strong_count(&f) == 1 && std::sync::Arc::weak_count(&f) == 0 => {
-            f
-        }
-        _ => std::sync::Arc::new(Frame::default()),
-    };
+    // the last frame's buffers, unless a sink still holds it
+    let mut frame = recorders
+        .spare
+        .take()
+        .and_then(std::sync::Arc::into_inner)
+        .unwrap_or_default();
     fill_frame(
-        std::sync::Arc::make_mut(&mut frame),
+        &mut frame,
         (clock.step, clock.time()),
         &params,
         &tally,
         &q,
         &mut scratch,
     );
+    let frame = std::sync::Arc::new(frame);
     for s in recorders.sinks.iter_mut() {
         if let Err(e) = s.write_shared(&frame) {
             recorders.error = Some(e);
