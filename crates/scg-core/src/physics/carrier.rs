@@ -139,6 +139,15 @@ impl Scheme {
         viscosity: 1.0,
     };
 
+    /// The drag law when the step is the Reynolds-dependent exponential one (τ from the
+    /// slip at the start: [`start_reynolds`], [`DragFactors`]).
+    pub fn reynolds_law(&self) -> Option<DragLaw> {
+        match (self.law, self.integrator) {
+            (None | Some(DragLaw::Stokes), _) | (_, Integrator::Explicit) => None,
+            (Some(law), _) => Some(law),
+        }
+    }
+
     /// True when the step reads the fluid velocity at its start (the explicit scheme, the
     /// Reynolds-dependent laws), so a caller that knows it may pass it to [`advance`].
     pub fn reads_start(&self) -> bool {
@@ -148,6 +157,37 @@ impl Scheme {
             (Some(_), _) => true,
         }
     }
+}
+
+/// The factors of a Reynolds-dependent exponential step (the drag law's τ from the slip at
+/// the start, and [`exponential_factors`] of it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DragFactors {
+    /// Response time, s.
+    pub tau: f64,
+    /// 1 − e^(−dt/τ).
+    pub gain: f64,
+    /// τ·(1 − e^(−dt/τ)), s.
+    pub relax: f64,
+}
+
+/// The particle Reynolds number [`advance`]'s Reynolds-dependent exponential step takes its
+/// τ from (the slip at the start, after the wall force's kick), given the carrier velocity
+/// `u0` at `b.x`; `None` when the step is not such a step (the explicit scheme, Stokes
+/// drag, no drag).
+#[inline(always)]
+pub fn start_reynolds(s: &Scheme, b: &Body, u0: DVec3) -> Option<f64> {
+    s.reynolds_law()?;
+    let vk = match b.force {
+        Some(f) => linear_kick(b.v, f, b.m, s.dt),
+        None => b.v,
+    };
+    Some(particle_reynolds(
+        b.fc.reynolds_diameter,
+        (u0 - vk).length(),
+        s.fluid.density,
+        s.fluid.viscosity,
+    ))
 }
 
 /// One particle as a step reads it: position (m), velocity (m/s), mass (kg), the wall
@@ -175,7 +215,9 @@ pub struct Body<'a> {
 /// velocity and the place the carrier last found (the mid-step point's for the
 /// exponential schemes, the last sub-step's for the explicit one). `start`: the carrier
 /// velocity at `b.x` when the caller knows it (it must be what `carrier.at(cell, b.x)`
-/// gives).
+/// gives). `drag`: the Reynolds-dependent exponential step's factors when the caller
+/// computed them for a block of particles ([`start_reynolds`], then
+/// [`crate::physics::elementary::drag_factors`]: the same operations, so the same bits).
 #[inline(always)]
 pub fn advance<C: Carrier>(
     s: &Scheme,
@@ -183,6 +225,7 @@ pub fn advance<C: Carrier>(
     b: &Body,
     cell: Place,
     start: Option<DVec3>,
+    drag: Option<DragFactors>,
 ) -> (DVec3, DVec3, Place) {
     let dt = s.dt;
     let (x0, v0, fc) = (b.x, b.v, b.fc);
@@ -238,9 +281,12 @@ pub fn advance<C: Carrier>(
                     exponential_drift(x0, vk, u, a, fc.tau, b.sf.gain, b.sf.relax, dt)
                 }
                 Some(law) => {
-                    let u0 = u_start(cell, x0);
-                    let tau = effective_tau(law, fc, &s.fluid, (u0 - vk).length());
-                    let (gain, relax) = exponential_factors(tau, dt);
+                    let DragFactors { tau, gain, relax } = drag.unwrap_or_else(|| {
+                        let u0 = u_start(cell, x0);
+                        let tau = effective_tau(law, fc, &s.fluid, (u0 - vk).length());
+                        let (gain, relax) = exponential_factors(tau, dt);
+                        DragFactors { tau, gain, relax }
+                    });
                     exponential_drift(x0, vk, u, a, tau, gain, relax, dt)
                 }
             };
@@ -297,15 +343,22 @@ mod tests {
             inner: FlowField::Uniform(u),
             du,
         };
-        let (x1, v1, _) = advance(&s, &shifted, &b, Place::cell(0), None);
-        let (x2, v2, _) = advance(&s, &FlowField::Uniform(u + du), &b, Place::cell(0), None);
+        let (x1, v1, _) = advance(&s, &shifted, &b, Place::cell(0), None, None);
+        let (x2, v2, _) = advance(
+            &s,
+            &FlowField::Uniform(u + du),
+            &b,
+            Place::cell(0),
+            None,
+            None,
+        );
         assert_eq!((x1, v1), (x2, v2));
         // Many steps: the analytic relaxation of v toward w = u + δ + a·τ.
         let (mut x, mut v) = (b.x, b.v);
         let n = 40;
         for _ in 0..n {
             let bi = Body { x, v, ..b };
-            (x, v, _) = advance(&s, &shifted, &bi, Place::cell(0), None);
+            (x, v, _) = advance(&s, &shifted, &bi, Place::cell(0), None, None);
         }
         let t = n as f64 * dt;
         let w = u + du + b.a * tau;

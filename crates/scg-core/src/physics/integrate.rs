@@ -38,20 +38,23 @@ impl Integrator {
 }
 
 /// Precomputed exponential factors for response time `tau` (s) and step `dt` (s):
-/// (1 − e^(−dt/τ), τ·(1 − e^(−dt/τ))), both via `exp_m1` for precision. An infinite τ
-/// (no drag) gives (0, dt).
-#[inline]
+/// (1 − e^(−dt/τ), τ·(1 − e^(−dt/τ))), both via e^x − 1 for precision
+/// ([`crate::physics::elementary::exp_m1`], which a block of particles evaluates in
+/// lanes). An infinite τ (no drag) gives (0, dt).
+#[inline(always)]
 pub fn exponential_factors(tau: f64, dt: f64) -> (f64, f64) {
-    if !tau.is_finite() {
-        return (0.0, dt);
-    }
     let x = dt / tau;
     // e^(−x) − 1 once (the same bits as evaluating it for each factor)
-    let em1 = (-x).exp_m1();
+    let em1 = crate::physics::elementary::exp_m1(-x);
     let gain = -em1;
     // τ·(1 − e^(−x)) = dt·(1 − e^(−x))/x, evaluated with exp_m1 to keep precision for small x.
     let relax = -tau * em1;
-    (gain, relax)
+    // (selections, not a branch: a loop of them runs in lanes)
+    let finite = tau.is_finite();
+    (
+        if finite { gain } else { 0.0 },
+        if finite { relax } else { dt },
+    )
 }
 
 /// Exact solution over one step of dv/dt = (u − v)/τ + a with u and a constant.

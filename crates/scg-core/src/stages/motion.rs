@@ -198,7 +198,7 @@ fn carrier_pass<'a>(
         };
         match offs {
             None => scalar_rows(&mut p, 0..n, |i, m| {
-                let (x, v, _) = advance(scheme, flow, &body(i, m), Place::cell(0), None);
+                let (x, v, _) = advance(scheme, flow, &body(i, m), Place::cell(0), None, None);
                 (x, v)
             }),
             Some(offs) => scalar_rows(&mut p, 0..n, |i, m| {
@@ -206,7 +206,7 @@ fn carrier_pass<'a>(
                     inner: flow,
                     du: offs[i].0,
                 };
-                let (x, v, _) = advance(scheme, &carrier, &body(i, m), Place::cell(0), None);
+                let (x, v, _) = advance(scheme, &carrier, &body(i, m), Place::cell(0), None, None);
                 (x, v)
             }),
         }
