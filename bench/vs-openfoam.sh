@@ -40,8 +40,8 @@
 #    the first location excluded), and the wall time of the same lines (timestamped as
 #    the log is written). scg: its `done: ... particle-steps/s` line (wall time of the
 #    run's steps, the first step's location of every particle included; scene loading
-#    excluded) and, on one thread, its CPU time (the run's minus a one-step run's: noisy
-#    unless the timed steps take several CPU seconds, as with the defaults).
+#    excluded) and, on one thread, its CPU time of the same steps (the line's `(CPU … s)`,
+#    the process's user + system time over them, 10 ms resolution).
 # After the table, the ratios with one timer for both (wall: scg 2 threads / OpenFOAM;
 # CPU: scg 1 thread / OpenFOAM); the last lines are `openfoam particle-steps/s: X`
 # (ExecutionTime), `scg 1 thread: Y`, `scg 2 threads: Z` (their own lines) and
@@ -180,9 +180,9 @@ echo "   scg 1 thread, scg 2 threads"
 tc=$work/time
 foam_case "$tc" "$N" "$STEPS"
 py steps "$tc" "$STEPS"   # no write time in the run
-# scg's start-up CPU time (scene, mesh, one step), subtracted from its 1-thread CPU time.
-cpu0=$(py run "$work/scg0.log" $NICE "$SCG" --threads 1 run "$tc/scene.toml" --no-record \
-  --set duration=1e-5) || { tail "$work/scg0.log" >&2; fail "scg start-up run failed"; }
+# one short scg run first (the case read once, files in the page cache for every timed run)
+py run "$work/scg0.log" $NICE "$SCG" --threads 1 run "$tc/scene.toml" --no-record \
+  --set duration=1e-5 > /dev/null || { tail "$work/scg0.log" >&2; fail "scg start-up run failed"; }
 declare -A runs
 for rep in $(seq "$REPS"); do
   (cd "$tc" && rm -rf [1-9]* 0.[0-9]* && py run log.foam $NICE "$FOAM" > /dev/null) ||
@@ -193,15 +193,20 @@ for rep in $(seq "$REPS"); do
   runs[foam]+="$fc "; runs[foamwall]+="$fw "
   echo "  rep $rep OpenFOAM  $fc particle-steps/s (ExecutionTime, $fsteps steps), wall $fw"
   for t in 1 2; do
-    cpu=$(py run "$work/scg.log" $NICE "$SCG" --threads "$t" run "$tc/scene.toml" --no-record \
-      --set duration="$(python3 -c "print($STEPS * 1e-5)")") || { tail "$work/scg.log" >&2; fail "scg run failed"; }
+    py run "$work/scg.log" $NICE "$SCG" --threads "$t" run "$tc/scene.toml" --no-record \
+      --set duration="$(python3 -c "print($STEPS * 1e-5)")" > /dev/null ||
+      { tail "$work/scg.log" >&2; fail "scg run failed"; }
     line=$(grep '^done:' "$work/scg.log") || fail "no done: line from scg"
     r=$(echo "$line" | sed -n 's/.*: \([0-9.e+-]*\) particle-steps\/s.*/\1/p')
     steps=$(echo "$line" | awk '{print $2}')
     [ "$steps" = "$STEPS" ] || fail "scg ran $steps steps"
     runs[scg$t]+="$r "
     if [ "$t" = 1 ]; then
-      rc=$(python3 -c "print(f'{$N * ($STEPS - 1) / ($cpu - $cpu0):.4e}')")
+      # its CPU time of the same steps: r × wall / CPU from the done: line
+      wall=$(echo "$line" | sed -n 's/.* in \([0-9.]*\) s (CPU \([0-9.]*\) s).*/\1/p')
+      cpus=$(echo "$line" | sed -n 's/.* in \([0-9.]*\) s (CPU \([0-9.]*\) s).*/\2/p')
+      [ -n "$cpus" ] || fail "no CPU time on scg's done: line"
+      rc=$(python3 -c "print(f'{$r * $wall / $cpus:.4e}')")
       runs[scgcpu]+="$rc "
       echo "  rep $rep scg 1     $r particle-steps/s (own line), CPU $rc"
     else

@@ -273,6 +273,7 @@ pub fn run(args: RunArgs) -> i32 {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let t0 = Instant::now();
+    let cpu0 = crate::study::cyclone::run::process_cpu_s();
     let particle_steps0 = sim.particle_steps();
     let mut result = sim.record_now().map(|_| 0);
     let mut saved = Ok(());
@@ -304,13 +305,18 @@ pub fn run(args: RunArgs) -> i32 {
     }
     bar.finish_and_clear();
     let wall = t0.elapsed().as_secs_f64();
+    // the CPU time of the steps, all threads (the same span as `wall`)
+    let cpu = match (cpu0, crate::study::cyclone::run::process_cpu_s()) {
+        (Some(a), Some(b)) => format!(" (CPU {:.2} s)", b - a),
+        _ => String::new(),
+    };
     let done = sim.step_count();
     let particle_steps = sim.particle_steps() - particle_steps0;
     let fin = sim.finish_recorders();
     let interrupted = stop.load(Ordering::Relaxed);
     match &result {
         Ok(_) => eprintln!(
-            "{} {done} steps (t = {:.6} s) in {wall:.3} s: {:.3e} particle-steps/s",
+            "{} {done} steps (t = {:.6} s) in {wall:.3} s{cpu}: {:.3e} particle-steps/s",
             if interrupted {
                 "interrupted after"
             } else {
