@@ -203,9 +203,8 @@ for rep in $(seq "$REPS"); do
     runs[scg$t]+="$r "
     if [ "$t" = 1 ]; then
       # its CPU time of the same steps: r × wall / CPU from the done: line
-      wall=$(echo "$line" | sed -n 's/.* in \([0-9.]*\) s (CPU \([0-9.]*\) s).*/\1/p')
-      cpus=$(echo "$line" | sed -n 's/.* in \([0-9.]*\) s (CPU \([0-9.]*\) s).*/\2/p')
-      [ -n "$cpus" ] || fail "no CPU time on scg's done: line"
+      read -r wall cpus < <(echo "$line" | sed -n 's/.* in \([0-9.]*\) s (CPU \([0-9.]*\) s).*/\1 \2/p') ||
+        fail "no CPU time on scg's done: line"
       rc=$(python3 -c "print(f'{$r * $wall / $cpus:.4e}')")
       runs[scgcpu]+="$rc "
       echo "  rep $rep scg 1     $r particle-steps/s (own line), CPU $rc"

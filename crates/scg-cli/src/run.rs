@@ -172,6 +172,18 @@ pub fn load_checked(args: &RunArgs, print: bool) -> Result<(Scene, scg_scene::ch
 }
 
 /// Run `scg run`; returns the exit status.
+/// CPU time (user + system) of this process so far, all threads, s: `/proc/self/stat`
+/// (Linux; clock ticks of 1/100 s); `None` elsewhere.
+pub fn process_cpu_s() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // The command name (field 2) is in parentheses and may hold spaces: count from the
+    // last ')'. utime and stime are fields 14 and 15, i.e. the 12th and 13th after it.
+    let rest = &stat[stat.rfind(')')? + 1..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
+}
+
 pub fn run(args: RunArgs) -> i32 {
     let (scene, report) = match load_checked(&args, true) {
         Ok(s) => s,
@@ -273,7 +285,7 @@ pub fn run(args: RunArgs) -> i32 {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let t0 = Instant::now();
-    let cpu0 = crate::study::cyclone::run::process_cpu_s();
+    let cpu0 = process_cpu_s();
     let particle_steps0 = sim.particle_steps();
     let mut result = sim.record_now().map(|_| 0);
     let mut saved = Ok(());
@@ -306,7 +318,7 @@ pub fn run(args: RunArgs) -> i32 {
     bar.finish_and_clear();
     let wall = t0.elapsed().as_secs_f64();
     // the CPU time of the steps, all threads (the same span as `wall`)
-    let cpu = match (cpu0, crate::study::cyclone::run::process_cpu_s()) {
+    let cpu = match (cpu0, process_cpu_s()) {
         (Some(a), Some(b)) => format!(" (CPU {:.2} s)", b - a),
         _ => String::new(),
     };
@@ -472,4 +484,24 @@ pub(crate) fn write_report(
     }
     eprintln!("wrote {}", svg.display());
     0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn process_cpu_time_advances() {
+        let Some(a) = process_cpu_s() else {
+            return; // not Linux
+        };
+        let mut x = 0u64;
+        let t = Instant::now();
+        while t.elapsed().as_secs_f64() < 0.05 {
+            x = x.wrapping_mul(6364136223846793005).wrapping_add(1);
+        }
+        std::hint::black_box(x);
+        let b = process_cpu_s().unwrap();
+        assert!(a >= 0.0 && b >= a, "{a} {b}");
+    }
 }

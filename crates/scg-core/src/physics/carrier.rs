@@ -19,11 +19,11 @@
 use glam::{DMat3, DVec3};
 
 use super::drag::{DragLaw, particle_reynolds};
+pub use super::drag_factors::DragFactors;
 use super::flow::{FlowField, Fluid};
 use super::forces::StepForces;
 use super::integrate::{
-    Integrator, explicit_euler, explicit_substeps, exponential_drift, exponential_factors,
-    linear_kick,
+    Integrator, explicit_euler, explicit_substeps, exponential_drift, linear_kick,
 };
 use crate::components::{FluidCoupling, StokesFactors};
 
@@ -159,18 +159,6 @@ impl Scheme {
     }
 }
 
-/// The factors of a Reynolds-dependent exponential step (the drag law's τ from the slip at
-/// the start, and [`exponential_factors`] of it).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DragFactors {
-    /// Response time, s.
-    pub tau: f64,
-    /// 1 − e^(−dt/τ).
-    pub gain: f64,
-    /// τ·(1 − e^(−dt/τ)), s.
-    pub relax: f64,
-}
-
 /// The particle Reynolds number [`advance`]'s Reynolds-dependent exponential step takes its
 /// τ from (the slip at the start, after the wall force's kick), given the carrier velocity
 /// `u0` at `b.x`; `None` when the step is not such a step (the explicit scheme, Stokes
@@ -178,16 +166,27 @@ pub struct DragFactors {
 #[inline(always)]
 pub fn start_reynolds(s: &Scheme, b: &Body, u0: DVec3) -> Option<f64> {
     s.reynolds_law()?;
-    let vk = match b.force {
+    Some(slip_reynolds(s, b.fc, u0, kicked(s, b)))
+}
+
+/// The velocity after the wall force's kick (m/s): the exponential schemes' start.
+#[inline(always)]
+fn kicked(s: &Scheme, b: &Body) -> DVec3 {
+    match b.force {
         Some(f) => linear_kick(b.v, f, b.m, s.dt),
         None => b.v,
-    };
-    Some(particle_reynolds(
-        b.fc.reynolds_diameter,
+    }
+}
+
+/// The particle Reynolds number of the slip `u0 − vk` (velocities in m/s).
+#[inline(always)]
+fn slip_reynolds(s: &Scheme, fc: &FluidCoupling, u0: DVec3, vk: DVec3) -> f64 {
+    particle_reynolds(
+        fc.reynolds_diameter,
         (u0 - vk).length(),
         s.fluid.density,
         s.fluid.viscosity,
-    ))
+    )
 }
 
 /// One particle as a step reads it: position (m), velocity (m/s), mass (kg), the wall
@@ -217,7 +216,7 @@ pub struct Body<'a> {
 /// velocity at `b.x` when the caller knows it (it must be what `carrier.at(cell, b.x)`
 /// gives). `drag`: the Reynolds-dependent exponential step's factors when the caller
 /// computed them for a block of particles ([`start_reynolds`], then
-/// [`crate::physics::elementary::drag_factors`]: the same operations, so the same bits).
+/// [`crate::physics::drag_factors::DragBlock`]: the same operations, so the same bits).
 #[inline(always)]
 pub fn advance<C: Carrier>(
     s: &Scheme,
@@ -254,10 +253,7 @@ pub fn advance<C: Carrier>(
             (xi, vi, h)
         }
         _ => {
-            let vk = match b.force {
-                Some(f) => linear_kick(v0, f, b.m, dt),
-                None => v0,
-            };
+            let vk = kicked(s, b);
             let xm = x0 + vk * (0.5 * dt);
             let (u, hm) = carrier.at(cell, xm);
             // the opt-in forces at the mid-step point, with the velocity there: relaxed
@@ -282,10 +278,8 @@ pub fn advance<C: Carrier>(
                 }
                 Some(law) => {
                     let DragFactors { tau, gain, relax } = drag.unwrap_or_else(|| {
-                        let u0 = u_start(cell, x0);
-                        let tau = effective_tau(law, fc, &s.fluid, (u0 - vk).length());
-                        let (gain, relax) = exponential_factors(tau, dt);
-                        DragFactors { tau, gain, relax }
+                        let re = slip_reynolds(s, fc, u_start(cell, x0), vk);
+                        DragFactors::new(fc.tau, law.correction(re), dt)
                     });
                     exponential_drift(x0, vk, u, a, tau, gain, relax, dt)
                 }
@@ -326,7 +320,7 @@ mod tests {
             force_scale: 1.0,
             tau,
         };
-        let (gain, relax) = exponential_factors(tau, dt);
+        let (gain, relax) = crate::physics::integrate::exponential_factors(tau, dt);
         let sf = StokesFactors { gain, relax };
         let s = Scheme {
             dt,

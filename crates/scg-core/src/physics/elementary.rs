@@ -2,8 +2,9 @@
 //! and bit operations on the representation, nothing fused, no table, no branch but
 //! selections), so that a loop of them compiles to four AVX2 lanes and gives the bits of
 //! the scalar call on every machine: the drag law's Reynolds power and the exponential
-//! integrator's factors of a block of particles are computed so ([`drag_factors`]), four
-//! at a time where the CPU has AVX2, where libm's `pow` and `expm1` cost a call each.
+//! integrator's factors of a block of particles are computed so
+//! ([`crate::physics::drag_factors`]), four at a time where the CPU has AVX2, where libm's
+//! `pow` and `expm1` cost a call each.
 //!
 //! * [`ln`]: fdlibm's `__ieee754_log` (Sun Microsystems, 1993; as musl writes it):
 //!   x = 2^k·(1 + f) with √2/2 ≤ 1 + f < √2, s = f/(2 + f), ln(1 + f) = f − f²/2 +
@@ -16,9 +17,6 @@
 //! * [`powf`] = e^(y·ln x): relative error below 2·10^-15 where |y·ln x| < 8 (the
 //!   Reynolds powers of the drag laws below Re = 1000), against libm's correctly rounded
 //!   `pow`.
-
-use crate::physics::drag::DragLaw;
-use crate::physics::integrate::exponential_factors;
 
 /// ln 2's leading 32 bits (the last 21 of the significand zero: k·LN2_HI is exact for
 /// |k| < 2^21), fdlibm's. (fdlibm's decimals, which round to its bit patterns.)
@@ -136,86 +134,6 @@ pub fn powf(x: f64, y: f64) -> f64 {
     exp(y * ln(x))
 }
 
-/// The Reynolds-dependent exponential step's factors of a block of particles: for each i,
-/// τ = `tau_stokes[i]` / `law`'s correction at `re[i]` and the [`exponential_factors`] of
-/// τ and `dt`, into `tau`, `gain` and `relax` (as many as the shortest slice). Four lanes
-/// at a time where the CPU has AVX2 ([`crate::exec::lanes`]), with the scalar code's bits
-/// (the same operations: see the module documentation).
-pub fn drag_factors(
-    law: DragLaw,
-    dt: f64,
-    tau_stokes: &[f64],
-    re: &[f64],
-    out: (&mut [f64], &mut [f64], &mut [f64]),
-) {
-    #[cfg(target_arch = "x86_64")]
-    if crate::exec::lanes() {
-        // SAFETY: the CPU supports AVX2 (`exec::lanes` checked it).
-        return unsafe { drag_factors_avx2(law, dt, tau_stokes, re, out) };
-    }
-    drag_factors_loop(law, dt, tau_stokes, re, out);
-}
-
-/// [`drag_factors`] compiled for AVX2: the same loop, vectorised by the compiler.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn drag_factors_avx2(
-    law: DragLaw,
-    dt: f64,
-    tau_stokes: &[f64],
-    re: &[f64],
-    out: (&mut [f64], &mut [f64], &mut [f64]),
-) {
-    drag_factors_loop(law, dt, tau_stokes, re, out);
-}
-
-/// The loop of [`drag_factors`], one law at a time so that each loop is straight-line
-/// (no call: the compiler vectorises only such loops).
-#[inline(always)]
-fn drag_factors_loop(
-    law: DragLaw,
-    dt: f64,
-    tau_stokes: &[f64],
-    re: &[f64],
-    out: (&mut [f64], &mut [f64], &mut [f64]),
-) {
-    use crate::physics::drag::{putnam_correction, schiller_naumann_correction};
-    /// Law 0: Stokes, 1: Schiller–Naumann, 2: Putnam.
-    #[inline(always)]
-    fn each<const LAW: u8>(
-        dt: f64,
-        tau_stokes: &[f64],
-        re: &[f64],
-        (tau, gain, relax): (&mut [f64], &mut [f64], &mut [f64]),
-    ) {
-        let n = tau_stokes
-            .len()
-            .min(re.len())
-            .min(tau.len())
-            .min(gain.len())
-            .min(relax.len());
-        let (ts, re) = (&tau_stokes[..n], &re[..n]);
-        let (tau, gain, relax) = (&mut tau[..n], &mut gain[..n], &mut relax[..n]);
-        for i in 0..n {
-            let correction = match LAW {
-                0 => 1.0,
-                1 => schiller_naumann_correction(re[i]),
-                _ => putnam_correction(re[i]),
-            };
-            let t = ts[i] / correction;
-            let (g, r) = exponential_factors(t, dt);
-            tau[i] = t;
-            gain[i] = g;
-            relax[i] = r;
-        }
-    }
-    match law {
-        DragLaw::Stokes => each::<0>(dt, tau_stokes, re, out),
-        DragLaw::SchillerNaumann => each::<1>(dt, tau_stokes, re, out),
-        DragLaw::Putnam => each::<2>(dt, tau_stokes, re, out),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -289,32 +207,5 @@ mod tests {
         }
         assert!(worst < 2e-15, "{worst:e}");
         assert!(exp(0.0) == 1.0 && ulps(exp(1.0), std::f64::consts::E) <= 1);
-    }
-
-    #[test]
-    fn a_block_in_lanes_gives_the_scalar_bits() {
-        let mut rng = rand::rngs::StdRng::seed_from_u64(4);
-        let n = 203;
-        let ts: Vec<f64> = (0..n)
-            .map(|_| 10f64.powf(rng.random_range(-7.0..-1.0)))
-            .collect();
-        let mut re: Vec<f64> = (0..n)
-            .map(|_| 10f64.powf(rng.random_range(-8.0..4.0)))
-            .collect();
-        re[5] = 0.0;
-        re[6] = f64::NAN;
-        re[7] = f64::INFINITY;
-        re[8] = 1000.0;
-        for law in [DragLaw::SchillerNaumann, DragLaw::Putnam, DragLaw::Stokes] {
-            let (mut t, mut g, mut r) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-            drag_factors(law, 1e-5, &ts, &re, (&mut t, &mut g, &mut r));
-            for i in 0..n {
-                let tau = ts[i] / law.correction(re[i]);
-                let (gain, relax) = exponential_factors(tau, 1e-5);
-                assert_eq!(t[i].to_bits(), tau.to_bits(), "{law:?} {i}");
-                assert_eq!(g[i].to_bits(), gain.to_bits(), "{law:?} {i}");
-                assert_eq!(r[i].to_bits(), relax.to_bits(), "{law:?} {i}");
-            }
-        }
     }
 }

@@ -15,8 +15,10 @@
 //! * [`mesh_flow`] — flow fields on CFD meshes (location, interpolation, patch roles);
 //! * [`inlet`] — feeding on a mesh patch: uniform-by-area sampling, the flow through it;
 //! * [`integrate`] — the exponential and explicit schemes, kicks;
-//! * [`elementary`] — ln, exp and e^x − 1 in plain arithmetic, four lanes at a time (the
-//!   drag factors of a block of particles);
+//! * [`elementary`] — ln, exp and e^x − 1 in plain arithmetic (a loop of them runs in
+//!   lanes);
+//! * [`drag_factors`] — a Reynolds-dependent step's τ and exponential factors, one
+//!   particle or a block in AVX2 lanes;
 //! * [`lane`] — one formula for one particle or four AVX2 lanes (the flows use it);
 //! * [`contact`] — normal, tangential and rolling laws, and the pair kernel;
 //! * [`wall_shape`] — wall geometry (planes, cylinders, meshes) and touch tests;
@@ -29,6 +31,7 @@ pub mod carrier;
 pub mod contact;
 pub mod dispersion;
 pub mod drag;
+pub mod drag_factors;
 pub mod elementary;
 pub mod erosion;
 pub mod flow;

@@ -28,11 +28,8 @@ use super::table::{bypass, columns_mut, reorder_particles};
 use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
 use crate::components::*;
 use crate::exec::par::for_each_piece_heavy;
-use crate::physics::carrier::{
-    Body, Carrier, DragFactors, Place, Scheme, WithOffset, advance, start_reynolds,
-};
-use crate::physics::drag::DragLaw;
-use crate::physics::elementary::drag_factors;
+use crate::physics::carrier::{Body, Carrier, Place, Scheme, WithOffset, advance, start_reynolds};
+use crate::physics::drag_factors::{BLOCK, DragBlock};
 use crate::physics::flow::Fluid;
 use crate::physics::mesh_flow::series::FlowSeriesSpec;
 use crate::physics::mesh_flow::{MeshFlow, PatchInteraction, PatchRole, hint, land};
@@ -324,34 +321,32 @@ impl MeshStep<'_> {
         let mut d2max = 0.0_f64;
         let mut gone = 0u64;
         // A Reynolds-dependent exponential step whose start velocity is kept: its drag
-        // factors are computed a block at a time, in lanes ([`DragBlock`]).
+        // factors are computed a block of particles at a time, in lanes ([`DragBlock`]).
         let lanes_law = if KEEP { scheme.reynolds_law() } else { None };
-        let mut block = DragBlock::new();
+        let mut block = DragBlock::default();
         for i in 0..xs.len() {
             let j = i % BLOCK;
             if j == 0
                 && let Some(law) = lanes_law
             {
-                let rows = i..(i + BLOCK).min(xs.len());
-                block.fill(
-                    &scheme,
-                    law,
-                    rows,
-                    |i| fcs[i].tau,
-                    |i| {
-                        let body = Body {
-                            x: xs[i].0,
-                            v: vs[i].0,
-                            m: ms[i].0,
-                            force: fs.map(|f| f[i].0),
-                            a: DVec3::ZERO,
-                            fc: &fcs[i],
-                            sf: &sfs[i],
-                        };
-                        let u0 = us[i].at(body.x).map(|u| offs.map_or(u, |o| u + o[i].0))?;
-                        start_reynolds(&scheme, &body, u0)
-                    },
-                );
+                let n = BLOCK.min(xs.len() - i);
+                block.fill(law, scheme.dt, n, |j| {
+                    let i = i + j;
+                    let body = Body {
+                        x: xs[i].0,
+                        v: vs[i].0,
+                        m: ms[i].0,
+                        force: fs.map(|f| f[i].0),
+                        a: DVec3::ZERO,
+                        fc: &fcs[i],
+                        sf: &sfs[i],
+                    };
+                    let u0 = us[i].at(body.x).map(|u| offs.map_or(u, |o| u + o[i].0));
+                    (
+                        fcs[i].tau,
+                        u0.and_then(|u0| start_reynolds(&scheme, &body, u0)),
+                    )
+                });
             }
             // Memory latency dominates on large meshes: start loading a later particle's
             // records now (its cell 16 ahead; 8 ahead its tetrahedron when hinted, else
@@ -447,76 +442,6 @@ impl MeshStep<'_> {
                 .extend(impacts);
         }
         (d2max, gone)
-    }
-}
-
-/// Particles per block of [`DragBlock`].
-const BLOCK: usize = 64;
-
-/// The drag factors of a block of [`BLOCK`] consecutive particles (a Reynolds-dependent
-/// exponential step's), computed together so that the drag law's power and e^x − 1 run in
-/// lanes ([`drag_factors`]); a particle whose start velocity is not known has none (its
-/// step computes them after locating its start, with the same functions).
-struct DragBlock {
-    known: [bool; BLOCK],
-    tau_stokes: [f64; BLOCK],
-    re: [f64; BLOCK],
-    tau: [f64; BLOCK],
-    gain: [f64; BLOCK],
-    relax: [f64; BLOCK],
-}
-
-impl DragBlock {
-    fn new() -> Self {
-        DragBlock {
-            known: [false; BLOCK],
-            tau_stokes: [0.0; BLOCK],
-            re: [0.0; BLOCK],
-            tau: [0.0; BLOCK],
-            gain: [0.0; BLOCK],
-            relax: [0.0; BLOCK],
-        }
-    }
-
-    /// The factors of rows `rows` (at most [`BLOCK`]), `re(i)` giving row i's start
-    /// Reynolds number when known ([`start_reynolds`]); `tau(i)` its Stokes τ.
-    #[inline(always)]
-    fn fill(
-        &mut self,
-        scheme: &Scheme,
-        law: DragLaw,
-        rows: std::ops::Range<usize>,
-        tau: impl Fn(usize) -> f64,
-        re: impl Fn(usize) -> Option<f64>,
-    ) {
-        let n = rows.len();
-        for (j, i) in rows.enumerate() {
-            let r = re(i);
-            self.known[j] = r.is_some();
-            self.re[j] = r.unwrap_or(1.0);
-            self.tau_stokes[j] = tau(i);
-        }
-        drag_factors(
-            law,
-            scheme.dt,
-            &self.tau_stokes[..n],
-            &self.re[..n],
-            (
-                &mut self.tau[..n],
-                &mut self.gain[..n],
-                &mut self.relax[..n],
-            ),
-        );
-    }
-
-    /// Row j's factors, when its start was known.
-    #[inline(always)]
-    fn factors(&self, j: usize) -> Option<DragFactors> {
-        self.known[j].then(|| DragFactors {
-            tau: self.tau[j],
-            gain: self.gain[j],
-            relax: self.relax[j],
-        })
     }
 }
 

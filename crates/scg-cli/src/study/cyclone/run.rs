@@ -138,17 +138,7 @@ pub struct CycloneRun {
     pub snapshot: (f64, Vec<(DVec3, u32)>),
 }
 
-/// CPU time (user + system) of this process so far, all threads, s: `/proc/self/stat`
-/// (Linux; clock ticks of 1/100 s); `None` elsewhere.
-pub fn process_cpu_s() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // The command name (field 2) is in parentheses and may hold spaces: count from the
-    // last ')'. utime and stime are fields 14 and 15, i.e. the 12th and 13th after it.
-    let rest = &stat[stat.rfind(')')? + 1..];
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let ticks = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
-    Some(ticks / 100.0)
-}
+use crate::run::process_cpu_s;
 
 /// A held particle faster than this at the end is "still moving", m/s (a tenth of the
 /// inlet velocity; particles resting on a wall move at mm/s to cm/s).
@@ -289,21 +279,6 @@ pub fn run_variant_with(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn process_cpu_time_advances() {
-        let Some(a) = process_cpu_s() else {
-            return; // not Linux
-        };
-        let mut x = 0u64;
-        let t = Instant::now();
-        while t.elapsed().as_secs_f64() < 0.05 {
-            x = x.wrapping_mul(6364136223846793005).wrapping_add(1);
-        }
-        std::hint::black_box(x);
-        let b = process_cpu_s().unwrap();
-        assert!(a >= 0.0 && b >= a, "{a} {b}");
-    }
 
     #[test]
     fn tracker_pairs_feeds_with_escapes() {
