@@ -144,8 +144,11 @@ pub struct TetHint(pub u32);
 pub struct FlowAtCentre {
     /// The centre the value was found at, m (NaN: unknown).
     pub at: DVec3,
-    /// The fluid velocity there, m/s.
+    /// The fluid velocity there, m/s (of an unsteady series: its earlier snapshot's).
     pub u: DVec3,
+    /// An unsteady series: the later snapshot's velocity there, m/s (NaN otherwise), so
+    /// that the step blends the two at its own weight.
+    pub later: DVec3,
 }
 
 impl FlowAtCentre {
@@ -153,6 +156,7 @@ impl FlowAtCentre {
     pub const UNKNOWN: FlowAtCentre = FlowAtCentre {
         at: DVec3::NAN,
         u: DVec3::NAN,
+        later: DVec3::NAN,
     };
 
     /// The value at `x` when it is known there (`x` bit for bit the centre it was found
@@ -162,6 +166,12 @@ impl FlowAtCentre {
         let same =
             |a: DVec3, b: DVec3| a.to_array().map(f64::to_bits) == b.to_array().map(f64::to_bits);
         same(self.at, x).then_some(self.u)
+    }
+
+    /// The values of both snapshots of a series at `x` when they are known there.
+    #[inline]
+    pub fn pair_at(&self, x: DVec3) -> Option<(DVec3, DVec3)> {
+        self.at(x).map(|u| (u, self.later))
     }
 }
 

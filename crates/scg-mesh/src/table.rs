@@ -55,9 +55,14 @@
 //!
 //! Memory: 64 bytes per cell; a simple cell 96 per face (a tetrahedron: 0.45 kB); any other
 //! 36 per cell face and 176 per tetrahedron of the decomposition (a hexahedron's 24:
-//! 4.5 kB). [`CellTable::new`] declines (returns `None`) above [`CellTable::MAX_BYTES`].
+//! 4.5 kB). [`CellTable::new`] declines (returns `None`) above [`CellTable::MAX_BYTES`] or
+//! when the memory cannot be had.
+
+use std::sync::Arc;
 
 use glam::DVec3;
+
+use values::{Own, Values};
 
 /// Relative tolerance of the inside test (the locator's).
 const TOL: f64 = 1e-9;
@@ -125,8 +130,26 @@ struct SimpleFace {
 
 /// Per-cell records for locating a point in a known cell and interpolating there (see the
 /// module documentation).
+///
+/// A table of another field on the same mesh ([`CellTable::for_field`], the later
+/// snapshots of an unsteady series) shares this one's records and keeps only its own
+/// values ([`values`]): the cell values, the node differences of the tetrahedra and the
+/// gradients of the simple cells' faces, about a third of a hexahedral mesh's records.
 #[derive(Clone, Debug, Default)]
 pub struct CellTable {
+    r: Arc<Records>,
+    /// The conservative scheme's tetrahedron velocities, the interpolator's (`None` for the
+    /// other schemes; with them no cell is simple, and a query answers its tetrahedron's
+    /// value).
+    tet_values: Option<Arc<[DVec3]>>,
+    /// Another field's values on `r` (`None`: the values in `r` are this table's).
+    values: Option<Arc<values::FieldValues>>,
+}
+
+/// The records of a table: the mesh's geometry as the queries read it, with the values of
+/// the field they were built for.
+#[derive(Debug, Default)]
+struct Records {
     cells: Vec<CellRec>,
     faces: Vec<FaceRec>,
     tets: Vec<TetRec>,
@@ -136,10 +159,9 @@ pub struct CellTable {
     simple_next: Vec<u32>,
     /// What is across each of `faces`' faces (see [`BOUNDARY`]; [`NO_CELL`] for padding).
     faces_next: Vec<u32>,
-    /// The conservative scheme's tetrahedron velocities, the interpolator's (`None` for the
-    /// other schemes; with them no cell is simple, and a query answers its tetrahedron's
-    /// value).
-    tet_values: Option<std::sync::Arc<[DVec3]>>,
+    /// The nodes of the tetrahedra, for the tables of other fields on these records
+    /// ([`CellTable::for_field`]), built by the first of them.
+    node_map: std::sync::OnceLock<Arc<values::NodeMap>>,
 }
 
 /// Most sibling tetrahedra a hinted query tries before it searches the cell.
@@ -194,23 +216,29 @@ enum Query {
 }
 
 impl CellTable {
-    /// Largest table [`CellTable::new`] builds, bytes (4 GiB).
-    pub const MAX_BYTES: usize = 4 << 30;
+    /// Largest table [`CellTable::new`] builds, bytes (16 GiB: a 3.5·10^6-cell hexahedral
+    /// mesh). A fixed bound, not the machine's memory, so that whether a mesh gets a table
+    /// (which changes the interpolated values in their last bits) does not depend on where
+    /// it runs; an allocation the machine refuses declines the table as well.
+    pub const MAX_BYTES: usize = 16 << 30;
 
     /// Cells on the short path (convex, triangular faces), and cells without records.
     pub fn counts(&self) -> (usize, usize) {
         (
-            self.cells.iter().filter(|c| c.simple != 0).count(),
-            self.cells.iter().filter(|c| c.n_faces == 0).count(),
+            self.r.cells.iter().filter(|c| c.simple != 0).count(),
+            self.r.cells.iter().filter(|c| c.n_faces == 0).count(),
         )
     }
 
-    /// Bytes held.
+    /// Bytes held (a table of another field on shared records: its values alone).
     pub fn bytes(&self) -> usize {
-        self.cells.len() * size_of::<CellRec>()
-            + self.faces.len() * (size_of::<FaceRec>() + size_of::<u32>())
-            + self.tets.len() * size_of::<TetRec>()
-            + self.simple.len() * (size_of::<SimpleFace>() + size_of::<u32>())
+        if let Some(v) = &self.values {
+            return v.bytes();
+        }
+        self.r.cells.len() * size_of::<CellRec>()
+            + self.r.faces.len() * (size_of::<FaceRec>() + size_of::<u32>())
+            + self.r.tets.len() * size_of::<TetRec>()
+            + self.r.simple.len() * (size_of::<SimpleFace>() + size_of::<u32>())
     }
 
     /// The interpolated value at x when x is in cell `c` (in one of its tetrahedra, up to
@@ -267,26 +295,35 @@ impl CellTable {
     /// tried first ([`CellTable::walk`]).
     #[inline(never)]
     fn query(&self, c: u32, hint: u32, x: DVec3) -> Query {
-        let Some(rec) = self.cells.get(c as usize) else {
+        match &self.values {
+            None => self.query_in(Own, c, hint, x),
+            Some(v) => self.query_in(&**v, c, hint, x),
+        }
+    }
+
+    /// [`CellTable::query`] with the values `v`.
+    #[inline(always)]
+    fn query_in<V: Values>(&self, v: V, c: u32, hint: u32, x: DVec3) -> Query {
+        let Some(rec) = self.r.cells.get(c as usize) else {
             return Query::Unknown;
         };
         let d = x - rec.cc;
-        if let Some(q) = self.hinted(c, rec, hint, d) {
+        if let Some(q) = self.hinted(v, c, rec, hint, d) {
             return q;
         }
         if rec.simple != 0 {
-            self.query_simple(rec, d)
+            self.query_simple(v, c, rec, d)
         } else {
-            self.query_general(rec, d)
+            self.query_general(v, c, rec, d)
         }
     }
 
     /// [`CellTable::query`] for a simple cell (convex, planar faces): inside when the
     /// exit ratio is ≤ 1, and then in the tetrahedron of the exit face.
     #[inline(always)]
-    fn query_simple(&self, rec: &CellRec, d: DVec3) -> Query {
+    fn query_simple<V: Values>(&self, v: V, c: u32, rec: &CellRec, d: DVec3) -> Query {
         let r = rec.face as usize..(rec.face + rec.n_faces) as usize;
-        let (Some(faces), Some(next)) = (self.simple.get(r.clone()), self.simple_next.get(r))
+        let (Some(faces), Some(next)) = (self.r.simple.get(r.clone()), self.r.simple_next.get(r))
         else {
             return Query::Unknown;
         };
@@ -296,9 +333,9 @@ impl CellTable {
         if best_ratio > 1.0 + TOL {
             return Query::Beyond(next[best], NO_TET);
         }
-        let g = &faces[best].g;
+        let g = v.g(rec.face as usize + best, &faces[best]);
         Query::Inside(
-            rec.uc + DVec3::new(g[0].dot(d), g[1].dot(d), g[2].dot(d)),
+            v.uc(c, rec) + DVec3::new(g[0].dot(d), g[1].dot(d), g[2].dot(d)),
             NO_TET,
         )
     }
@@ -311,9 +348,16 @@ impl CellTable {
     /// triangle when that is on the face the search's ray leaves through; `None` where the
     /// hints cannot tell (then search).
     #[inline(always)]
-    fn hinted(&self, c: u32, rec: &CellRec, mut k: u32, d: DVec3) -> Option<Query> {
+    fn hinted<V: Values>(
+        &self,
+        v: V,
+        c: u32,
+        rec: &CellRec,
+        mut k: u32,
+        d: DVec3,
+    ) -> Option<Query> {
         for _ in 0..=HINT_HOPS {
-            let t = self.tets.get(k as usize)?;
+            let t = self.r.tets.get(k as usize)?;
             if t.cell != c {
                 return None;
             }
@@ -321,7 +365,7 @@ impl CellTable {
             let w = DVec3::new(a, b, cw);
             if a > t.margin && b > t.margin && cw > t.margin {
                 if w.element_sum() <= 1.0 + TOL {
-                    return Some(Query::Inside(self.tet_value(t, rec.uc, w), k));
+                    return Some(Query::Inside(self.tet_value(v, k, t, v.uc(c, rec), w), k));
                 }
                 return self.beyond(rec, k, t.across, d);
             }
@@ -343,7 +387,7 @@ impl CellTable {
     #[inline(always)]
     fn beyond(&self, rec: &CellRec, k: u32, across: u32, d: DVec3) -> Option<Query> {
         let r = rec.face as usize..(rec.face + rec.n_faces) as usize;
-        let (faces, next) = (self.faces.get(r.clone())?, self.faces_next.get(r)?);
+        let (faces, next) = (self.r.faces.get(r.clone())?, self.r.faces_next.get(r)?);
         let (best, _) = exit_face(faces, |f| f.q, d)?;
         let f = &faces[best];
         (f.tet..f.tet + f.n_tets)
@@ -351,13 +395,16 @@ impl CellTable {
             .then(|| Query::Beyond(next[best], across))
     }
 
-    /// The value in tetrahedron `t` at coordinates `w`: the conservative scheme's constant,
-    /// else linear from the node differences.
+    /// The value in tetrahedron `t` (record `k`) at coordinates `w`: the conservative
+    /// scheme's constant, else linear from the node differences.
     #[inline(always)]
-    fn tet_value(&self, t: &TetRec, uc: DVec3, w: DVec3) -> DVec3 {
+    fn tet_value<V: Values>(&self, v: V, k: u32, t: &TetRec, uc: DVec3, w: DVec3) -> DVec3 {
         match &self.tet_values {
-            Some(v) => v.get(t.value as usize).copied().unwrap_or(DVec3::NAN),
-            None => uc + w.x * t.du[0] + w.y * t.du[1] + w.z * t.du[2],
+            Some(tv) => tv.get(t.value as usize).copied().unwrap_or(DVec3::NAN),
+            None => {
+                let du = v.du(k, t);
+                uc + w.x * du[0] + w.y * du[1] + w.z * du[2]
+            }
         }
     }
 
@@ -365,9 +412,10 @@ impl CellTable {
     /// face, a non-convex cell) all the cell's. Kept out of line so that the simple path
     /// stays small where it is inlined.
     #[inline(never)]
-    fn query_general(&self, rec: &CellRec, d: DVec3) -> Query {
+    fn query_general<V: Values>(&self, v: V, c: u32, rec: &CellRec, d: DVec3) -> Query {
         let r = rec.face as usize..(rec.face + rec.n_faces) as usize;
-        let (Some(faces), Some(next)) = (self.faces.get(r.clone()), self.faces_next.get(r)) else {
+        let (Some(faces), Some(next)) = (self.r.faces.get(r.clone()), self.r.faces_next.get(r))
+        else {
             return Query::Unknown;
         };
         let Some((best, _)) = exit_face(faces, |f| f.q, d) else {
@@ -375,17 +423,19 @@ impl CellTable {
         };
         let bf = &faces[best];
         let Some(tets) = self
+            .r
             .tets
             .get(bf.tet as usize..(bf.tet + bf.n_tets) as usize)
         else {
             return Query::Unknown;
         };
-        match self.in_tets(bf.tet, tets, rec.uc, d) {
+        let uc = v.uc(c, rec);
+        match self.in_tets(v, bf.tet, tets, uc, d) {
             Some((Some(u), t)) => return Query::Inside(u, t),
             // the ray leaves through the outer triangle of one of this face's tetrahedra:
             // the locator crosses this face too
             Some((None, t)) => {
-                let across = self.tets.get(t as usize).map_or(NO_TET, |r| r.across);
+                let across = self.r.tets.get(t as usize).map_or(NO_TET, |r| r.across);
                 return Query::Beyond(next[best], across);
             }
             None => {}
@@ -393,10 +443,10 @@ impl CellTable {
         // the ray leaves through another face (a warped face, a non-convex cell): all the
         // cell's tetrahedra, as the locator scans all faces
         let (a, b) = (faces[0].tet, faces[faces.len() - 1]);
-        let Some(all) = self.tets.get(a as usize..(b.tet + b.n_tets) as usize) else {
+        let Some(all) = self.r.tets.get(a as usize..(b.tet + b.n_tets) as usize) else {
             return Query::Unknown;
         };
-        match self.in_tets(a, all, rec.uc, d) {
+        match self.in_tets(v, a, all, uc, d) {
             Some((Some(u), t)) => Query::Inside(u, t),
             _ => Query::Unknown,
         }
@@ -407,8 +457,9 @@ impl CellTable {
     /// it, `None` when d is beyond its outer triangle; `None` when no tetrahedron takes
     /// the ray. With the conservative scheme's velocities the value is the tetrahedron's.
     #[inline(always)]
-    fn in_tets(
+    fn in_tets<V: Values>(
         &self,
+        v: V,
         first: u32,
         tets: &[TetRec],
         uc: DVec3,
@@ -434,7 +485,7 @@ impl CellTable {
             if w.element_sum() > 1.0 + TOL {
                 return Some((None, k));
             }
-            return Some((Some(self.tet_value(t, uc, w)), k));
+            return Some((Some(self.tet_value(v, k, t, uc, w)), k));
         }
         None
     }
@@ -444,7 +495,10 @@ impl CellTable {
     /// results.
     #[inline]
     pub fn prefetch(&self, c: u32, deep: bool) {
-        let Some(rec) = self.cells.get(c as usize) else {
+        if let Some(v) = &self.values {
+            Self::prefetch_values(v, Some(c), None);
+        }
+        let Some(rec) = self.r.cells.get(c as usize) else {
             return;
         };
         if !deep {
@@ -452,7 +506,7 @@ impl CellTable {
             return;
         }
         if rec.simple != 0 {
-            if let Some(f) = self.simple.get(rec.face as usize) {
+            if let Some(f) = self.r.simple.get(rec.face as usize) {
                 crate::prefetch::lines(
                     f,
                     (rec.n_faces as usize * size_of::<SimpleFace>()).div_ceil(64),
@@ -460,7 +514,7 @@ impl CellTable {
             }
             return;
         }
-        if let Some(f) = self.faces.get(rec.face as usize) {
+        if let Some(f) = self.r.faces.get(rec.face as usize) {
             crate::prefetch::lines(
                 f,
                 (rec.n_faces as usize * size_of::<FaceRec>()).div_ceil(64),
@@ -472,7 +526,10 @@ impl CellTable {
     /// false when there is no such record. No effect on results.
     #[inline(always)]
     pub fn prefetch_tet(&self, tet: u32) -> bool {
-        match self.tets.get(tet as usize) {
+        if let Some(v) = &self.values {
+            Self::prefetch_values(v, None, Some(tet));
+        }
+        match self.r.tets.get(tet as usize) {
             Some(t) => {
                 crate::prefetch::lines(t, size_of::<TetRec>().div_ceil(64) + 1);
                 true
@@ -486,7 +543,7 @@ impl CellTable {
     /// results.
     #[inline(always)]
     pub fn prefetch_at(&self, c: u32, x: DVec3) {
-        let Some(rec) = self.cells.get(c as usize) else {
+        let Some(rec) = self.r.cells.get(c as usize) else {
             return;
         };
         if rec.simple != 0 {
@@ -494,13 +551,14 @@ impl CellTable {
             return;
         }
         let Some(faces) = self
+            .r
             .faces
             .get(rec.face as usize..(rec.face + rec.n_faces) as usize)
         else {
             return;
         };
         if let Some((best, _)) = exit_face(faces, |f| f.q, x - rec.cc)
-            && let Some(t) = self.tets.get(faces[best].tet as usize)
+            && let Some(t) = self.r.tets.get(faces[best].tet as usize)
         {
             // every tetrahedron of the exit face's fan: the scan may end in any of them
             let bytes = faces[best].n_tets as usize * size_of::<TetRec>();
@@ -525,6 +583,7 @@ fn exit_face<F>(faces: &[F], q: impl Fn(&F) -> DVec3, d: DVec3) -> Option<(usize
 }
 
 mod build;
+pub mod values;
 
 #[cfg(test)]
 mod tests;

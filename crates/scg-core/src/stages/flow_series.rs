@@ -29,6 +29,8 @@ pub struct FlowSeries {
     ahead: Option<(usize, JoinHandle<Result<Snapshot, String>>)>,
     /// Snapshots read so far (including the first, given).
     reads: usize,
+    /// The last [`FlowSeries::advance`] changed the pair.
+    changed: bool,
     /// A snapshot that could not be read: the run stops ([`crate::sim::SimError::Flow`]).
     pub failure: Option<String>,
 }
@@ -47,6 +49,7 @@ impl FlowSeries {
             now: Interval { a: 0, b: 1, w: 0.0 },
             ahead: None,
             reads: 2,
+            changed: false,
             failure: None,
         }
     }
@@ -64,6 +67,12 @@ impl FlowSeries {
     /// Snapshots read so far.
     pub fn reads(&self) -> usize {
         self.reads
+    }
+
+    /// True when the last [`FlowSeries::advance`] made another pair of snapshots current
+    /// (what a particle kept of the last pair no longer holds).
+    pub fn changed(&self) -> bool {
+        self.changed
     }
 
     /// The carrier of the current interval.
@@ -108,7 +117,8 @@ impl FlowSeries {
             return;
         }
         let iv = self.spec.clock.at(t);
-        if (self.pair[0].0, self.pair[1].0) != (iv.a, iv.b) {
+        self.changed = (self.pair[0].0, self.pair[1].0) != (iv.a, iv.b);
+        if self.changed {
             match (self.get(iv.a), self.get(iv.b)) {
                 (Ok(a), Ok(b)) => self.pair = [(iv.a, a), (iv.b, b)],
                 (Err(e), _) | (_, Err(e)) => {

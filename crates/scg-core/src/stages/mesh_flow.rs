@@ -24,7 +24,7 @@ use super::carrier::CarrierModifier;
 use super::erosion::{ErosionLog, Impact};
 use super::flow_series::FlowSeries;
 use super::outlet::{OutletLog, OutletPart, remove_departed};
-use super::table::{bypass, columns_mut, reorder_particles};
+use super::table::{bypass, columns_mut};
 use crate::checkpoint::records::{Checkpoint, Part, Persist, Persistence};
 use crate::components::*;
 use crate::exec::par::for_each_piece_heavy;
@@ -35,6 +35,10 @@ use crate::physics::mesh_flow::series::FlowSeriesSpec;
 use crate::physics::mesh_flow::{MeshFlow, PatchInteraction, PatchRole, hint, land};
 use crate::state::{Health, Motion, SimClock, StepDisplacement, Tally};
 use crate::step::{StepBuilder, StepSet, StepSystem};
+
+mod sort;
+pub(crate) use sort::add_sort;
+pub use sort::{SORT_EVERY, sort_by_cell};
 
 /// A mesh flow as a scene declares it.
 #[derive(Clone, Debug)]
@@ -206,16 +210,18 @@ pub fn integrate_mesh_flow(mut d: MeshInputs, mut q: MeshMoveQuery) {
     let step = MeshStep {
         scheme,
         flow,
-        later: blend.map(|b| b.b),
+        later: blend.map(|b| (b.b, b.w)),
+        // a new pair of snapshots: what the last landing kept is of the old one
+        stale: d.series.as_deref().is_some_and(FlowSeries::changed),
         models: &d.state.spec.interactions,
         n_cells: flow.mesh().n_cells as u32,
         health: &d.health,
         erosion: d.erosion.as_deref().zip(sink.as_ref()),
     };
     // The schemes that never read the start's fluid velocity run a loop without it
-    // (unless the dispersion model reads it). An unsteady flow reads it afresh: the
-    // value kept from the last landing is of one snapshot.
-    let keep_start = d.series.is_none() && keeps_start(&d.motion, d.carrier.as_deref());
+    // (unless the dispersion model reads it). An unsteady flow keeps both snapshots'
+    // values and blends them at the step's weight.
+    let keep_start = keeps_start(&d.motion, d.carrier.as_deref());
     for_each_piece_heavy(columns, |piece| {
         let (d2max, gone) = match blend {
             None => step.advance_in(piece, keep_start, flow),
@@ -261,9 +267,11 @@ type MeshPiece<'a> = (
 struct MeshStep<'a> {
     scheme: Scheme,
     flow: &'a MeshFlow,
-    /// An unsteady flow's later snapshot (`flow` the earlier): its records are loaded
-    /// ahead too.
-    later: Option<&'a MeshFlow>,
+    /// An unsteady flow's later snapshot (`flow` the earlier) and its weight: its values
+    /// are loaded ahead too, and kept at each landing beside the earlier one's.
+    later: Option<(&'a MeshFlow, f64)>,
+    /// The values kept at the last landings are of another pair of snapshots.
+    stale: bool,
     models: &'a [PatchInteraction],
     n_cells: u32,
     health: &'a Health,
@@ -312,6 +320,7 @@ impl MeshStep<'_> {
             scheme,
             flow,
             later,
+            stale,
             models,
             n_cells,
             health,
@@ -341,7 +350,7 @@ impl MeshStep<'_> {
                         fc: &fcs[i],
                         sf: &sfs[i],
                     };
-                    let u0 = us[i].at(body.x).map(|u| offs.map_or(u, |o| u + o[i].0));
+                    let u0 = kept_start(&us[i], body.x, later, stale, offs.map(|o| o[i].0));
                     (
                         fcs[i].tau,
                         u0.and_then(|u0| start_reynolds(&scheme, &body, u0)),
@@ -350,7 +359,8 @@ impl MeshStep<'_> {
             }
             // Memory latency dominates on large meshes: start loading a later particle's
             // records now (its cell 16 ahead; 8 ahead its tetrahedron when hinted, else
-            // the cell's faces; without a hint the tetrahedron holding it 4 ahead).
+            // the cell's faces; without a hint the tetrahedron holding it 4 ahead, with one
+            // the later snapshot's values of it).
             if let Some(h) = hs.get(i + 16) {
                 flow.prefetch(h.0, false);
             }
@@ -358,16 +368,18 @@ impl MeshStep<'_> {
                 if !flow.prefetch_tet(t.0) {
                     flow.prefetch(h.0, true);
                 }
-                if let Some(b) = later
+                if let Some((b, _)) = later
                     && !b.prefetch_tet(t.0)
                 {
                     b.prefetch(h.0, true);
                 }
             }
-            if let (Some(h), Some(t)) = (hs.get(i + 4), ts.get(i + 4))
-                && t.0 == scg_mesh::NO_TET
-            {
-                flow.prefetch_at(h.0, xs[i + 4].0);
+            if let (Some(h), Some(t)) = (hs.get(i + 4), ts.get(i + 4)) {
+                if t.0 == scg_mesh::NO_TET {
+                    flow.prefetch_at(h.0, xs[i + 4].0);
+                } else if let Some((b, _)) = later {
+                    b.prefetch_tet_values(t.0);
+                }
             }
             let x0 = xs[i].0;
             let mut h0 = Place {
@@ -395,7 +407,7 @@ impl MeshStep<'_> {
             };
             // The fluid velocity at the start, from the last landing when it found it.
             let start = if KEEP {
-                us[i].at(x0).map(|u| offs.map_or(u, |o| u + o[i].0))
+                kept_start(&us[i], x0, later, stale, offs.map(|o| o[i].0))
             } else {
                 None
             };
@@ -429,7 +441,18 @@ impl MeshStep<'_> {
             ts[i].0 = l.tet;
             if KEEP {
                 us[i] = match l.u {
-                    Some(u) => FlowAtCentre { at: l.x, u },
+                    Some(u) => FlowAtCentre {
+                        at: l.x,
+                        u,
+                        // the later snapshot at the same place, as the blend reads it
+                        later: later.map_or(DVec3::NAN, |(b, _)| {
+                            let here = Place {
+                                cell: l.hint,
+                                tet: l.tet,
+                            };
+                            b.velocity_at(here, l.x).0
+                        }),
+                    },
                     None => FlowAtCentre::UNKNOWN,
                 };
             }
@@ -443,6 +466,32 @@ impl MeshStep<'_> {
         }
         (d2max, gone)
     }
+}
+
+/// The carrier's velocity at the start `x` of a step as the last landing kept it
+/// (`None` where it did not, or kept it of another pair of snapshots, `stale`): an
+/// unsteady flow's two snapshots blended at the step's weight (`later`'s) as
+/// [`Blend`](crate::physics::mesh_flow::series::Blend) blends them, plus the particle's
+/// offset `off` when the carrier has one; the same bits as locating x again.
+#[inline(always)]
+fn kept_start(
+    k: &FlowAtCentre,
+    x: DVec3,
+    later: Option<(&MeshFlow, f64)>,
+    stale: bool,
+    off: Option<DVec3>,
+) -> Option<DVec3> {
+    if stale {
+        return None;
+    }
+    let u = match later {
+        None => k.at(x)?,
+        Some((_, w)) => {
+            let (a, b) = k.pair_at(x)?;
+            crate::physics::mesh_flow::series::blend(a, b, w)
+        }
+    };
+    Some(off.map_or(u, |o| u + o))
 }
 
 /// True when a step reads the fluid velocity at its start ([`Scheme::reads_start`]) or the
@@ -462,62 +511,6 @@ fn keeps_start(m: &Motion, carrier: Option<&CarrierModifier>) -> bool {
             forces: None,
         }
         .reads_start()
-}
-
-/// Default steps between two reorderings of the particle table by mesh cell
-/// ([`sort_by_cell`]; scene key `flow.sort_every`).
-pub const SORT_EVERY: u64 = 100;
-
-/// Add the reordering of the particle table by mesh cell (inlet/outlet stage, after the
-/// feeders). Only for scenes without particle contacts: there every particle's step
-/// reads only its own state, so the table order changes no result.
-pub(crate) fn add_sort(b: &mut StepBuilder) {
-    b.add(
-        StepSet::InletOutlet,
-        "mesh_flow",
-        StepSystem::SortByCell,
-        sort_by_cell,
-    );
-}
-
-/// Reorder the particle table by mesh cell, then id, after the first step (when every
-/// particle has been located) and every `sort_every` steps ([`MeshFlowSpec`], default
-/// [`SORT_EVERY`]), as LAMMPS's `atom_modify
-/// sort` does by bins. The cell records of consecutive particles are then neighbours in
-/// memory, and a step reads the mesh almost in order instead of at random: on a
-/// 10^6-cell mesh this more than doubles the speed of the integration, which is bound
-/// by memory latency. Every component column of the particle table is permuted alike
-/// (the rows keep their entities; nothing holds a particle's entity across steps), so
-/// each particle's state is unchanged but for its row; and since no stage of a scene
-/// without contacts depends on the row order, the results are bit-identical to an
-/// unsorted run's (tested).
-///
-/// # Panics
-/// When the particles carry a component the layout does not know
-/// ([`reorder_particles`]): it stops before moving anything.
-pub fn sort_by_cell(world: &mut World) {
-    let step = world.resource::<SimClock>().step;
-    let every = world.resource::<MeshFlowState>().spec.sort_every;
-    if every == 0 || (step != 1 && !step.is_multiple_of(every)) {
-        return;
-    }
-    let mut q = world.query::<(&ParticleId, Option<&CellHint>)>();
-    let keys: Vec<(u32, u32)> = q
-        .iter(world)
-        .map(|(id, h)| (h.map_or(u32::MAX, |h| h.0), id.0))
-        .collect();
-    if keys.is_sorted() {
-        return;
-    }
-    let mut perm: Vec<u32> = (0..keys.len() as u32).collect();
-    perm.sort_unstable_by_key(|&i| keys[i as usize]);
-    // The start's fluid velocity only where it is kept.
-    let keep_start = keeps_start(
-        world.resource::<Motion>(),
-        world.get_resource::<CarrierModifier>(),
-    );
-    let flow_at_centre = std::any::TypeId::of::<FlowAtCentre>();
-    reorder_particles(world, &perm, |t| keep_start || t != flow_at_centre);
 }
 
 /// Particles that left through each patch, per group (resource of a mesh flow):

@@ -3,7 +3,11 @@
 
 use glam::DVec3;
 
-use super::{BOUNDARY, CellRec, CellTable, FaceRec, NO_CELL, NO_TET, SimpleFace, TOL, TetRec};
+use std::sync::Arc;
+
+use super::{
+    BOUNDARY, CellRec, CellTable, FaceRec, NO_CELL, NO_TET, Records, SimpleFace, TOL, TetRec,
+};
 use crate::interp::Interpolator;
 
 impl CellTable {
@@ -33,17 +37,18 @@ impl CellTable {
         let cellv = it.cell_values();
         let nodev = it.node_values();
         let np = mesh.points.len() as u32;
-        let mut t = CellTable {
-            cells: Vec::with_capacity(nc),
-            faces: Vec::with_capacity(n_faces),
-            tets: Vec::with_capacity(n_tets),
+        // (an allocation the machine refuses declines the table)
+        let mut t = Records {
+            cells: room(nc)?,
+            faces: room(n_faces)?,
+            tets: room(n_tets)?,
             simple: Vec::new(),
             simple_next: Vec::new(),
-            faces_next: Vec::with_capacity(n_faces),
-            tet_values: None,
+            faces_next: room(n_faces)?,
+            node_map: Default::default(),
         };
         let shared = it.tet_velocities();
-        t.tet_values = shared.map(|(v, _)| std::sync::Arc::clone(v));
+        let tet_values = shared.map(|(v, _)| Arc::clone(v));
         let conservative = shared.is_some();
         // room for the cells that may be simple (all faces triangles), each on a line
         let tri_faced: usize = (0..nc)
@@ -51,8 +56,8 @@ impl CellTable {
             .filter(|fs| fs.iter().all(|&f| mesh.face(f as usize).len() == 3))
             .map(|fs| fs.len() + 1)
             .sum();
-        t.simple.reserve_exact(tri_faced);
-        t.simple_next.reserve_exact(tri_faced);
+        t.simple.try_reserve_exact(tri_faced).ok()?;
+        t.simple_next.try_reserve_exact(tri_faced).ok()?;
         huge_pages(&t.cells);
         huge_pages(&t.faces);
         huge_pages(&t.tets);
@@ -84,14 +89,10 @@ impl CellTable {
                 let flip = mesh.owner[fi] as usize != c;
                 let mut push = |nodes: [u32; 3]| {
                     let v = nodes.map(|n| loc.node(n) - cc);
-                    let n23 = v[1].cross(v[2]);
-                    let det = v[0].dot(n23);
-                    if det.is_nan() || det <= 0.0 {
+                    let Some(m) = inverse_rows(v) else {
                         return false;
-                    }
-                    let inv = 1.0 / det;
-                    let m = [n23 * inv, v[2].cross(v[0]) * inv, v[0].cross(v[1]) * inv];
-                    let du = nodes.map(|n| nodev.get(n as usize).map_or(DVec3::ZERO, |&u| u - uc));
+                    };
+                    let du = node_differences(nodev, nodes, uc);
                     corners.push(v);
                     ids.push(nodes);
                     t.tets.push(TetRec {
@@ -105,20 +106,8 @@ impl CellTable {
                     });
                     true
                 };
-                if pts.len() == 3 {
-                    let (a, b) = if flip {
-                        (pts[2], pts[1])
-                    } else {
-                        (pts[1], pts[2])
-                    };
-                    ok &= push([pts[0], a, b]);
-                } else {
-                    let n = pts.len();
-                    for i in 0..n {
-                        let (pa, pb) = (pts[i], pts[(i + 1) % n]);
-                        let (a, b) = if flip { (pb, pa) } else { (pa, pb) };
-                        ok &= push([np + f, a, b]);
-                    }
+                for nodes in face_tets(pts, flip, np + f) {
+                    ok &= push(nodes);
                 }
                 ok &= q.is_finite();
                 t.faces.push(FaceRec {
@@ -182,9 +171,7 @@ impl CellTable {
                 t.simple_next.extend_from_slice(&t.faces_next[f0..]);
                 for fr in &t.faces[f0..] {
                     let tr = &t.tets[fr.tet as usize];
-                    let g = [0, 1, 2].map(|j| {
-                        tr.m[0] * tr.du[0][j] + tr.m[1] * tr.du[1][j] + tr.m[2] * tr.du[2][j]
-                    });
+                    let g = gradient_rows(&tr.m, &tr.du);
                     t.simple.push(SimpleFace { q: fr.q, g });
                 }
                 t.faces.truncate(f0);
@@ -221,8 +208,73 @@ impl CellTable {
         t.faces.shrink_to_fit();
         t.faces_next.shrink_to_fit();
         t.tets.shrink_to_fit();
-        Some(t)
+        Some(CellTable {
+            r: Arc::new(t),
+            tet_values,
+            values: None,
+        })
     }
+}
+
+/// An empty vector with room for `n` elements, `None` when the allocation fails.
+fn room<T>(n: usize) -> Option<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).ok()?;
+    Some(v)
+}
+
+/// The corner nodes of the tetrahedra of a cell's face of points `pts` (`flip`: the cell
+/// is the face's neighbour; `centre`: the node number of the face's centre), in record
+/// order: one for a triangle, else one per edge, each with the face centre.
+pub(super) fn face_tets(pts: &[u32], flip: bool, centre: u32) -> impl Iterator<Item = [u32; 3]> {
+    let n = pts.len();
+    let tri = n == 3;
+    (0..if tri { 1 } else { n }).map(move |i| {
+        if tri {
+            let (a, b) = if flip {
+                (pts[2], pts[1])
+            } else {
+                (pts[1], pts[2])
+            };
+            [pts[0], a, b]
+        } else {
+            let (pa, pb) = (pts[i], pts[(i + 1) % n]);
+            let (a, b) = if flip { (pb, pa) } else { (pa, pb) };
+            [centre, a, b]
+        }
+    })
+}
+
+/// The rows of the inverse of the matrix of columns v (a tetrahedron's corners minus the
+/// cell centre), `None` unless its determinant is positive.
+#[inline]
+pub(super) fn inverse_rows(v: [DVec3; 3]) -> Option<[DVec3; 3]> {
+    let n23 = v[1].cross(v[2]);
+    let det = v[0].dot(n23);
+    if det.is_nan() || det <= 0.0 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    Some([n23 * inv, v[2].cross(v[0]) * inv, v[0].cross(v[1]) * inv])
+}
+
+/// The node values minus the cell value `uc` (zero for a node without a value).
+#[inline]
+pub(super) fn node_differences(nodev: &[DVec3], nodes: [u32; 3], uc: DVec3) -> [DVec3; 3] {
+    nodes.map(|n| node_difference(nodev, n, uc))
+}
+
+/// Node `n`'s value minus the cell value `uc` (zero for a node without a value).
+#[inline]
+pub(super) fn node_difference(nodev: &[DVec3], n: u32, uc: DVec3) -> DVec3 {
+    nodev.get(n as usize).map_or(DVec3::ZERO, |&u| u - uc)
+}
+
+/// The rows of the value's gradient in a tetrahedron of inverse rows `m` and node
+/// differences `du`.
+#[inline]
+pub(super) fn gradient_rows(m: &[DVec3; 3], du: &[DVec3; 3]) -> [DVec3; 3] {
+    [0, 1, 2].map(|j| m[0] * du[0][j] + m[1] * du[1][j] + m[2] * du[2][j])
 }
 
 /// The margins of one cell's tetrahedra (`corners`: each one's v_i = node_i − cc, the

@@ -188,11 +188,11 @@ fn tet_hints_change_no_answer() {
             // next to the sides: a random tetrahedron record, a point on one of its
             // sides (or at a corner) moved off it by up to 1e-6 of the cell
             let mut near = 0;
-            for _ in 0..if t.tets.is_empty() { 0 } else { 20_000 } {
-                let k = rng.random_range(0..t.tets.len());
-                let r = &t.tets[k];
+            for _ in 0..if t.r.tets.is_empty() { 0 } else { 20_000 } {
+                let k = rng.random_range(0..t.r.tets.len());
+                let r = &t.r.tets[k];
                 let c = r.cell;
-                let cc = t.cells[c as usize].cc;
+                let cc = t.r.cells[c as usize].cc;
                 let inv = glam::DMat3::from_cols(r.m[0], r.m[1], r.m[2])
                     .transpose()
                     .inverse();
@@ -213,11 +213,11 @@ fn tet_hints_change_no_answer() {
                     bits(t.walk(c, sibling, x, 0)),
                     "{shape:?}: {sibling}"
                 );
-                if let Some(a) = t.tets.get(r.across as usize) {
+                if let Some(a) = t.r.tets.get(r.across as usize) {
                     let from_next = t.walk(a.cell, r.across, x, 2);
                     assert_eq!(bits(from_next), bits(t.walk(a.cell, NO_TET, x, 2)));
                 }
-                if matches!(t.hinted(c, &t.cells[c as usize], k as u32, x - cc), Some(Query::Inside(_, h)) if h == k as u32)
+                if matches!(t.hinted(Own, c, &t.r.cells[c as usize], k as u32, x - cc), Some(Query::Inside(_, h)) if h == k as u32)
                 {
                     near += 1;
                 }
@@ -236,10 +236,16 @@ fn tet_hints_change_no_answer() {
                     let plain = t.walk(c, NO_TET, x, 4);
                     let hinted = t.walk(c, tet, x, 4);
                     assert_eq!(bits(plain), bits(hinted), "{shape:?} {scheme:?}: x {x}");
-                    if let Some(r) = t.tets.get(tet as usize)
+                    if let Some(r) = t.r.tets.get(tet as usize)
                         && r.cell == c
-                        && t.hinted(c, &t.cells[c as usize], tet, x - t.cells[c as usize].cc)
-                            .is_some()
+                        && t.hinted(
+                            Own,
+                            c,
+                            &t.r.cells[c as usize],
+                            tet,
+                            x - t.r.cells[c as usize].cc,
+                        )
+                        .is_some()
                     {
                         fast += 1;
                     }
@@ -261,4 +267,63 @@ fn tet_hints_change_no_answer() {
             }
         }
     });
+}
+
+/// A table of another field on shared records ([`CellTable::for_field`]) answers every
+/// query and walk, hinted or not, bit for bit as a table built from scratch for that field,
+/// on every cell shape and scheme, and holds less; a table on another mesh is refused.
+#[test]
+fn a_table_for_another_field_answers_as_its_own_table() {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+    let schemes = [
+        Interpolation::CellPoint,
+        Interpolation::CellPointIdw,
+        Interpolation::CellValue,
+        Interpolation::Conservative,
+    ];
+    let bits = |w: TableWalk| match w {
+        TableWalk::Inside { cell, tet, value } => (cell, tet, value.to_array().map(f64::to_bits)),
+        TableWalk::Boundary { cell, face } => (cell, face, [0; 3]),
+        TableWalk::Unknown => (u32::MAX, u32::MAX, [0; 3]),
+    };
+    for_each_table(&schemes, |shape, scheme, m, g, loc, _, t| {
+        let other = CellField::at_cell_centres(m, g, |c| {
+            DVec3::new((2.0 * c.z).cos(), c.x - c.y * c.y, 0.3 * c.y)
+        });
+        let outflow = vec![true; m.patches.len()];
+        let it = crate::Interpolator::with_outflow(loc, &other, scheme, &outflow).unwrap();
+        let fresh = CellTable::new(&it).unwrap();
+        let shared = t.for_field(&it).unwrap();
+        assert!(shared.shares_records(t) && !fresh.shares_records(t));
+        assert!(shared.bytes() < fresh.bytes(), "{shape:?} {scheme:?}");
+        let (mut inside, mut hinted) = (0, 0);
+        for _ in 0..3000 {
+            let x = DVec3::new(rng.random(), rng.random(), rng.random());
+            let c = rng.random_range(0..m.n_cells as u32);
+            let a = fresh.walk(c, NO_TET, x, 6);
+            assert_eq!(
+                bits(a),
+                bits(shared.walk(c, NO_TET, x, 6)),
+                "{shape:?} {scheme:?}"
+            );
+            assert_eq!(fresh.velocity_in(c, x), shared.velocity_in(c, x));
+            if let TableWalk::Inside { cell, tet, .. } = a {
+                inside += 1;
+                // a small move from there, hinted
+                let y = x + (DVec3::new(rng.random(), rng.random(), rng.random()) - 0.5) * 0.01;
+                let (p, q) = (fresh.walk(cell, tet, y, 2), shared.walk(cell, tet, y, 2));
+                assert_eq!(bits(p), bits(q), "{shape:?} {scheme:?}: hinted");
+                hinted += usize::from(matches!(p, TableWalk::Inside { .. }));
+            }
+        }
+        assert!(inside > 300 && hinted > 250, "{shape:?}: {inside} {hinted}");
+    });
+    // another mesh (other cell count): refused
+    let (m, g, field) = perturbed_box(CellShape::Hex, 4);
+    let loc = Locator::new(&m, &g).unwrap();
+    let it = crate::Interpolator::new(&loc, &field, Interpolation::CellPoint).unwrap();
+    let (m5, g5, f5) = perturbed_box(CellShape::Hex, 5);
+    let loc5 = Locator::new(&m5, &g5).unwrap();
+    let it5 = crate::Interpolator::new(&loc5, &f5, Interpolation::CellPoint).unwrap();
+    assert!(CellTable::new(&it5).unwrap().for_field(&it).is_none());
 }
