@@ -1,6 +1,7 @@
-//! Unsteady fields (`[flow] series`): an OpenFOAM case's time directories as one field,
-//! linear in time between two snapshots. Against the closed form (a uniform flow ramping
-//! in time) and a fine reference integration (a vortex whose rate ramps); a cycling window
+//! Unsteady fields (`[flow] series`): an OpenFOAM case's time directories (or a VTK
+//! collection's files) as one field, linear in time between two snapshots. Against the
+//! closed form (a uniform flow ramping in time, from either) and a fine reference
+//! integration (a vortex whose rate ramps); a cycling window
 //! against the same files written out in full, bit for bit; 1 and 2 threads and a
 //! restart, bit for bit; the refusals, by key.
 //!
@@ -106,18 +107,107 @@ fn a_uniform_flow_ramping_in_time_moves_a_particle_as_the_closed_form() {
     let dt = 1.0 / 16384.0;
     let duration = 0.5;
     let sc = load(dir.path(), &scene_text("", duration, dt, rho, x0, v0));
+    let worst = ramp_error(&sc, (a, b), x0, v0, tau);
+    println!("τ = {tau:.4e} s, dt = {dt:e} s: largest position error {worst:.3e} m");
+    assert!(worst <= 1e-9, "{worst:e} m");
+}
+
+/// The largest distance over the run of `sc` between its one particle and the closed form
+/// of dv/dt = (a + b·t − v)/τ from x0, v0.
+fn ramp_error(sc: &Scene, (a, b): (DVec3, DVec3), x0: DVec3, v0: DVec3, tau: f64) -> f64 {
     let mut sim = sc.build(false);
     let mut worst = 0.0_f64;
     for i in 0..sc.steps() {
         sim.step().unwrap();
-        let t = (i + 1) as f64 * dt;
+        let t = (i + 1) as f64 * sc.dt;
         let c = v0 - a + b * tau;
         let e = (-t / tau).exp();
         let x = x0 + a * t + b * (0.5 * t * t - tau * t) + c * tau * (1.0 - e);
         worst = worst.max((sim.particles()[0].position - x).length());
     }
-    println!("τ = {tau:.4e} s, dt = {dt:e} s: largest position error {worst:.3e} m");
+    worst
+}
+
+/// `u` written as one legacy VTK file per time of `times` in `dir` (`u_k.vtk`) and the
+/// ParaView collection `dir/u.pvd` listing them (the first listed last: the collection's
+/// order is the times').
+fn vtk_series(dir: &Path, mesh: &PolyMesh, times: &[f64], u: impl Fn(f64) -> CellField) {
+    let mut sets = Vec::new();
+    for (k, &t) in times.iter().enumerate() {
+        let name = format!("u_{k}.vtk");
+        scg_mesh::vtk::write_legacy(dir.join(&name), mesh, "U", &u(t), k % 2 == 0).unwrap();
+        sets.push(format!(
+            "<DataSet timestep=\"{t}\" group=\"\" part=\"0\" file=\"{name}\"/>"
+        ));
+    }
+    sets.rotate_left(1);
+    std::fs::write(
+        dir.join("u.pvd"),
+        format!(
+            "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n\
+             <Collection>\n{}\n</Collection>\n</VTKFile>\n",
+            sets.join("\n")
+        ),
+    )
+    .unwrap();
+}
+
+/// [`scene_text`] reading the VTK collection `file` instead of the OpenFOAM case.
+fn vtk_scene(file: &str, series: Option<&str>, text: &str) -> String {
+    let flow = match series {
+        Some(s) => format!("kind = \"vtk\"\nfile = \"{file}\"\nseries = {{ {s} }}"),
+        None => format!("kind = \"vtk\"\nfile = \"{file}\""),
+    };
+    let cut = text.find("kind = \"openfoam\"").unwrap();
+    let end = text[cut..].find("[flow.patches]").unwrap() + cut;
+    format!("{}{flow}\n{}", &text[..cut], &text[end..]).replace(SIDES, r#"walls = ["boundary"]"#)
+}
+
+/// A VTK series (a ParaView `.pvd` of legacy files, one per time step) of a uniform flow
+/// ramping in time moves a particle as the closed form, as the OpenFOAM series does; the
+/// refusals name the key: a collection without `series`, `series` on one file, a time
+/// step whose mesh is not the first one's.
+#[test]
+fn a_vtk_series_moves_a_particle_as_the_closed_form() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = unit_box();
+    let (a, b) = (DVec3::new(0.2, 0.05, -0.1), DVec3::new(0.4, -0.2, 0.3));
+    let uniform = |t: f64| CellField {
+        cells: vec![a + b * t; mesh.n_cells],
+        patches: vec![None; mesh.patches.len()],
+    };
+    vtk_series(dir.path(), &mesh, &[0.0, 0.25, 0.5], uniform);
+    let (rho, x0, v0) = (1.0e3, DVec3::new(0.3, 0.5, 0.4), DVec3::new(-0.3, 0.1, 0.2));
+    let text = scene_text("", 0.5, 1.0 / 16384.0, rho, x0, v0);
+    let sc = load(dir.path(), &vtk_scene("u.pvd", Some(""), &text));
+    let s = sc.mesh_flow.as_ref().unwrap().series.as_ref().unwrap();
+    assert_eq!(s.times, vec![0.0, 0.25, 0.5]);
+    let worst = ramp_error(&sc, (a, b), x0, v0, tau(rho));
+    println!("VTK series: largest position error {worst:.3e} m");
     assert!(worst <= 1e-9, "{worst:e} m");
+    // refusals
+    let e = load_err(dir.path(), &vtk_scene("u.pvd", None, &text));
+    assert!(e.contains("flow.file") && e.contains("time series"), "{e}");
+    let e = load_err(dir.path(), &vtk_scene("u_0.vtk", Some(""), &text));
+    assert!(e.contains("flow.series") && e.contains(".pvd"), "{e}");
+    let e = load_err(dir.path(), &vtk_scene("u.pvd", Some("start = 0.3"), &text));
+    assert!(e.contains("1 time step in the window"), "{e}");
+    let other = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [6, 6, 6])
+        .shape(CellShape::Hex)
+        .naming(PatchNaming::Sides)
+        .perturbed(0.15, 4)
+        .build()
+        .unwrap();
+    scg_mesh::vtk::write_legacy(
+        dir.path().join("u_1.vtk"),
+        &other,
+        "U",
+        &uniform(0.25),
+        true,
+    )
+    .unwrap();
+    let e = load_err(dir.path(), &vtk_scene("u.pvd", Some(""), &text));
+    assert!(e.contains("u_1.vtk") && e.contains("one mesh"), "{e}");
 }
 
 /// A solid-body vortex about the box's axis whose rate Ω(t) ramps linearly between

@@ -43,6 +43,16 @@ pub enum BenchDispersion {
     Langevin,
 }
 
+/// The cells of the mesh benchmark's box (`--shape`).
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BenchShape {
+    /// Six tetrahedra per hexahedron (the tracker's short path: one record per face).
+    Tet,
+    /// Hexahedra, as blockMesh and snappyHexMesh make (24 tetrahedra each in the
+    /// tracker's records).
+    Hex,
+}
+
 /// Arguments of `scg bench`.
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -61,9 +71,12 @@ pub struct BenchArgs {
     /// `case`: edit the scene (`key=value`, as `scg run --set`).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
-    /// `mesh`: about this many cells (tetrahedra).
+    /// `mesh`: about this many cells.
     #[arg(long, default_value_t = 100_000)]
     pub cells: u64,
+    /// `mesh`: the cells' shape.
+    #[arg(long, value_enum, default_value_t = BenchShape::Tet)]
+    pub shape: BenchShape,
     /// Write the benchmark's scene (TOML; `dilute` and `dense` `--steps` + 5 steps long,
     /// `drag` 1 s) to this file instead of running it (not `mesh`: built in memory), e.g.
     /// to run it over MPI ranks with `scg run` (bench/mpi.sh).
@@ -118,22 +131,29 @@ pub fn with_dispersion(scene: &mut scg_scene::Scene, dispersion: BenchDispersion
 /// through the origin).
 pub const MESH_BENCH_BOX: (f64, f64) = (1.0e-3, 1.0e-3);
 
-/// The mesh benchmark: `n` 10 µm particles in a cylinder inside a perturbed tetrahedral
-/// box of about `cells` cells holding the paper's vortex (ω = 31.4 rad/s, k = 0.1) sampled
+/// The mesh benchmark: `n` 10 µm particles in a cylinder inside a perturbed box of about
+/// `cells` cells of `shape` holding the paper's vortex (ω = 31.4 rad/s, k = 0.1) sampled
 /// at the cell centres; every boundary patch a wall.
-pub fn mesh_scene(n: u64, cells: u64) -> Result<scg_scene::Scene, String> {
+pub fn mesh_scene(n: u64, cells: u64, shape: BenchShape) -> Result<scg_scene::Scene, String> {
     use glam::DVec3;
     use scg_core::physics::mesh_flow::{MeshFlow, PatchRole};
     use scg_mesh::build::{BoxMesh, CellShape, PatchNaming};
     let (w, h) = MESH_BENCH_BOX;
-    // 6 tetrahedra per hexahedron, nx × nx × nx/2 hexahedra.
-    let nx = ((cells as f64 / 3.0).cbrt().round() as usize).max(2);
+    // nx × nx × nx/2 hexahedra, each 6 tetrahedra or itself
+    let per_hex = match shape {
+        BenchShape::Tet => 6.0,
+        BenchShape::Hex => 1.0,
+    };
+    let nx = ((2.0 * cells as f64 / per_hex).cbrt().round() as usize).max(2);
     let mesh = BoxMesh::new(
         DVec3::new(-w, -w, 0.0),
         DVec3::new(w, w, h),
         [nx, nx, (nx / 2).max(1)],
     )
-    .shape(CellShape::Tet)
+    .shape(match shape {
+        BenchShape::Tet => CellShape::Tet,
+        BenchShape::Hex => CellShape::Hex,
+    })
     .naming(PatchNaming::Sides)
     .perturbed(0.2, 11)
     .build()
@@ -175,8 +195,13 @@ region = {{ kind = "cylinder", radius_max = {r:e}, height = [{h0:e}, {h1:e}] }}
     scene.mesh_flow = Some(scg_scene::SceneMeshFlow {
         flow: std::sync::Arc::new(flow),
         source: format!(
-            "<generated tet box, {nx}×{nx}×{} hexahedra × 6>",
-            (nx / 2).max(1)
+            "<generated {shape:?} box, {nx}×{nx}×{} hexahedra{}>",
+            (nx / 2).max(1),
+            if shape == BenchShape::Tet {
+                " × 6"
+            } else {
+                ""
+            }
         ),
         field: "U".into(),
         sort_every: scg_core::stages::mesh_flow::SORT_EVERY,
@@ -408,13 +433,22 @@ pub fn bench(a: BenchArgs) -> i32 {
     let scene = match a.kind {
         BenchKind::Mesh => {
             let t = Instant::now();
-            let s = mesh_scene(a.particles, a.cells);
+            let s = mesh_scene(a.particles, a.cells, a.shape);
             if let Ok(s) = &s
                 && let Some(m) = &s.mesh_flow
             {
+                let n = m.flow.mesh().n_cells;
+                let records = match m.flow.table() {
+                    Some(t) => format!(
+                        "tracker records {:.1} MB ({:.2} kB per cell)",
+                        t.bytes() as f64 / 1e6,
+                        t.bytes() as f64 / 1e3 / n.max(1) as f64
+                    ),
+                    None => "no tracker records (too large)".into(),
+                };
                 println!(
-                    "mesh: {} cells, {} faces, {} points, built in {:.2} s",
-                    m.flow.mesh().n_cells,
+                    "mesh: {n} {:?} cells, {} faces, {} points, {records}, built in {:.2} s",
+                    a.shape,
                     m.flow.mesh().n_faces(),
                     m.flow.mesh().points.len(),
                     t.elapsed().as_secs_f64()

@@ -25,7 +25,7 @@ fn main() {
         Some(i) if a.len() == i + 3 => {
             let n: usize = a[i + 1].parse().unwrap_or(0);
             let dt: f64 = a[i + 2].parse().unwrap_or(f64::NAN);
-            if n < 2 || !(dt > 0.0) {
+            if n < 2 || dt.is_nan() || dt <= 0.0 {
                 eprintln!("--series N SPACING: N ≥ 2 snapshots, SPACING > 0 s");
                 std::process::exit(2);
             }

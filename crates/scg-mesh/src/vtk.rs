@@ -23,6 +23,9 @@
 mod appended;
 mod cells;
 mod guard;
+mod pvd;
+
+pub use pvd::read_pvd;
 
 use std::path::Path;
 

@@ -7,9 +7,9 @@
 //! keeps its own values ([`FieldValues`]: per cell its value and the differences at the
 //! nodes of its tetrahedra, 0.36 kB of a hexahedron's 4.5; per simple face its gradient)
 //! and shares the first snapshot's records, with a map from each tetrahedron to its
-//! three nodes built once for them all ([`NodeMap`], 0.35 kB per hexahedron).
+//! three nodes built once for them all (`NodeMap`, 0.35 kB per hexahedron).
 //! A query reads the same records either way; only where the values come from differs
-//! ([`Values`]), and they are computed with the same operations as the records' own, so a
+//! (`Values`), and they are computed with the same operations as the records' own, so a
 //! table for a field answers bit for bit as a table built from scratch for it.
 
 use std::sync::Arc;

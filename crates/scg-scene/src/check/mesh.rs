@@ -129,7 +129,7 @@ pub(super) fn series_findings(scene: &Scene, groups: &[GroupReport]) -> Vec<Find
     let c = &s.spec.clock;
     let (lo, hi) = c.spacing();
     let mut note = format!(
-        "unsteady field: {} snapshots (time directories {} … {}), CFD t = {} … {} s as simulation t = 0 … {} s, spacing {lo:.4e} … {hi:.4e} s, linear in time between two; in memory: the pair around t, the first (it holds the mesh) and the next, read ahead",
+        "unsteady field: {} snapshots ({} … {}), CFD t = {} … {} s as simulation t = 0 … {} s, spacing {lo:.4e} … {hi:.4e} s, linear in time between two; in memory: the pair around t, the first (it holds the mesh) and the next, read ahead",
         c.len(),
         s.dirs
             .first()

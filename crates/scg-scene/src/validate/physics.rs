@@ -256,16 +256,49 @@ pub(super) fn mesh_flow(
             if !file.is_file() {
                 return Err(cx.err("flow.file", format!("{shown}: no such file")));
             }
-            let (mesh, u) = scg_mesh::vtk::read(&file, &field)
-                .map_err(|e| cx.err("flow.file", format!("{shown}: field `{field}`: {e}")))?;
-            if f.series.is_some() {
-                return Err(cx.err(
-                    "flow.series",
-                    "reads an OpenFOAM case's time directories; a VTK series (.pvd) is not \
-                     read yet",
-                ));
-            }
-            (mesh, u, shown, FieldReader::Vtk { file }, None)
+            // a ParaView collection (.pvd): a series, its first time step here
+            let pvd = file
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("pvd"));
+            let window = match (&f.series, pvd) {
+                (Some(s), true) => Some(super::series::vtk_window(s, &file, cx)?),
+                (None, true) => {
+                    return Err(cx.err(
+                        "flow.file",
+                        format!(
+                            "{shown}: a .pvd collection is a time series: give flow.series \
+                             (`series = {{}}` for all its time steps) or name one of its files"
+                        ),
+                    ));
+                }
+                (Some(_), false) => {
+                    return Err(cx.err(
+                        "flow.series",
+                        format!(
+                            "{shown}: a VTK series is read from a ParaView collection (.pvd) \
+                             listing its files, one per time step"
+                        ),
+                    ));
+                }
+                (None, false) => None,
+            };
+            let first = window.as_ref().map_or(file.clone(), |w| w[0].1.clone());
+            let (mesh, u) = scg_mesh::vtk::read(&first, &field).map_err(|e| {
+                cx.err(
+                    "flow.file",
+                    format!("{}: field `{field}`: {e}", first.display()),
+                )
+            })?;
+            let source = match &window {
+                None => shown,
+                Some(w) => format!(
+                    "{shown} (series of {} snapshots, {} … {})",
+                    w.len(),
+                    first.display(),
+                    w[w.len() - 1].1.display()
+                ),
+            };
+            (mesh, u, source, FieldReader::Vtk { file: first }, window)
         }
         _ => return Ok(None),
     };
@@ -348,10 +381,20 @@ pub(super) fn mesh_flow(
         flow.set_moving_faces(m);
     }
     let flow = std::sync::Arc::new(flow);
-    let series = match (window, &f.series, &reader, read_mesh) {
-        (Some(dirs), Some(s), FieldReader::Foam { case, .. }, Some(read_mesh)) => Some(
-            super::series::series(s, dirs, (case, &field), read_mesh, &flow, wall, cx)?,
-        ),
+    let series = match (window, &f.series, read_mesh) {
+        (Some(steps), Some(s), Some(read_mesh)) => {
+            let read = match &reader {
+                FieldReader::Foam { case, .. } => {
+                    let times = steps.iter().map(|(t, _)| *t).collect();
+                    super::series::foam_read(case, &field, read_mesh, times)
+                }
+                FieldReader::Vtk { .. } => {
+                    let files = steps.iter().map(|(_, f)| f.clone()).collect();
+                    super::series::vtk_read(files, &field, read_mesh)
+                }
+            };
+            Some(super::series::series(s, steps, read, &flow, wall, cx)?)
+        }
         _ => None,
     };
     Ok(Some(SceneMeshFlow {

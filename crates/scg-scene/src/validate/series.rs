@@ -19,15 +19,8 @@ use crate::error::SceneError;
 use crate::model::{FieldReader, SceneMeshFlow, SceneSeries};
 use crate::raw::{RawFlow, RawScene, RawSeries};
 
-/// The time directories of `case` in the window of `s` (at least two), each holding
-/// `field` and no mesh of its own.
-pub(super) fn window(
-    s: &RawSeries,
-    case: &Path,
-    field: &str,
-    cx: &Ctx,
-) -> Result<Vec<(f64, PathBuf)>, SceneError> {
-    let shown = case.display();
+/// The window `[start, end]` of `s`, s of CFD time (open where not given).
+fn bounds(s: &RawSeries, cx: &Ctx) -> Result<(f64, f64), SceneError> {
     let start = match s.start {
         Some(t) => cx.finite("flow.series.start", t)?,
         None => f64::NEG_INFINITY,
@@ -39,6 +32,28 @@ pub(super) fn window(
     if start >= end {
         return Err(cx.err("flow.series.end", "must be after flow.series.start"));
     }
+    Ok((start, end))
+}
+
+/// The window of `s` as a message shows it.
+fn window_text(s: &RawSeries) -> String {
+    format!(
+        "[{}, {}]",
+        s.start.map_or("first".into(), |t| t.to_string()),
+        s.end.map_or("last".into(), |t| t.to_string())
+    )
+}
+
+/// The time directories of `case` in the window of `s` (at least two), each holding
+/// `field` and no mesh of its own.
+pub(super) fn window(
+    s: &RawSeries,
+    case: &Path,
+    field: &str,
+    cx: &Ctx,
+) -> Result<Vec<(f64, PathBuf)>, SceneError> {
+    let shown = case.display();
+    let (start, end) = bounds(s, cx)?;
     let all = foam::time_dirs(case).map_err(|e| cx.err("flow.case", format!("{shown}: {e}")))?;
     let tol = |t: f64| 1e-12 * t.abs().max(1.0);
     let dirs: Vec<(f64, PathBuf)> = all
@@ -46,17 +61,13 @@ pub(super) fn window(
         .filter(|(t, _)| *t >= start - tol(start) && *t <= end + tol(end))
         .collect();
     if dirs.len() < 2 {
-        let window = format!(
-            "[{}, {}]",
-            s.start.map_or("first".into(), |t| t.to_string()),
-            s.end.map_or("last".into(), |t| t.to_string())
-        );
         return Err(cx.err(
             "flow.series",
             format!(
-                "{shown}: {} time director{} in the window {window}: a series needs at least two",
+                "{shown}: {} time director{} in the window {}: a series needs at least two",
                 dirs.len(),
-                if dirs.len() == 1 { "y" } else { "ies" }
+                if dirs.len() == 1 { "y" } else { "ies" },
+                window_text(s)
             ),
         ));
     }
@@ -86,29 +97,101 @@ pub(super) fn window(
     Ok(dirs)
 }
 
-/// The series of the window `dirs` of `field` in `case` on the flow `first` (snapshot
-/// 0): its clock, its loader (each snapshot's field read with `read_mesh`, the mesh as the case gives it,
-/// and built on `first`'s mesh with `wall`) and snapshot 1, read now.
+/// Reads snapshot k's velocity field, as its file gives it (an error names the file).
+pub(super) type FieldRead = dyn Fn(usize) -> Result<scg_mesh::CellField, String> + Send + Sync;
+
+/// Snapshot k's field of an OpenFOAM series: `field` in the time folder of `times[k]` of
+/// `case`, on `read_mesh` (the mesh as the case gives it).
+pub(super) fn foam_read(
+    case: &Path,
+    field: &str,
+    read_mesh: Arc<PolyMesh>,
+    times: Vec<f64>,
+) -> Arc<FieldRead> {
+    let (case, field) = (case.to_path_buf(), field.to_string());
+    Arc::new(move |k: usize| {
+        foam::read_vector_field(&case, &read_mesh, TimeSel::Time(times[k]), &field).map_err(|e| {
+            let dir = case.join(format!("{}", times[k]));
+            format!("{}: field `{field}`: {e}", dir.display())
+        })
+    })
+}
+
+/// Snapshot k's field of a VTK series: `field` of `files[k]`, whose mesh must be
+/// `read_mesh` (the first file's) point for point and face for face.
+pub(super) fn vtk_read(
+    files: Vec<PathBuf>,
+    field: &str,
+    read_mesh: Arc<PolyMesh>,
+) -> Arc<FieldRead> {
+    let field = field.to_string();
+    Arc::new(move |k: usize| {
+        let file = &files[k];
+        let (mesh, u) = scg_mesh::vtk::read(file, &field)
+            .map_err(|e| format!("{}: field `{field}`: {e}", file.display()))?;
+        if mesh != *read_mesh {
+            return Err(format!(
+                "{}: its mesh is not the series' first file's ({} cells and {} points \
+                 against {} and {}, or moved points): a series needs one mesh for all its \
+                 snapshots",
+                file.display(),
+                mesh.n_cells,
+                mesh.points.len(),
+                read_mesh.n_cells,
+                read_mesh.points.len()
+            ));
+        }
+        Ok(u)
+    })
+}
+
+/// The time steps of the collection `pvd` in the window of `s` (at least two).
+pub(super) fn vtk_window(
+    s: &RawSeries,
+    pvd: &Path,
+    cx: &Ctx,
+) -> Result<Vec<(f64, PathBuf)>, SceneError> {
+    let shown = pvd.display();
+    let all = scg_mesh::vtk::read_pvd(pvd).map_err(|e| cx.err("flow.file", e.to_string()))?;
+    let (start, end) = bounds(s, cx)?;
+    let tol = |t: f64| 1e-12 * t.abs().max(1.0);
+    let steps: Vec<(f64, PathBuf)> = all
+        .into_iter()
+        .filter(|(t, _)| *t >= start - tol(start) && *t <= end + tol(end))
+        .collect();
+    if steps.len() < 2 {
+        return Err(cx.err(
+            "flow.series",
+            format!(
+                "{shown}: {} time step{} in the window {}: a series needs at least two",
+                steps.len(),
+                if steps.len() == 1 { "" } else { "s" },
+                window_text(s)
+            ),
+        ));
+    }
+    if let Some((_, f)) = steps.iter().find(|(_, f)| !f.is_file()) {
+        return Err(cx.err(
+            "flow.file",
+            format!("{shown}: lists {}, which is not a file", f.display()),
+        ));
+    }
+    Ok(steps)
+}
+
+/// The series of the snapshots `steps` (time, folder or file) read by `read` on the flow
+/// `first` (snapshot 0): its clock, its loader (each snapshot's field built on `first`'s
+/// mesh with `wall`) and snapshot 1, read now.
 pub(super) fn series(
     s: &RawSeries,
-    dirs: Vec<(f64, PathBuf)>,
-    (case, field): (&Path, &str),
-    read_mesh: Arc<PolyMesh>,
+    steps: Vec<(f64, PathBuf)>,
+    read: Arc<FieldRead>,
     first: &Arc<MeshFlow>,
     wall: Option<WallFunctionSpec>,
     cx: &Ctx,
 ) -> Result<SceneSeries, SceneError> {
-    let times: Vec<f64> = dirs.iter().map(|(t, _)| *t).collect();
+    let times: Vec<f64> = steps.iter().map(|(t, _)| *t).collect();
     let clock = SeriesClock::new(&times, s.cycle).map_err(|e| cx.err("flow.series", e))?;
-    let (case, field_name) = (case.to_path_buf(), field.to_string());
-    let t = times.clone();
-    // snapshot k's field, as the case gives it
-    let read = move |k: usize| {
-        foam::read_vector_field(&case, &read_mesh, TimeSel::Time(t[k]), &field_name).map_err(|e| {
-            let dir = case.join(format!("{}", t[k]));
-            format!("{}: field `{field_name}`: {e}", dir.display())
-        })
-    };
     // the change across the seam of a cycling window, relative to the field's rms (the
     // last snapshot's cells only: no flow is built for it)
     let seam = match s.cycle {
@@ -137,8 +220,8 @@ pub(super) fn series(
             second,
             first_turbulence: None,
         },
-        times: times.clone(),
-        dirs: dirs.into_iter().map(|(_, d)| d).collect(),
+        times,
+        dirs: steps.into_iter().map(|(_, d)| d).collect(),
         seam,
     })
 }
@@ -155,26 +238,31 @@ fn seam_change(a: &[glam::DVec3], b: &[glam::DVec3]) -> f64 {
 }
 
 /// A series under `[dispersion]` by the CFD's fields: each snapshot reads the same k and
-/// ε (or ω) fields from its own time folder, snapshot 0's being the dispersion's.
+/// ε (or ω) fields from its own time folder (or file), snapshot 0's being the dispersion's.
 pub(super) fn with_turbulence(
     m: &mut SceneMeshFlow,
     d: &Dispersion,
     fields: TurbulenceFields,
     cx: &Ctx,
 ) -> Result<(), SceneError> {
-    let (Some(FieldReader::Foam { case, .. }), Some(s)) = (m.reader.clone(), m.series.as_mut())
-    else {
+    let (Some(first_reader), Some(s)) = (m.reader.clone(), m.series.as_mut()) else {
         return Ok(());
     };
     let Turbulence::Cells(first) = &d.turbulence else {
         return Ok(());
     };
     let base = Arc::clone(&m.flow);
-    let times = s.times.clone();
+    let (times, sources) = (s.times.clone(), s.dirs.clone());
+    // snapshot k's fields: the same names in its time folder, or in its file
     let read = move |k: usize| {
-        let reader = FieldReader::Foam {
-            case: case.clone(),
-            time: TimeSel::Time(times[k]),
+        let reader = match &first_reader {
+            FieldReader::Foam { case, .. } => FieldReader::Foam {
+                case: case.clone(),
+                time: TimeSel::Time(times[k]),
+            },
+            FieldReader::Vtk { .. } => FieldReader::Vtk {
+                file: sources[k].clone(),
+            },
         };
         read_turbulence(&fields, &reader, base.mesh(), base.geometry()).map(Arc::new)
     };

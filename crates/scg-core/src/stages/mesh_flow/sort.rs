@@ -26,7 +26,7 @@ pub(crate) fn add_sort(b: &mut StepBuilder) {
 }
 
 /// Reorder the particle table by mesh cell, then id, after the first step (when every
-/// particle has been located) and every `sort_every` steps ([`MeshFlowSpec`], default
+/// particle has been located) and every `sort_every` steps ([`MeshFlowSpec`](super::MeshFlowSpec), default
 /// [`SORT_EVERY`]), as LAMMPS's `atom_modify
 /// sort` does by bins. The cell records of consecutive particles are then neighbours in
 /// memory, and a step reads the mesh almost in order instead of at random: on a
