@@ -350,7 +350,8 @@ fn a_cycling_series_equals_the_repeated_files_written_out() {
 }
 
 /// One and two threads, and a run restarted from a checkpoint half-way (past a snapshot
-/// change, in another interval): the same bits.
+/// change, in another interval): the same bits; and a recording of the series verified by
+/// `scg replay --verify`.
 #[test]
 fn a_series_is_bit_identical_on_threads_and_restarts() {
     let (dir, _) = wavy_series();
@@ -374,6 +375,30 @@ fn a_series_is_bit_identical_on_threads_and_restarts() {
     second.restore(&half).unwrap();
     second.run(total - half.step, |_| true).unwrap();
     assert!(second.checkpoint() == end, "a restarted series diverged");
+    // `scg replay --verify` re-runs a recording of it frame for frame, bit for bit
+    let text = format!("record_every = 64\n{}", many("cycle = true", 0.5));
+    std::fs::write(dir.path().join("rec.toml"), text).unwrap();
+    let scg = env!("CARGO_BIN_EXE_scg");
+    let out = dir.path().join("out");
+    let run = std::process::Command::new(scg)
+        .args(["run", "rec.toml", "--out", out.to_str().unwrap()])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let verify = std::process::Command::new(scg)
+        .args(["replay", out.join("rec.mcap").to_str().unwrap(), "--verify"])
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&verify.stdout);
+    assert!(
+        verify.status.success() && said.contains("bit-identical"),
+        "{said}"
+    );
 }
 
 /// `scg check` states the window, the spacing and the seam, and warns where the spacing

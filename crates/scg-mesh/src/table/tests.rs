@@ -217,7 +217,7 @@ fn tet_hints_change_no_answer() {
                     let from_next = t.walk(a.cell, r.across, x, 2);
                     assert_eq!(bits(from_next), bits(t.walk(a.cell, NO_TET, x, 2)));
                 }
-                if matches!(t.hinted(Own, c, &t.r.cells[c as usize], k as u32, x - cc), Some(Query::Inside(_, h)) if h == k as u32)
+                if matches!(t.view(Own).hinted(c, &t.r.cells[c as usize], k as u32, x - cc), Some(Query::Inside(_, h)) if h == k as u32)
                 {
                     near += 1;
                 }
@@ -238,14 +238,9 @@ fn tet_hints_change_no_answer() {
                     assert_eq!(bits(plain), bits(hinted), "{shape:?} {scheme:?}: x {x}");
                     if let Some(r) = t.r.tets.get(tet as usize)
                         && r.cell == c
-                        && t.hinted(
-                            Own,
-                            c,
-                            &t.r.cells[c as usize],
-                            tet,
-                            x - t.r.cells[c as usize].cc,
-                        )
-                        .is_some()
+                        && t.view(Own)
+                            .hinted(c, &t.r.cells[c as usize], tet, x - t.r.cells[c as usize].cc)
+                            .is_some()
                     {
                         fast += 1;
                     }
