@@ -343,7 +343,7 @@ fn tet_links(tets: &mut [TetRec], first: u32, ids: &[[u32; 3]]) {
 /// where it spans whole 2 MiB pages: particles visit the cells of a large mesh at random,
 /// and with 4 KiB pages nearly every record read would also miss the TLB. A hint: no
 /// effect on results, ignored where unsupported.
-fn huge_pages<T>(v: &Vec<T>) {
+pub(super) fn huge_pages<T>(v: &Vec<T>) {
     #[cfg(target_os = "linux")]
     {
         const HUGE: usize = 2 << 20;

@@ -16,7 +16,9 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::build::{face_tets, gradient_rows, inverse_rows, node_difference, node_differences};
+use super::build::{
+    face_tets, gradient_rows, huge_pages, inverse_rows, node_difference, node_differences,
+};
 use super::{CellRec, CellTable, Records, SimpleFace, TetRec};
 use crate::interp::Interpolator;
 
@@ -70,10 +72,14 @@ impl NodeMap {
         let (mesh, geom) = (loc.mesh(), loc.geometry());
         let np = mesh.points.len() as u32;
         let mut m = NodeMap {
-            tet_nodes: vec![[u32::MAX; 3]; r.tets.len()],
+            tet_nodes: Vec::new(),
             node_ids: Vec::new(),
             cell_first: Vec::with_capacity(r.cells.len() + 1),
         };
+        // read at random by every step: on huge pages, as the records are
+        m.tet_nodes.try_reserve_exact(r.tets.len()).ok()?;
+        huge_pages(&m.tet_nodes);
+        m.tet_nodes.resize(r.tets.len(), [u32::MAX; 3]);
         for (c, rec) in r.cells.iter().enumerate() {
             let first = m.node_ids.len();
             m.cell_first.push(first as u32);
@@ -183,6 +189,7 @@ impl CellTable {
         let mut node_du = Vec::new();
         if tet_values.is_none() {
             node_du.try_reserve_exact(map.node_ids.len()).ok()?;
+            huge_pages(&node_du);
             for (c, w) in map.cell_first.windows(2).enumerate() {
                 let uc = cellv[c];
                 node_du.extend(
@@ -208,8 +215,12 @@ impl CellTable {
                 *g.get_mut(rec.face as usize + k)? = gradient_rows(&m, &du);
             }
         }
+        let mut uc = Vec::new();
+        uc.try_reserve_exact(cellv.len()).ok()?;
+        huge_pages(&uc);
+        uc.extend_from_slice(cellv);
         let v = FieldValues {
-            uc: cellv.to_vec(),
+            uc,
             node_du,
             map,
             g,
