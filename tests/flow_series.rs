@@ -411,6 +411,19 @@ fn check_states_the_window_and_the_seam() {
     println!("{report}");
     assert!(report.contains("unsteady field: 3 snapshots"), "{report}");
     assert!(report.contains("repeats every 7.500000e-1 s"), "{report}");
+    // the memory: the later snapshots' tables hold their values only
+    let mb = |tag: &str| -> f64 {
+        let at = report
+            .find(tag)
+            .unwrap_or_else(|| panic!("{tag}: {report}"));
+        let head = &report[..at];
+        head[head.rfind(' ').unwrap() + 1..].trim().parse().unwrap()
+    };
+    let (first, later) = (
+        mb(" MB for the first snapshot"),
+        mb(" MB for each later one held"),
+    );
+    assert!(later > 0.0 && later < 0.5 * first, "{first} {later}");
     assert!(
         report.contains("across that seam the field changes by"),
         "{report}"

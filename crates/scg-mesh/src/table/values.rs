@@ -263,6 +263,12 @@ impl CellTable {
         }
     }
 
+    /// A table of another field on shared records: the bytes it shares with every other
+    /// such table (the tetrahedron-to-node map), not in [`CellTable::bytes`]; 0 otherwise.
+    pub fn shared_bytes(&self) -> usize {
+        self.values.as_ref().map_or(0, |v| v.shared_bytes())
+    }
+
     /// True when this table and `other` read the same records (one built for the other's
     /// mesh with [`CellTable::for_field`], or both from one table).
     pub fn shares_records(&self, other: &CellTable) -> bool {

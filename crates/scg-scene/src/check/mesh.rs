@@ -141,6 +141,16 @@ pub(super) fn series_findings(scene: &Scene, groups: &[GroupReport]) -> Vec<Find
         s.start() + c.span(),
         c.span()
     );
+    // what the snapshots' tracker tables hold: the first's records, then per later
+    // snapshot its values on them (three at a time: the pair and the one read ahead)
+    if let (Some(first), Some(later)) = (m.flow.table(), s.spec.second.flow.table()) {
+        note.push_str(&format!(
+            "; tracker tables {:.3} MB for the first snapshot and {:.3} MB for each later one held (and {:.3} MB shared by them)",
+            first.bytes() as f64 / 1e6,
+            later.bytes() as f64 / 1e6,
+            later.shared_bytes() as f64 / 1e6
+        ));
+    }
     if let (Some(p), Some(jump)) = (c.period(), s.seam) {
         note.push_str(&format!(
             "; cycle = true: the window repeats every {p:.6e} s, the field running from the last snapshot back to the first over {:.4e} s (the mean spacing); across that seam the field changes by {:.3} % (rms over the cells, of the first snapshot's rms)",
