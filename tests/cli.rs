@@ -245,3 +245,38 @@ fn bench_case_times_each_system_of_a_scene() {
     let bad = scg().args(["bench", "case"]).output().unwrap();
     assert_eq!(bad.status.code(), Some(2));
 }
+
+/// `scg bench mesh --shape hex|tet` builds the box of that cell shape, says how much the
+/// tracker's records take per cell (hexahedra: 24 tetrahedra each, several kB; tetrahedra
+/// under one) and ends with its rate.
+#[test]
+fn mesh_benchmark_builds_hexahedra_or_tetrahedra() {
+    let kb = |shape: &str| -> (String, f64) {
+        let out = scg()
+            .args(["bench", "mesh", "--shape", shape, "--cells", "2000"])
+            .args(["--particles", "500", "--steps", "2"])
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(out.status.success(), "{text}");
+        let line = text.lines().find(|l| l.starts_with("mesh: ")).unwrap();
+        let at = line
+            .find(" kB per cell")
+            .unwrap_or_else(|| panic!("{line}"));
+        let per_cell: f64 = line[..at].rsplit('(').next().unwrap().parse().unwrap();
+        assert!(
+            text.lines()
+                .last()
+                .unwrap()
+                .starts_with("particle-steps/s: ")
+        );
+        (line.to_string(), per_cell)
+    };
+    let (hex, hex_kb) = kb("hex");
+    let (tet, tet_kb) = kb("tet");
+    assert!(
+        hex.contains("Hex cells") && tet.contains("Tet cells"),
+        "{hex}\n{tet}"
+    );
+    assert!(hex_kb > 2.0 && tet_kb < 1.0, "{hex}\n{tet}");
+}
