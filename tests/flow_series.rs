@@ -378,27 +378,12 @@ fn a_series_is_bit_identical_on_threads_and_restarts() {
     // `scg replay --verify` re-runs a recording of it frame for frame, bit for bit
     let text = format!("record_every = 64\n{}", many("cycle = true", 0.5));
     std::fs::write(dir.path().join("rec.toml"), text).unwrap();
-    let scg = env!("CARGO_BIN_EXE_scg");
     let out = dir.path().join("out");
-    let run = std::process::Command::new(scg)
-        .args(["run", "rec.toml", "--out", out.to_str().unwrap()])
-        .current_dir(dir.path())
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
+    common::scg_ok(
+        dir.path(),
+        &["run", "rec.toml", "--out", out.to_str().unwrap()],
     );
-    let verify = std::process::Command::new(scg)
-        .args(["replay", out.join("rec.mcap").to_str().unwrap(), "--verify"])
-        .output()
-        .unwrap();
-    let said = String::from_utf8_lossy(&verify.stdout);
-    assert!(
-        verify.status.success() && said.contains("bit-identical"),
-        "{said}"
-    );
+    common::assert_replays_bit_identical(&out.join("rec.mcap"));
 }
 
 /// `scg check` states the window, the spacing and the seam, and warns where the spacing

@@ -5,6 +5,8 @@
 //!
 //! Run: `cargo test --release --test moving_walls`.
 
+mod common;
+
 use glam::DVec3;
 use scg::core::components::AngularVelocity;
 use scg::core::physics::contact::{Material, NormalLaw};
@@ -257,27 +259,9 @@ fn moving_walls_restart_and_replay_exactly() {
     let lp = dir.path().join("lift.toml");
     std::fs::write(&lp, lift).unwrap();
     let out = dir.path().join("out");
-    let scg = env!("CARGO_BIN_EXE_scg");
-    let run = std::process::Command::new(scg)
-        .args(["run", lp.to_str().unwrap(), "--out", out.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
+    common::scg_ok(
+        dir.path(),
+        &["run", lp.to_str().unwrap(), "--out", out.to_str().unwrap()],
     );
-    let verify = std::process::Command::new(scg)
-        .args([
-            "replay",
-            out.join("lift.mcap").to_str().unwrap(),
-            "--verify",
-        ])
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&verify.stdout);
-    assert!(
-        verify.status.success() && text.contains("bit-identical"),
-        "{text}"
-    );
+    common::assert_replays_bit_identical(&out.join("lift.mcap"));
 }

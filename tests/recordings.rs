@@ -46,17 +46,7 @@ fn replay_verify_passes_and_catches_one_altered_value() {
     let dir = tempfile::tempdir().unwrap();
     run_vortex(dir.path(), "2", "0.02");
     let mcap = dir.path().join("vortex.mcap");
-    let out = scg()
-        .arg("replay")
-        .arg(&mcap)
-        .arg("--verify")
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success() && text.contains("bit-identical"),
-        "{text}"
-    );
+    common::assert_replays_bit_identical(&mcap);
 
     // Alter one coordinate of one particle in frame 3 by one ulp and write it back.
     let mut rec = read_mcap(&mcap).unwrap();

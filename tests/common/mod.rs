@@ -133,3 +133,34 @@ velocity = [0.0, 0.0, 1.0]
         stl.display()
     )
 }
+
+/// `scg ARGS` run in `dir`; asserts that it succeeds (its stderr in the message).
+pub fn scg_ok(dir: &std::path::Path, args: &[&str]) {
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_scg"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "scg {args:?}: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+}
+
+/// `scg replay MCAP --verify` re-runs the recording's scene frame for frame: asserts that
+/// every frame is bit-identical.
+pub fn assert_replays_bit_identical(mcap: &std::path::Path) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_scg"))
+        .arg("replay")
+        .arg(mcap)
+        .arg("--verify")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && text.contains("bit-identical"),
+        "{}: {text}",
+        mcap.display()
+    );
+}

@@ -437,20 +437,13 @@ pub fn bench(a: BenchArgs) -> i32 {
             if let Ok(s) = &s
                 && let Some(m) = &s.mesh_flow
             {
-                let n = m.flow.mesh().n_cells;
-                let records = match m.flow.table() {
-                    Some(t) => format!(
-                        "tracker records {:.1} MB ({:.2} kB per cell)",
-                        t.bytes() as f64 / 1e6,
-                        t.bytes() as f64 / 1e3 / n.max(1) as f64
-                    ),
-                    None => "no tracker records (too large)".into(),
-                };
                 println!(
-                    "mesh: {n} {:?} cells, {} faces, {} points, {records}, built in {:.2} s",
+                    "mesh: {} {:?} cells, {} faces, {} points, {}, built in {:.2} s",
+                    m.flow.mesh().n_cells,
                     a.shape,
                     m.flow.mesh().n_faces(),
                     m.flow.mesh().points.len(),
+                    scg_scene::check::tracker_records(&m.flow),
                     t.elapsed().as_secs_f64()
                 );
             }

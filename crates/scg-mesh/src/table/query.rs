@@ -68,9 +68,7 @@ impl<V: Values> View<'_, V> {
     /// exit ratio is ≤ 1, and then in the tetrahedron of the exit face.
     #[inline(always)]
     pub(super) fn query_simple(self, c: u32, rec: &CellRec, d: DVec3) -> Query {
-        let r = rec.face as usize..(rec.face + rec.n_faces) as usize;
-        let (Some(faces), Some(next)) = (self.r.simple.get(r.clone()), self.r.simple_next.get(r))
-        else {
+        let Some((faces, next)) = cell_faces(rec, &self.r.simple, &self.r.simple_next) else {
             return Query::Unknown;
         };
         let Some((best, best_ratio)) = exit_face(faces, |f| f.q, d) else {
@@ -125,8 +123,7 @@ impl<V: Values> View<'_, V> {
     /// is `k`'s face: the search then takes `k` first in that face's fan and answers so.
     #[inline(always)]
     pub(super) fn beyond(self, rec: &CellRec, k: u32, across: u32, d: DVec3) -> Option<Query> {
-        let r = rec.face as usize..(rec.face + rec.n_faces) as usize;
-        let (faces, next) = (self.r.faces.get(r.clone())?, self.r.faces_next.get(r)?);
+        let (faces, next) = cell_faces(rec, &self.r.faces, &self.r.faces_next)?;
         let (best, _) = exit_face(faces, |f| f.q, d)?;
         let f = &faces[best];
         (f.tet..f.tet + f.n_tets)
@@ -152,9 +149,7 @@ impl<V: Values> View<'_, V> {
     /// stays small where it is inlined.
     #[inline(never)]
     pub(super) fn query_general(self, c: u32, rec: &CellRec, d: DVec3) -> Query {
-        let r = rec.face as usize..(rec.face + rec.n_faces) as usize;
-        let (Some(faces), Some(next)) = (self.r.faces.get(r.clone()), self.r.faces_next.get(r))
-        else {
+        let Some((faces, next)) = cell_faces(rec, &self.r.faces, &self.r.faces_next) else {
             return Query::Unknown;
         };
         let Some((best, _)) = exit_face(faces, |f| f.q, d) else {
@@ -227,4 +222,16 @@ impl<V: Values> View<'_, V> {
         }
         None
     }
+}
+
+/// Cell record `rec`'s run of face records in `faces` and what is across each in `next`
+/// (`None` out of range).
+#[inline(always)]
+fn cell_faces<'a, F>(
+    rec: &CellRec,
+    faces: &'a [F],
+    next: &'a [u32],
+) -> Option<(&'a [F], &'a [u32])> {
+    let r = rec.face as usize..(rec.face + rec.n_faces) as usize;
+    Some((faces.get(r.clone())?, next.get(r)?))
 }

@@ -7,6 +7,14 @@ use crate::locate::{Location, Locator};
 use crate::{CellField, MeshGeometry};
 use rand::{Rng, SeedableRng};
 
+/// Every interpolation scheme.
+const ALL_SCHEMES: [Interpolation; 4] = [
+    Interpolation::CellPoint,
+    Interpolation::CellPointIdw,
+    Interpolation::CellValue,
+    Interpolation::Conservative,
+];
+
 /// A unit box of n³ perturbed cells of `shape`, its geometry and a smooth field.
 fn perturbed_box(shape: CellShape, n: usize) -> (crate::PolyMesh, MeshGeometry, CellField) {
     let m = BoxMesh::new(DVec3::ZERO, DVec3::ONE, [n, n, n])
@@ -58,13 +66,7 @@ fn for_each_table(
 #[test]
 fn table_agrees_with_the_locator_and_interpolator() {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-    let schemes = [
-        Interpolation::CellPoint,
-        Interpolation::CellPointIdw,
-        Interpolation::CellValue,
-        Interpolation::Conservative,
-    ];
-    for_each_table(&schemes, |shape, scheme, m, g, loc, it, t| {
+    for_each_table(&ALL_SCHEMES, |shape, scheme, m, g, loc, it, t| {
         {
             let (simple, none) = t.counts();
             assert_eq!(none, 0);
@@ -270,18 +272,12 @@ fn tet_hints_change_no_answer() {
 #[test]
 fn a_table_for_another_field_answers_as_its_own_table() {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
-    let schemes = [
-        Interpolation::CellPoint,
-        Interpolation::CellPointIdw,
-        Interpolation::CellValue,
-        Interpolation::Conservative,
-    ];
     let bits = |w: TableWalk| match w {
         TableWalk::Inside { cell, tet, value } => (cell, tet, value.to_array().map(f64::to_bits)),
         TableWalk::Boundary { cell, face } => (cell, face, [0; 3]),
         TableWalk::Unknown => (u32::MAX, u32::MAX, [0; 3]),
     };
-    for_each_table(&schemes, |shape, scheme, m, g, loc, _, t| {
+    for_each_table(&ALL_SCHEMES, |shape, scheme, m, g, loc, _, t| {
         let other = CellField::at_cell_centres(m, g, |c| {
             DVec3::new((2.0 * c.z).cos(), c.x - c.y * c.y, 0.3 * c.y)
         });

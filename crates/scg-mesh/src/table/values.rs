@@ -17,7 +17,7 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use super::build::{
-    face_tets, gradient_rows, huge_pages, inverse_rows, node_difference, node_differences,
+    face_tets, gradient_rows, huge_room, inverse_rows, node_difference, node_differences,
 };
 use super::{CellRec, CellTable, Records, SimpleFace, TetRec};
 use crate::interp::Interpolator;
@@ -71,14 +71,12 @@ impl NodeMap {
     fn new(r: &Records, loc: &crate::Locator<'_>) -> Option<NodeMap> {
         let (mesh, geom) = (loc.mesh(), loc.geometry());
         let np = mesh.points.len() as u32;
+        // read at random by every step: on huge pages, as the records are
         let mut m = NodeMap {
-            tet_nodes: Vec::new(),
+            tet_nodes: huge_room(r.tets.len())?,
             node_ids: Vec::new(),
             cell_first: Vec::with_capacity(r.cells.len() + 1),
         };
-        // read at random by every step: on huge pages, as the records are
-        m.tet_nodes.try_reserve_exact(r.tets.len()).ok()?;
-        huge_pages(&m.tet_nodes);
         m.tet_nodes.resize(r.tets.len(), [u32::MAX; 3]);
         for (c, rec) in r.cells.iter().enumerate() {
             let first = m.node_ids.len();
@@ -177,27 +175,26 @@ impl CellTable {
         if mesh.n_cells != r.cells.len() || tet_values.is_some() != self.tet_values.is_some() {
             return None;
         }
-        let map = match r.node_map.get() {
-            Some(m) => Arc::clone(m),
-            None => {
+        // the node map serves the node differences, which the conservative scheme has not
+        let map = match (r.node_map.get(), &tet_values) {
+            (_, Some(_)) => Arc::new(NodeMap::default()),
+            (Some(m), None) => Arc::clone(m),
+            (None, None) => {
                 let m = Arc::new(NodeMap::new(r, loc)?);
                 Arc::clone(r.node_map.get_or_init(|| m))
             }
         };
         let (cellv, nodev) = (it.cell_values(), it.node_values());
         let np = mesh.points.len() as u32;
-        let mut node_du = Vec::new();
-        if tet_values.is_none() {
-            node_du.try_reserve_exact(map.node_ids.len()).ok()?;
-            huge_pages(&node_du);
-            for (c, w) in map.cell_first.windows(2).enumerate() {
-                let uc = cellv[c];
-                node_du.extend(
-                    map.node_ids[w[0] as usize..w[1] as usize]
-                        .iter()
-                        .map(|&n| node_difference(nodev, n, uc)),
-                );
-            }
+        // (empty with the conservative scheme's empty map)
+        let mut node_du = huge_room(map.node_ids.len())?;
+        for (c, w) in map.cell_first.windows(2).enumerate() {
+            let uc = cellv[c];
+            node_du.extend(
+                map.node_ids[w[0] as usize..w[1] as usize]
+                    .iter()
+                    .map(|&n| node_difference(nodev, n, uc)),
+            );
         }
         let mut g = vec![[DVec3::ZERO; 3]; r.simple.len()];
         for (c, rec) in r.cells.iter().enumerate() {
@@ -215,9 +212,7 @@ impl CellTable {
                 *g.get_mut(rec.face as usize + k)? = gradient_rows(&m, &du);
             }
         }
-        let mut uc = Vec::new();
-        uc.try_reserve_exact(cellv.len()).ok()?;
-        huge_pages(&uc);
+        let mut uc = huge_room(cellv.len())?;
         uc.extend_from_slice(cellv);
         let v = FieldValues {
             uc,

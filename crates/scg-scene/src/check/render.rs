@@ -177,17 +177,7 @@ fn mesh_flow_lines(
         umin,
         umax
     );
-    s.push_str(&match f.table() {
-        Some(t) => format!(
-            "  tracker records (scg_mesh::CellTable): {:.1} MB, {:.2} kB per cell\n",
-            t.bytes() as f64 / 1e6,
-            t.bytes() as f64 / 1e3 / mesh.n_cells.max(1) as f64
-        ),
-        None => format!(
-            "  tracker records: none (they would exceed {} GiB, or the memory was refused): particles are located by walking the mesh, several times slower\n",
-            scg_mesh::CellTable::MAX_BYTES >> 30
-        ),
-    });
+    s.push_str(&format!("  {}\n", tracker_records(f)));
     if let Some(p) = f.projection() {
         s.push_str(&format!(
             "  conservative interpolation: the cell field's face fluxes (linear between cells) were out of balance by Σ_cells |Σ_f φ| = {:.4e} m³/s, {:.4e} after the projection ({} conjugate-gradient iterations); it changed the faces' normal velocity by {:.4e} m/s on average (area-weighted), {:.4e} at most; {:.6e} m³/s in through the fixed-flux patches, {:.6e} out through the outlets (before: {:.6e}){}\n",
@@ -359,6 +349,22 @@ fn friction_text(mu: f64, friction: scg_core::physics::patch_interaction::WallFr
         WallFriction::Coulomb => format!("Coulomb friction μ = {mu}"),
         WallFriction::OpenfoamFraction => format!(
             "OpenFOAM's rebound friction μ = {mu} (the fraction μ of the tangential velocity removed)"
+        ),
+    }
+}
+
+/// What the tracker's per-cell records of `flow` take (`scg_mesh::CellTable`), or that it
+/// has none and why (`scg check`, `scg bench mesh`).
+pub fn tracker_records(flow: &scg_core::physics::mesh_flow::MeshFlow) -> String {
+    match flow.table() {
+        Some(t) => format!(
+            "tracker records {:.1} MB ({:.2} kB per cell)",
+            t.bytes() as f64 / 1e6,
+            t.bytes() as f64 / 1e3 / flow.mesh().n_cells.max(1) as f64
+        ),
+        None => format!(
+            "no tracker records (they would exceed {} GiB, or the memory was refused): particles are located by walking the mesh, several times slower",
+            scg_mesh::CellTable::MAX_BYTES >> 30
         ),
     }
 }

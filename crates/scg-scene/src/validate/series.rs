@@ -35,13 +35,37 @@ fn bounds(s: &RawSeries, cx: &Ctx) -> Result<(f64, f64), SceneError> {
     Ok((start, end))
 }
 
-/// The window of `s` as a message shows it.
-fn window_text(s: &RawSeries) -> String {
-    format!(
-        "[{}, {}]",
-        s.start.map_or("first".into(), |t| t.to_string()),
-        s.end.map_or("last".into(), |t| t.to_string())
-    )
+/// The snapshots of `all` (time, folder or file) within `[start, end]` of the series `s`
+/// (to rounding), at least two; `what` names them in the error (one, several), `shown`
+/// where they come from.
+fn in_window(
+    all: Vec<(f64, PathBuf)>,
+    (start, end): (f64, f64),
+    s: &RawSeries,
+    (shown, what): (&dyn std::fmt::Display, (&str, &str)),
+    cx: &Ctx,
+) -> Result<Vec<(f64, PathBuf)>, SceneError> {
+    let tol = |t: f64| 1e-12 * t.abs().max(1.0);
+    let steps: Vec<(f64, PathBuf)> = all
+        .into_iter()
+        .filter(|(t, _)| *t >= start - tol(start) && *t <= end + tol(end))
+        .collect();
+    if steps.len() < 2 {
+        let window = format!(
+            "[{}, {}]",
+            s.start.map_or("first".into(), |t| t.to_string()),
+            s.end.map_or("last".into(), |t| t.to_string())
+        );
+        return Err(cx.err(
+            "flow.series",
+            format!(
+                "{shown}: {} {} in the window {window}: a series needs at least two",
+                steps.len(),
+                if steps.len() == 1 { what.0 } else { what.1 },
+            ),
+        ));
+    }
+    Ok(steps)
 }
 
 /// The time directories of `case` in the window of `s` (at least two), each holding
@@ -55,22 +79,8 @@ pub(super) fn window(
     let shown = case.display();
     let (start, end) = bounds(s, cx)?;
     let all = foam::time_dirs(case).map_err(|e| cx.err("flow.case", format!("{shown}: {e}")))?;
-    let tol = |t: f64| 1e-12 * t.abs().max(1.0);
-    let dirs: Vec<(f64, PathBuf)> = all
-        .into_iter()
-        .filter(|(t, _)| *t >= start - tol(start) && *t <= end + tol(end))
-        .collect();
-    if dirs.len() < 2 {
-        return Err(cx.err(
-            "flow.series",
-            format!(
-                "{shown}: {} time director{} in the window {}: a series needs at least two",
-                dirs.len(),
-                if dirs.len() == 1 { "y" } else { "ies" },
-                window_text(s)
-            ),
-        ));
-    }
+    let what = ("time directory", "time directories");
+    let dirs = in_window(all, (start, end), s, (&shown, what), cx)?;
     for (_, d) in &dirs {
         if d.join("polyMesh").exists() {
             return Err(cx.err(
@@ -153,23 +163,8 @@ pub(super) fn vtk_window(
 ) -> Result<Vec<(f64, PathBuf)>, SceneError> {
     let shown = pvd.display();
     let all = scg_mesh::vtk::read_pvd(pvd).map_err(|e| cx.err("flow.file", e.to_string()))?;
-    let (start, end) = bounds(s, cx)?;
-    let tol = |t: f64| 1e-12 * t.abs().max(1.0);
-    let steps: Vec<(f64, PathBuf)> = all
-        .into_iter()
-        .filter(|(t, _)| *t >= start - tol(start) && *t <= end + tol(end))
-        .collect();
-    if steps.len() < 2 {
-        return Err(cx.err(
-            "flow.series",
-            format!(
-                "{shown}: {} time step{} in the window {}: a series needs at least two",
-                steps.len(),
-                if steps.len() == 1 { "" } else { "s" },
-                window_text(s)
-            ),
-        ));
-    }
+    let bounds = bounds(s, cx)?;
+    let steps = in_window(all, bounds, s, (&shown, ("time step", "time steps")), cx)?;
     if let Some((_, f)) = steps.iter().find(|(_, f)| !f.is_file()) {
         return Err(cx.err(
             "flow.file",
