@@ -54,6 +54,7 @@ fn sim(dt: f64, model: Model, turbulence: Turbulence, seed: u64) -> Simulation {
             turbulence,
             seed,
             mask: DVec3::ONE,
+            own_pass: false,
         })),
     })
 }
@@ -156,7 +157,7 @@ fn langevin_tracers_follow_taylors_curve() {
     let sigma2 = 2.0 * k / 3.0;
     let mut s = sim(
         dt,
-        Model::Langevin { c0 },
+        Model::Langevin { c0, csanady: None },
         Turbulence::Uniform { k, epsilon: eps },
         5,
     );
@@ -308,7 +309,13 @@ fn langevin_keeps_tracers_well_mixed_and_the_eddy_model_does_not() {
         .map(|_| DVec3::new(rng.random::<f64>() * l, 0.0, 0.0))
         .collect();
     let mut results = Vec::new();
-    for model in [Model::Langevin { c0: 2.1 }, Model::StochasticRas] {
+    for model in [
+        Model::Langevin {
+            c0: 2.1,
+            csanady: None,
+        },
+        Model::StochasticRas,
+    ] {
         let mut s = sim(dt, model, profile.clone(), 9);
         for x in &starts {
             s.spawn(&spec(TRACER, 1.0, *x));
@@ -345,7 +352,13 @@ fn langevin_keeps_tracers_well_mixed_and_the_eddy_model_does_not() {
 fn scg_ratios_spread_alike_under_dispersion() {
     let d = (0.02 * 18.0 * MU / RHO).sqrt();
     let (k, eps) = (1.5, 15.0);
-    for model in [Model::StochasticRas, Model::Langevin { c0: 2.1 }] {
+    for model in [
+        Model::StochasticRas,
+        Model::Langevin {
+            c0: 2.1,
+            csanady: None,
+        },
+    ] {
         let mut out = Vec::new();
         for (i, alpha) in [1.0, 2.0, 4.0].into_iter().enumerate() {
             let mut s = sim(
@@ -387,7 +400,13 @@ fn bits(s: &mut Simulation) -> Vec<[u64; 6]> {
 /// after a checkpoint and restore halfway (the fluctuation and the eddy's age are state).
 #[test]
 fn dispersion_is_bit_identical_over_threads_and_restarts() {
-    for model in [Model::StochasticRas, Model::Langevin { c0: 2.1 }] {
+    for model in [
+        Model::StochasticRas,
+        Model::Langevin {
+            c0: 2.1,
+            csanady: None,
+        },
+    ] {
         let build = || {
             let mut s = sim(
                 0.004,

@@ -57,7 +57,10 @@ fn the_cyclone_reads_its_turbulence_fields() {
         (sim.particles(), plan)
     };
     let (with, plan) = run(&scene);
-    assert!(plan.contains("dispersion:stochastic_ras"), "{plan}");
+    assert!(
+        plan.contains("mesh_flow + dispersion:stochastic_ras") && !plan.contains("modify_carrier"),
+        "the dispersion runs inside the mesh move: {plan}"
+    );
     let plain = cyclone_with("").unwrap();
     let (without, plan) = run(&plain);
     assert!(!plan.contains("dispersion"), "{plan}");
@@ -69,6 +72,46 @@ fn the_cyclone_reads_its_turbulence_fields() {
         .filter(|(a, b)| a.position != b.position)
         .count();
     assert!(moved > 0, "dispersion moved nobody");
+}
+
+/// Both models (the Langevin walk with and without Csanady's correction) inside the mesh
+/// move give the bits of their own pass: 100 steps of the
+/// cyclone's feed, every particle's position and velocity equal.
+#[test]
+fn the_fused_dispersion_gives_the_bits_of_its_own_pass() {
+    let mut runs = Vec::new();
+    for model in [
+        "stochastic_ras\"",
+        "langevin\"\nc0 = 2.1",
+        "langevin\"\nc0 = 2.1\ncsanady = 1.0",
+    ] {
+        let section =
+            format!("[dispersion]\nk = \"kMean\"\nomega = \"omegaMean\"\nmodel = \"{model}");
+        let run = |own_pass: bool| {
+            let mut scene = cyclone_with(&section).unwrap();
+            scene.dispersion.as_mut().unwrap().own_pass = own_pass;
+            let mut sim = scene.build(false);
+            sim.run(100, |_| true).unwrap();
+            (sim.particles(), sim.plan().render())
+        };
+        let (fused, plan) = run(false);
+        assert!(!plan.contains("modify_carrier"), "{plan}");
+        let (own, plan) = run(true);
+        assert!(plan.contains("modify_carrier"), "{plan}");
+        assert!(fused.len() > 10, "{model}: {} particles", fused.len());
+        assert_eq!(fused.len(), own.len());
+        for (a, b) in fused.iter().zip(&own) {
+            assert_eq!(a.position, b.position, "{model}");
+            assert_eq!(a.velocity, b.velocity, "{model}");
+        }
+        runs.push(fused);
+    }
+    // the correction is wired through: the particles' slip shortens their walk's time
+    let moved = runs[1]
+        .iter()
+        .zip(&runs[2])
+        .filter(|(a, b)| a.position != b.position);
+    assert!(moved.count() > 0, "csanady changed nothing");
 }
 
 fn err(section: &str) -> String {
@@ -98,6 +141,16 @@ fn bad_dispersion_input_names_file_key_and_line() {
     assert!(e.contains("dispersion.k") && e.contains("field"), "{e}");
     let e = err("[dispersion]\nmodel = \"stochastic_ras\"\nk = \"k\"\nomega = \"omega\"\nc0 = 2");
     assert!(e.contains("dispersion.c0"), "{e}");
+    let e =
+        err("[dispersion]\nmodel = \"stochastic_ras\"\nk = \"k\"\nomega = \"omega\"\ncsanady = 1");
+    assert!(
+        e.contains("dispersion.csanady") && e.contains("langevin"),
+        "{e}"
+    );
+    let e = err(
+        "[dispersion]\nmodel = \"langevin\"\nc0 = 2.1\nk = \"k\"\nomega = \"omega\"\ncsanady = -1",
+    );
+    assert!(e.contains("dispersion.csanady"), "{e}");
     let e = err("[dispersion]\nmodel = \"langevin\"\nk = \"k\"\nomega = \"omega\"\nsmoothing = 1");
     assert!(e.contains("smoothing"), "{e}");
 }
@@ -116,7 +169,7 @@ fn analytic_flows_take_numbers_or_a_profile() {
             &[],
         )
     };
-    let ok = parse("[dispersion]\nmodel = \"langevin\"\nk = 0.5\nepsilon = 2.0").unwrap();
+    let ok = parse("[dispersion]\nmodel = \"langevin\"\nc0 = 2.1\nk = 0.5\nepsilon = 2.0").unwrap();
     assert!(ok.dispersion.is_some());
     let ok = parse(
         "[dispersion]\nmodel = \"stochastic_ras\"\n[dispersion.profile]\naxis = \"y\"\nat = [0, 1]\nk = [0.1, 0.2]\nomega = [10, 20]",
@@ -127,29 +180,37 @@ fn analytic_flows_take_numbers_or_a_profile() {
         "{}",
         ok.dispersion_source
     );
+    // C₀ is stated: no value is right for every field
+    let e = parse("[dispersion]\nmodel = \"langevin\"\nk = 0.5\nepsilon = 2.0")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("dispersion.c0") && e.contains("8.9") && e.contains("2.1"),
+        "{e}"
+    );
     for (s, key) in [
         (
-            "[dispersion]\nmodel = \"langevin\"\nk = -0.5\nepsilon = 2.0",
+            "[dispersion]\nmodel = \"langevin\"\nc0 = 2.1\nk = -0.5\nepsilon = 2.0",
             "dispersion.k",
         ),
         (
-            "[dispersion]\nmodel = \"langevin\"\nk = nan\nepsilon = 2.0",
+            "[dispersion]\nmodel = \"langevin\"\nc0 = 2.1\nk = nan\nepsilon = 2.0",
             "dispersion.k",
         ),
         (
-            "[dispersion]\nmodel = \"langevin\"\nk = \"k\"\nepsilon = 2.0",
+            "[dispersion]\nmodel = \"langevin\"\nc0 = 2.1\nk = \"k\"\nepsilon = 2.0",
             "dispersion.k",
         ),
         (
-            "[dispersion]\nmodel = \"langevin\"\nk = 0.5\nepsilon = 0.0",
+            "[dispersion]\nmodel = \"langevin\"\nc0 = 2.1\nk = 0.5\nepsilon = 0.0",
             "dispersion.epsilon",
         ),
         (
-            "[dispersion]\nmodel = \"langevin\"\n[dispersion.profile]\naxis = \"w\"\nat = [0, 1]\nk = [1, 1]\nepsilon = [1, 1]",
+            "[dispersion]\nmodel = \"langevin\"\nc0 = 2.1\n[dispersion.profile]\naxis = \"w\"\nat = [0, 1]\nk = [1, 1]\nepsilon = [1, 1]",
             "dispersion.profile.axis",
         ),
         (
-            "[dispersion]\nmodel = \"langevin\"\n[dispersion.profile]\naxis = \"x\"\nat = [1, 0]\nk = [1, 1]\nepsilon = [1, 1]",
+            "[dispersion]\nmodel = \"langevin\"\nc0 = 2.1\n[dispersion.profile]\naxis = \"x\"\nat = [1, 0]\nk = [1, 1]\nepsilon = [1, 1]",
             "dispersion.profile.at",
         ),
     ] {

@@ -492,7 +492,13 @@ fn dispersion_over_equal_snapshots_equals_the_frozen_field() {
         |x| 0.5 + x.z,
     );
     for model in ["stochastic_ras", "langevin"] {
-        let disp = format!("[dispersion]\nmodel = \"{model}\"\nk = \"k\"\nepsilon = \"epsilon\"\n");
+        let c0 = if model == "langevin" {
+            "c0 = 2.1\n"
+        } else {
+            ""
+        };
+        let disp =
+            format!("[dispersion]\nmodel = \"{model}\"\n{c0}k = \"k\"\nepsilon = \"epsilon\"\n");
         let series = load(dir.path(), &(many("", 0.6) + &disp));
         let frozen = load(dir.path(), &(many_in("time = 0", 0.6) + &disp));
         let (a, b) = (final_bits(&series), final_bits(&frozen));
@@ -524,7 +530,7 @@ fn the_langevin_walk_follows_k_in_time() {
         "duration = {duration:e}\ndt = {dt:e}\nseed = 3\n[fluid]\ndensity = 1.2\n\
          viscosity = 1.8e-5\n[flow]\nkind = \"openfoam\"\ncase = \"case\"\nseries = {{}}\n\
          [flow.patches]\n{SIDES}\nwall_model = \"rebound\"\n[drag]\nlaw = \"stokes\"\n\
-         [dispersion]\nmodel = \"langevin\"\nk = \"k\"\nepsilon = \"epsilon\"\n\
+         [dispersion]\nmodel = \"langevin\"\nc0 = 2.1\nk = \"k\"\nepsilon = \"epsilon\"\n\
          [[groups]]\nname = \"tracer\"\ndiameter = 1.0e-6\ndensity = 1.0e3\ncount = 3000\n\
          region = {{ kind = \"box\", min = [0.3, 0.3, 0.3], max = [0.7, 0.7, 0.7] }}\n"
     );

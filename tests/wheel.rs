@@ -259,7 +259,8 @@ fn the_wheel_cut_and_the_dispersion_model() {
         theory.d50_field
     );
     let mut eddy = o.clone();
-    eddy.push("dispersion.model=\"stochastic_ras\"".into());
+    // the whole table: the scene's `c0` is the Langevin walk's alone
+    eddy.push("dispersion={model=\"stochastic_ras\", k=\"kMean\", omega=\"omegaMean\"}".into());
     let cut_eddy = cut_of(&eddy);
     assert!(
         d_c < cut_eddy && cut_eddy < theory.d50_field,

@@ -335,6 +335,8 @@ def like(path, dest):
     d = s.get("dispersion")
     if isinstance(d, dict) and d.get("model") == "langevin":
         d["model"] = "stochastic_ras"
+        for key in ("c0", "csanady"):  # the Langevin walk's own parameters
+            d.pop(key, None)
         changes.append("dispersion.model: langevin -> stochastic_ras (OpenFOAM's "
                        "stochasticDispersionRAS, the eddy model its tracker has)")
     patches = flow.get("patches", {})

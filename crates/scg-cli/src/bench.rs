@@ -98,7 +98,10 @@ pub fn with_dispersion(scene: &mut scg_scene::Scene, dispersion: BenchDispersion
     let model = match dispersion {
         BenchDispersion::None => return,
         BenchDispersion::StochasticRas => Model::StochasticRas,
-        BenchDispersion::Langevin => Model::Langevin { c0: 2.1 },
+        BenchDispersion::Langevin => Model::Langevin {
+            c0: 2.1,
+            csanady: None,
+        },
     };
     let (k0, epsilon) = (1.0e-4, 0.1);
     let turbulence = match &scene.mesh_flow {
@@ -124,6 +127,7 @@ pub fn with_dispersion(scene: &mut scg_scene::Scene, dispersion: BenchDispersion
         turbulence,
         seed: scene.seed,
         mask: glam::DVec3::ONE,
+        own_pass: false,
     });
 }
 

@@ -254,10 +254,13 @@ impl Simulation {
             world.insert_resource(w);
             walls::plugin(&mut world, &mut b, Some(t));
         }
+        let lift = cfg.extra_forces.rubinow_keller && cfg.drag.is_some() && cfg.fluid.is_some();
         if let Some(m) = cfg.carrier {
-            carrier::plugin(&mut world, &mut b, m);
+            // the rotational lift reads the offsets before the move: then its own pass
+            let fuse = cfg.mesh_flow.is_some() && !lift;
+            carrier::plugin(&mut world, &mut b, m, fuse);
         }
-        if cfg.extra_forces.rubinow_keller && cfg.drag.is_some() && cfg.fluid.is_some() {
+        if lift {
             let ca = cfg.extra_forces.added_mass.unwrap_or(0.0);
             crate::stages::rotational_lift::plugin(&mut world, &mut b, ca);
         }

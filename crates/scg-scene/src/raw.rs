@@ -77,6 +77,8 @@ pub struct RawDispersion {
     pub omega: Option<RawTurbulenceValue>,
     /// langevin: Kolmogorov's Lagrangian constant C₀.
     pub c0: Option<f64>,
+    /// langevin: Csanady's β of the crossing-trajectories correction (absent: none).
+    pub csanady: Option<f64>,
     pub profile: Option<RawProfile>,
 }
 

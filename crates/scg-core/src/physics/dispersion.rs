@@ -65,6 +65,9 @@ pub enum Model {
     Langevin {
         /// Kolmogorov's Lagrangian constant C₀.
         c0: f64,
+        /// Csanady's β of the crossing-trajectories correction ([`csanady_factors`]);
+        /// `None`: every particle sees the tracers' Lagrangian time.
+        csanady: Option<f64>,
     },
 }
 
@@ -97,11 +100,12 @@ pub fn sigma_of(k: f64) -> f64 {
 }
 
 /// The eddy model's lifetime for the slip speed `slip` (m/s), s:
-/// min(k/ε, C_ps·k^1.5/(ε·(slip + small))), ε + rootVSmall as OpenFOAM.
+/// min(k/ε, C_ps·k^1.5/(ε·(slip + small))), ε + rootVSmall as OpenFOAM (k^1.5 as k·√k:
+/// one correctly rounded root instead of a `pow`, within an ulp of it).
 #[inline]
 pub fn eddy_lifetime(k: f64, epsilon: f64, slip: f64) -> f64 {
     let eps = epsilon + ROOT_VSMALL;
-    (k / eps).min(C_PS * k.powf(1.5) / eps / (slip + SMALL))
+    (k / eps).min(C_PS * (k * k.sqrt()) / eps / (slip + SMALL))
 }
 
 /// The Langevin model's Lagrangian time T_L = 2σ²/(C₀·ε) = 4k/(3·C₀·ε), s.
@@ -156,12 +160,45 @@ pub fn stochastic_ras(
     }
 }
 
+/// Csanady's (1963) crossing-trajectories correction of the Lagrangian time a particle
+/// with slip `slip` = v − u − u′ (m/s, against the fluid it sees) sees in turbulence of rms
+/// `sigma` (m/s): along the slip T_L/√(1 + β²ξ²), across it T_L/√(1 + 4β²ξ²), ξ = |slip|/σ.
+/// A heavy particle falling or flung through the eddies leaves each one before it decays:
+/// the fluid velocity it sees decorrelates faster than a tracer's. Returns the two factors
+/// (along, across), 1 for a tracer.
+#[inline]
+pub fn csanady_factors(beta: f64, slip: DVec3, sigma: f64) -> (f64, f64) {
+    let b2x2 = beta * beta * slip.length_squared() / (sigma * sigma);
+    (1.0 / (1.0 + b2x2).sqrt(), 1.0 / (1.0 + 4.0 * b2x2).sqrt())
+}
+
+/// The crossing-trajectories correction a [`langevin`] step applies: Csanady's β and the
+/// particle's slip against the fluid it sees (the mean carrier and its fluctuation before
+/// the step), m/s: zero for a tracer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Crossing {
+    /// β, the ratio of the Lagrangian to the Eulerian integral time (dimensionless).
+    pub beta: f64,
+    /// v − u − u′, m/s.
+    pub slip: DVec3,
+}
+
 /// One step of the normalised Langevin model: the exact Ornstein–Uhlenbeck update of
 /// w = u'/σ over dt, with the drift ∇σ, then u' = σ·w. A particle without a fluctuation
 /// yet (σ = 0 in `s`) starts from the stationary distribution, w ~ N(0, 1) per component.
-/// Where k or ε is not positive the fluctuation is zero.
+/// Where k or ε is not positive the fluctuation is zero. With `crossing` the component of
+/// w along the slip relaxes over Csanady's longitudinal time and the rest over the
+/// lateral one ([`csanady_factors`]); the stationary variance stays σ² per component.
 #[inline]
-pub fn langevin(dt: f64, t: &Local, c0: f64, mask: DVec3, s: &mut State, d: &mut Draws) {
+pub fn langevin(
+    dt: f64,
+    t: &Local,
+    c0: f64,
+    crossing: Option<Crossing>,
+    mask: DVec3,
+    s: &mut State,
+    d: &mut Draws,
+) {
     let sigma = sigma_of(t.k);
     if sigma <= 0.0 || t.epsilon <= 0.0 || !t.epsilon.is_finite() {
         s.u = DVec3::ZERO;
@@ -174,9 +211,22 @@ pub fn langevin(dt: f64, t: &Local, c0: f64, mask: DVec3, s: &mut State, d: &mut
     } else {
         DVec3::from_array(d.normal3())
     };
-    let a = (-dt / tl).exp();
     let xi = DVec3::from_array(d.normal3());
-    let w = a * w0 + ((1.0 - a) * tl) * t.grad_sigma + (1.0 - a * a).sqrt() * xi;
+    let relax = |tl: f64, w0: DVec3, drift: DVec3, xi: DVec3| {
+        let a = (-dt / tl).exp();
+        a * w0 + ((1.0 - a) * tl) * drift + (1.0 - a * a).sqrt() * xi
+    };
+    let w = match crossing {
+        Some(c) if c.slip.length_squared() > 0.0 => {
+            let (along, across) = csanady_factors(c.beta, c.slip, sigma);
+            let e = c.slip.normalize();
+            let par = |v: DVec3| v.dot(e) * e;
+            let (w0p, gp, xip) = (par(w0), par(t.grad_sigma), par(xi));
+            relax(tl * along, w0p, gp, xip)
+                + relax(tl * across, w0 - w0p, t.grad_sigma - gp, xi - xip)
+        }
+        _ => relax(tl, w0, t.grad_sigma, xi),
+    };
     s.u = sigma * w * mask;
     s.sigma = sigma;
 }

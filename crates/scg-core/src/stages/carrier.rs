@@ -38,6 +38,9 @@ pub struct Dispersion {
     /// 1 for every direction the flow solves, 0 for the normal of a 2-D case's `empty`
     /// patches (OpenFOAM's `constrainDirection`).
     pub mask: DVec3,
+    /// Run as a pass of its own even where the mesh move could run it
+    /// ([`DispersionInMove`]): the same bits, slower; for checking the fused move.
+    pub own_pass: bool,
 }
 
 /// A carrier modifier (resource).
@@ -70,12 +73,23 @@ impl CarrierModifier {
     }
 }
 
-/// Add the modifier's system (the integration stage's first) and its resource.
-pub fn plugin(world: &mut World, b: &mut StepBuilder, m: CarrierModifier) {
+/// The dispersion runs inside the mesh move's sweep (resource; [`plugin`] with `fuse`):
+/// each particle's fluctuation is advanced just before it moves, from the same inputs
+/// [`disperse`] reads, so the same bits without a pass of its own over the table.
+#[derive(Resource, Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DispersionInMove;
+
+/// Add the modifier's system (the integration stage's first) and its resource. `fuse`:
+/// the particles move through a mesh flow and nothing between this stage and the move
+/// reads the offsets, so a dispersion model runs inside the move ([`DispersionInMove`]).
+pub fn plugin(world: &mut World, b: &mut StepBuilder, m: CarrierModifier, fuse: bool) {
     let name = m.name();
     let dispersion = m.dispersion().is_some();
+    let fuse = fuse && !m.dispersion().is_some_and(|d| d.own_pass);
     world.insert_resource(m);
-    if dispersion {
+    if dispersion && fuse {
+        world.insert_resource(DispersionInMove);
+    } else if dispersion {
         b.add(
             StepSet::Integration,
             name,
@@ -131,53 +145,99 @@ pub fn disperse(
     else {
         return;
     };
-    let (dt, step) = (clock.dt, clock.step);
     let mesh = mesh.as_ref().map(|m| &*m.spec.flow);
-    // an unsteady flow: its two snapshots' velocity and turbulence at the step's mid time
-    // (the value the last landing kept is of one snapshot: not read)
     let series = series.as_deref();
     let blend = series.map(FlowSeries::blend);
+    // an unsteady flow: the value the last landing kept is of one snapshot: not read
     let known = known.filter(|_| series.is_none());
     let mean = |cell: u32, x: DVec3| match (blend, mesh) {
         (Some(b), _) => Carrier::at(&b, Place::cell(cell), x).0,
         (None, Some(mf)) => Carrier::at(mf, Place::cell(cell), x).0,
         (None, None) => flow.velocity(x),
     };
-    let turbulence = |cell: u32, x: DVec3| {
-        series
-            .and_then(|s| s.turbulence(cell))
-            .unwrap_or_else(|| d.turbulence.at(cell, x))
-    };
+    let step = DisperseStep::new(d, &clock, series);
     let cols = (ids, xs, vs, cells, known, bypass(eddies), bypass(offs));
     for_each_piece(cols, |(ids, xs, vs, cells, known, eddies, offs)| {
         for i in 0..ids.len() {
             let cell = cells.map_or(0, |c| c[i].0);
             let x = xs[i].0;
-            let t = turbulence(cell, x);
-            let mut s = State {
-                u: offs[i].0,
-                age: eddies[i].age,
-                sigma: eddies[i].sigma,
+            // the mean velocity the last step's landing found here, when kept (the same
+            // value bit for bit), else sampled
+            let u = || {
+                known
+                    .and_then(|k| k[i].at(x))
+                    .unwrap_or_else(|| mean(cell, x))
             };
-            let mut draws = Draws::new(d.seed, ids[i].0, step);
-            match d.model {
-                Model::StochasticRas => {
-                    // the mean velocity the last step's landing found here, when kept
-                    // (the same value bit for bit), else sampled
-                    let u = known
-                        .and_then(|k| k[i].at(x))
-                        .unwrap_or_else(|| mean(cell, x));
-                    dispersion::stochastic_ras(dt, &t, vs[i].0, u, d.mask, &mut s, &mut draws);
-                }
-                Model::Langevin { c0 } => {
-                    dispersion::langevin(dt, &t, c0, d.mask, &mut s, &mut draws);
-                }
-            }
-            offs[i].0 = s.u;
-            eddies[i] = Eddy {
-                age: s.age,
-                sigma: s.sigma,
-            };
+            step.apply(ids[i].0, cell, x, vs[i].0, u, &mut eddies[i], &mut offs[i]);
         }
     });
+}
+
+/// One step of turbulent dispersion for one particle at a time: what [`disperse`] runs
+/// over the particle table and the mesh move runs inside its own sweep
+/// ([`DispersionInMove`]), the same operations so the same bits.
+#[derive(Clone, Copy)]
+pub(crate) struct DisperseStep<'a> {
+    d: &'a Dispersion,
+    dt: f64,
+    step: u64,
+    /// An unsteady flow: its turbulence at the step's mid time.
+    series: Option<&'a FlowSeries>,
+}
+
+impl<'a> DisperseStep<'a> {
+    pub(crate) fn new(d: &'a Dispersion, clock: &SimClock, series: Option<&'a FlowSeries>) -> Self {
+        DisperseStep {
+            d,
+            dt: clock.dt,
+            step: clock.step,
+            series,
+        }
+    }
+
+    /// Advance the fluctuation of particle `id` in mesh cell `cell` (0 off a mesh) at `x`
+    /// with velocity `v`; `mean` gives the mean carrier velocity there (read only by
+    /// `stochastic_ras` and Csanady's correction). The turbulence is the series' at the step's mid time, else the
+    /// model's own; the draws come from the particle's stream for this step.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn apply(
+        &self,
+        id: u32,
+        cell: u32,
+        x: DVec3,
+        v: DVec3,
+        mean: impl FnOnce() -> DVec3,
+        eddy: &mut Eddy,
+        off: &mut CarrierOffset,
+    ) {
+        let d = self.d;
+        let t = self
+            .series
+            .and_then(|s| s.turbulence(cell))
+            .unwrap_or_else(|| d.turbulence.at(cell, x));
+        let mut s = State {
+            u: off.0,
+            age: eddy.age,
+            sigma: eddy.sigma,
+        };
+        let mut draws = Draws::new(d.seed, id, self.step);
+        match d.model {
+            Model::StochasticRas => {
+                dispersion::stochastic_ras(self.dt, &t, v, mean(), d.mask, &mut s, &mut draws);
+            }
+            Model::Langevin { c0, csanady } => {
+                let crossing = csanady.map(|beta| dispersion::Crossing {
+                    beta,
+                    slip: v - mean() - s.u,
+                });
+                dispersion::langevin(self.dt, &t, c0, crossing, d.mask, &mut s, &mut draws);
+            }
+        }
+        off.0 = s.u;
+        *eddy = Eddy {
+            age: s.age,
+            sigma: s.sigma,
+        };
+    }
 }

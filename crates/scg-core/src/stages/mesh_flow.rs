@@ -20,7 +20,7 @@ use std::sync::{Arc, Mutex};
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 
-use super::carrier::CarrierModifier;
+use super::carrier::{CarrierModifier, DisperseStep, DispersionInMove};
 use super::erosion::{ErosionLog, Impact};
 use super::flow_series::FlowSeries;
 use super::outlet::{OutletLog, OutletPart, remove_departed};
@@ -37,8 +37,10 @@ use crate::state::{Health, Motion, SimClock, StepDisplacement, Tally};
 use crate::step::{StepBuilder, StepSet, StepSystem};
 
 mod sort;
+mod start;
 pub(crate) use sort::add_sort;
 pub use sort::{SORT_EVERY, sort_by_cell};
+use start::{disperse_row, keeps_start, kept_start};
 
 /// A mesh flow as a scene declares it.
 #[derive(Clone, Debug)]
@@ -104,7 +106,17 @@ impl Persist for PatchesPart {
 
 /// Add the mesh-flow integration and boundary systems and their resources.
 pub fn plugin(world: &mut World, b: &mut StepBuilder, spec: MeshFlowSpec, groups: usize) {
-    add_integration(b);
+    // a dispersion model the move runs (the carrier plugin's `fuse`): named beside it
+    let fused = world.contains_resource::<DispersionInMove>();
+    let effect = match world
+        .get_resource::<CarrierModifier>()
+        .map(CarrierModifier::name)
+    {
+        Some("dispersion:stochastic_ras") if fused => "mesh_flow + dispersion:stochastic_ras",
+        Some("dispersion:langevin") if fused => "mesh_flow + dispersion:langevin",
+        _ => "mesh_flow",
+    };
+    add_integration(b, effect);
     if let Some(series) = &spec.series {
         let s = super::flow_series::FlowSeries::new(series.clone(), Arc::clone(&spec.flow));
         super::flow_series::plugin(world, b, s);
@@ -128,10 +140,10 @@ pub fn plugin(world: &mut World, b: &mut StepBuilder, spec: MeshFlowSpec, groups
 }
 
 /// Add the integration system of a mesh flow.
-fn add_integration(b: &mut StepBuilder) {
+fn add_integration(b: &mut StepBuilder, effect: &'static str) {
     b.add(
         StepSet::Integration,
-        "mesh_flow",
+        effect,
         StepSystem::IntegrateMeshFlow,
         integrate_mesh_flow,
     );
@@ -152,7 +164,10 @@ type MeshMoveQuery<'w, 's> = Query<
             &'static mut TetHint,
             &'static mut FlowAtCentre,
         ),
-        Option<&'static CarrierOffset>,
+        (
+            Option<&'static mut CarrierOffset>,
+            Option<&'static mut Eddy>,
+        ),
         (&'static CoarseGrain, &'static ParticleId),
     ),
 >;
@@ -167,6 +182,7 @@ pub struct MeshInputs<'w> {
     disp: Option<Res<'w, StepDisplacement>>,
     state: Res<'w, MeshFlowState>,
     carrier: Option<Res<'w, CarrierModifier>>,
+    fused: Option<Res<'w, DispersionInMove>>,
     erosion: Option<ResMut<'w, ErosionLog>>,
     series: Option<Res<'w, FlowSeries>>,
 }
@@ -179,7 +195,8 @@ pub fn integrate_mesh_flow(mut d: MeshInputs, mut q: MeshMoveQuery) {
     let disp = d.disp.as_deref();
     let departures = &d.state.departures;
     departures.store(0, Ordering::Relaxed);
-    let Some((xs, vs, drag, ms, fs, gs, (hs, ts, us), offs, (cgs, ids))) = columns_mut(&mut q)
+    let Some((xs, vs, drag, ms, fs, gs, (hs, ts, us), (offs, eddies), (cgs, ids))) =
+        columns_mut(&mut q)
     else {
         if let Some(dd) = disp {
             dd.mark_reported();
@@ -194,7 +211,7 @@ pub fn integrate_mesh_flow(mut d: MeshInputs, mut q: MeshMoveQuery) {
         fs,
         gs,
         (bypass(hs), bypass(ts), bypass(us)),
-        (offs, (cgs, ids)),
+        ((offs.map(bypass), eddies.map(bypass)), (cgs, ids)),
     );
     // an unsteady flow: the step's two snapshots (one mesh: either locates)
     let blend = d.series.as_deref().map(FlowSeries::blend);
@@ -217,6 +234,12 @@ pub fn integrate_mesh_flow(mut d: MeshInputs, mut q: MeshMoveQuery) {
         n_cells: flow.mesh().n_cells as u32,
         health: &d.health,
         erosion: d.erosion.as_deref().zip(sink.as_ref()),
+        disperse: d
+            .carrier
+            .as_deref()
+            .and_then(CarrierModifier::dispersion)
+            .filter(|_| d.fused.is_some())
+            .map(|m| DisperseStep::new(m, &d.clock, d.series.as_deref())),
     };
     // The schemes that never read the start's fluid velocity run a loop without it
     // (unless the dispersion model reads it). An unsteady flow keeps both snapshots'
@@ -257,7 +280,7 @@ type MeshPiece<'a> = (
         &'a mut [FlowAtCentre],
     ),
     (
-        Option<&'a [CarrierOffset]>,
+        (Option<&'a mut [CarrierOffset]>, Option<&'a mut [Eddy]>),
         (&'a [CoarseGrain], &'a [ParticleId]),
     ),
 );
@@ -277,6 +300,9 @@ struct MeshStep<'a> {
     health: &'a Health,
     /// With `[erosion]`: the log (which patches) and where the step's impacts go.
     erosion: Option<(&'a ErosionLog, &'a Mutex<Vec<Impact>>)>,
+    /// The dispersion the move runs, particle by particle before each moves
+    /// ([`DispersionInMove`]).
+    disperse: Option<DisperseStep<'a>>,
 }
 
 impl MeshStep<'_> {
@@ -289,33 +315,31 @@ impl MeshStep<'_> {
         keep_start: bool,
         carrier: C,
     ) -> (f64, u64) {
-        match (keep_start, piece.7.0) {
-            (true, None) => self.advance::<true, _>(piece, |_| carrier),
-            (false, None) => self.advance::<false, _>(piece, |_| carrier),
-            (true, Some(offs)) => self.advance::<true, _>(piece, |i| WithOffset {
-                inner: carrier,
-                du: offs[i].0,
-            }),
-            (false, Some(offs)) => self.advance::<false, _>(piece, |i| WithOffset {
-                inner: carrier,
-                du: offs[i].0,
-            }),
+        let with = |du| WithOffset { inner: carrier, du };
+        match (keep_start, piece.7.0.0.is_some()) {
+            (true, false) => self.advance::<true, _, _>(piece, carrier, |_| carrier),
+            (false, false) => self.advance::<false, _, _>(piece, carrier, |_| carrier),
+            (true, true) => self.advance::<true, _, _>(piece, carrier, with),
+            (false, true) => self.advance::<false, _, _>(piece, carrier, with),
         }
     }
 
-    /// Advance the particles of a piece in the carrier `carrier(i)` gives row `i`; the
-    /// largest squared displacement and the number of particles that left the mesh.
+    /// Advance the particles of a piece in the carrier `carrier(du)` gives a row with offset
+    /// `du` (`base` without one: the mean flow a fused dispersion reads); the largest
+    /// squared displacement and the number of particles that left the mesh.
     /// `KEEP`: the scheme reads the fluid velocity at the start of the step
     /// ([`Scheme::reads_start`]), so it is read from and written to [`FlowAtCentre`];
     /// otherwise that column is left alone. (With an offset, the value kept is the mean
     /// flow's and the offset is added to it.)
     #[inline(always)]
-    fn advance<const KEEP: bool, C: Carrier>(
+    fn advance<const KEEP: bool, B: Carrier, C: Carrier>(
         &self,
         piece: MeshPiece,
-        carrier: impl Fn(usize) -> C,
+        base: B,
+        carrier: impl Fn(DVec3) -> C,
     ) -> (f64, u64) {
-        let (xs, vs, (sfs, fcs), ms, fs, gs, (hs, ts, us), (offs, (cgs, ids))) = piece;
+        let (xs, vs, (sfs, fcs), ms, fs, gs, (hs, ts, us), ((mut offs, mut eddies), (cgs, ids))) =
+            piece;
         let MeshStep {
             scheme,
             flow,
@@ -325,6 +349,7 @@ impl MeshStep<'_> {
             n_cells,
             health,
             erosion,
+            disperse,
         } = *self;
         let mut impacts = Vec::new();
         let mut d2max = 0.0_f64;
@@ -343,6 +368,14 @@ impl MeshStep<'_> {
                 let n = BLOCK.min(xs.len() - i);
                 block.fill(law, scheme.dt, n, |j| {
                     let i = i + j;
+                    disperse_row(
+                        disperse,
+                        &base,
+                        later.is_some(),
+                        i,
+                        (xs, vs, hs, us, ids),
+                        (&mut offs, &mut eddies),
+                    );
                     let body = Body {
                         x: xs[i].0,
                         v: vs[i].0,
@@ -352,7 +385,13 @@ impl MeshStep<'_> {
                         fc: &fcs[i],
                         sf: &sfs[i],
                     };
-                    let u0 = kept_start(&us[i], body.x, later, stale, offs.map(|o| o[i].0));
+                    let u0 = kept_start(
+                        &us[i],
+                        body.x,
+                        later,
+                        stale,
+                        offs.as_deref().map(|o| o[i].0),
+                    );
                     starts[j] = u0;
                     (
                         fcs[i].tau,
@@ -384,6 +423,16 @@ impl MeshStep<'_> {
                     b.prefetch_tet_values(t.0);
                 }
             }
+            if lanes_law.is_none() {
+                disperse_row(
+                    disperse,
+                    &base,
+                    later.is_some(),
+                    i,
+                    (xs, vs, hs, us, ids),
+                    (&mut offs, &mut eddies),
+                );
+            }
             let x0 = xs[i].0;
             let mut h0 = Place {
                 cell: hs[i].0,
@@ -411,11 +460,14 @@ impl MeshStep<'_> {
             // The fluid velocity at the start, from the last landing when it found it.
             let start = match (KEEP, lanes_law) {
                 (true, Some(_)) => starts[j],
-                (true, None) => kept_start(&us[i], x0, later, stale, offs.map(|o| o[i].0)),
+                (true, None) => {
+                    kept_start(&us[i], x0, later, stale, offs.as_deref().map(|o| o[i].0))
+                }
                 (false, _) => None,
             };
             let drag = lanes_law.and_then(|_| block.factors(j));
-            let (x1, v1, h_end) = advance(&scheme, &carrier(i), &body, h0, start, drag);
+            let du = offs.as_deref().map_or(DVec3::ZERO, |o| o[i].0);
+            let (x1, v1, h_end) = advance(&scheme, &carrier(du), &body, h0, start, drag);
             if !(x1 + v1).element_sum().is_finite() {
                 health.raise();
                 xs[i].0 = x1;
@@ -469,51 +521,6 @@ impl MeshStep<'_> {
         }
         (d2max, gone)
     }
-}
-
-/// The carrier's velocity at the start `x` of a step as the last landing kept it
-/// (`None` where it did not, or kept it of another pair of snapshots, `stale`): an
-/// unsteady flow's two snapshots blended at the step's weight (`later`'s) as
-/// [`Blend`](crate::physics::mesh_flow::series::Blend) blends them, plus the particle's
-/// offset `off` when the carrier has one; the same bits as locating x again.
-#[inline(always)]
-fn kept_start(
-    k: &FlowAtCentre,
-    x: DVec3,
-    later: Option<(&MeshFlow, f64)>,
-    stale: bool,
-    off: Option<DVec3>,
-) -> Option<DVec3> {
-    if stale {
-        return None;
-    }
-    let u = match later {
-        None => k.at(x)?,
-        Some((_, w)) => {
-            let (a, b) = k.pair_at(x)?;
-            crate::physics::mesh_flow::series::blend(a, b, w)
-        }
-    };
-    Some(off.map_or(u, |o| u + o))
-}
-
-/// True when a step reads the fluid velocity at its start ([`Scheme::reads_start`]) or the
-/// carrier modifier reads the mean velocity at the centre (`stochastic_ras`: the slip of
-/// the eddy-crossing time), so that [`FlowAtCentre`] is kept. The landing finds the value
-/// anyway; keeping it costs a store.
-fn keeps_start(m: &Motion, carrier: Option<&CarrierModifier>) -> bool {
-    let mean_at_centre = carrier
-        .and_then(CarrierModifier::dispersion)
-        .is_some_and(|d| d.model == crate::physics::dispersion::Model::StochasticRas);
-    mean_at_centre
-        || Scheme {
-            dt: 0.0,
-            law: m.drag,
-            integrator: m.integrator,
-            fluid: Scheme::NO_FLUID,
-            forces: None,
-        }
-        .reads_start()
 }
 
 /// Particles that left through each patch, per group (resource of a mesh flow):

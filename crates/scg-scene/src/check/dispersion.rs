@@ -23,7 +23,7 @@ pub(super) fn findings(scene: &Scene) -> Vec<Finding> {
             "eddy lifetime k/ε",
             k.iter().zip(&eps).map(|(k, e)| k / e).collect(),
         ),
-        Model::Langevin { c0 } => (
+        Model::Langevin { c0, .. } => (
             "Lagrangian time T_L = 4k/(3·C₀·ε)",
             k.iter()
                 .zip(&eps)

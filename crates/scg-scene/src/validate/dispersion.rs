@@ -17,6 +17,14 @@ use crate::error::SceneError;
 use crate::model::{FieldReader, SceneMeshFlow};
 use crate::raw::{RawDispersion, RawDispersionModel, RawProfile, RawTurbulenceValue};
 
+/// Why `langevin` needs `c0` stated, and which values mean what (docs/dispersion.md).
+const C0_MISSING: &str = "missing: the Langevin walk's C₀ sets its Lagrangian time \
+    T_L = 4k/(3·C₀·ε) and so the tracers' diffusivity 8k²/(9·C₀·ε), and no one value is right \
+    for every field; state it: 8.9 spreads tracers as the RANS model's own diffusivity \
+    C_μ·k²/(Sc_t·ε) with Sc_t = 0.9 (as OpenFOAM's stochastic_ras and Fluent's random walk \
+    with T_L = 0.15·k/ε do), 2.1 is Pope's simplified Langevin model (4.2 times that); \
+    docs/dispersion.md, \"Which C₀\"";
+
 /// `[dispersion]` → the carrier modifier, a line saying where its turbulence came from and,
 /// on a mesh, the fields it was read from.
 pub(super) fn dispersion(
@@ -27,16 +35,29 @@ pub(super) fn dispersion(
 ) -> Result<(Dispersion, String, Option<TurbulenceFields>), SceneError> {
     let model = match d.model {
         RawDispersionModel::StochasticRas => {
-            if d.c0.is_some() {
-                return Err(cx.err(
-                    "dispersion.c0",
-                    "is a parameter of the `langevin` model, not of `stochastic_ras`",
-                ));
+            for (key, given) in [("c0", d.c0.is_some()), ("csanady", d.csanady.is_some())] {
+                if given {
+                    return Err(cx.err(
+                        &format!("dispersion.{key}"),
+                        "is a parameter of the `langevin` model, not of `stochastic_ras` \
+                         (whose eddies end when the particle crosses them: its own \
+                         crossing-trajectories effect); to switch a scene's walk to the \
+                         eddy model from the command line replace the whole table: --set \
+                         'dispersion={model=\"stochastic_ras\", k=\"k\", omega=\"omega\"}'",
+                    ));
+                }
             }
             Model::StochasticRas
         }
         RawDispersionModel::Langevin => Model::Langevin {
-            c0: cx.positive("dispersion.c0", d.c0.unwrap_or(2.1))?,
+            c0: match d.c0 {
+                Some(c0) => cx.positive("dispersion.c0", c0)?,
+                None => return Err(cx.err("dispersion.c0", C0_MISSING)),
+            },
+            csanady: d
+                .csanady
+                .map(|b| cx.positive("dispersion.csanady", b))
+                .transpose()?,
         },
     };
     if d.epsilon.is_some() && d.omega.is_some() {
@@ -132,6 +153,7 @@ pub(super) fn dispersion(
             turbulence,
             seed,
             mask,
+            own_pass: false,
         },
         source,
         fields,

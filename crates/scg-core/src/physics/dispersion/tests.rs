@@ -126,7 +126,7 @@ fn the_mask_constrains_the_direction() {
         );
         assert_eq!(s.u.z, 0.0);
         let mut d = Draws::new(1, id, 0);
-        langevin(1e-3, &uniform(1.0, 1.0), 2.1, mask, &mut s, &mut d);
+        langevin(1e-3, &uniform(1.0, 1.0), 2.1, None, mask, &mut s, &mut d);
         assert_eq!(s.u.z, 0.0);
     }
 }
@@ -149,7 +149,7 @@ fn langevin_is_stationary_with_its_lagrangian_time() {
         for (id, s) in states.iter_mut().enumerate() {
             let before = s.u.x;
             let mut d = Draws::new(9, id as u32, step);
-            langevin(dt, &t, c0, ONES, s, &mut d);
+            langevin(dt, &t, c0, None, ONES, s, &mut d);
             if step == 19 {
                 s2 += s.u.x * s.u.x;
                 c += before * s.u.x;
@@ -161,6 +161,55 @@ fn langevin_is_stationary_with_its_lagrangian_time() {
     assert!((var / want - 1.0).abs() < 0.02, "variance {var} vs {want}");
     let rho = c / s2;
     assert!((rho - (-0.25f64).exp()).abs() < 0.01, "correlation {rho}");
+}
+
+/// With Csanady's correction a particle slipping along x at 1.5σ (β = 1) keeps the
+/// stationary variance 2k/3 per component, and its one-step autocorrelation is
+/// e^(−dt/(T_L·f)) with f = 1/√(1 + ξ²) along the slip, 1/√(1 + 4ξ²) across it (ξ = 1.5):
+/// 10^5 particles for 20 steps of dt = T_L/8. Tolerances as above.
+#[test]
+fn csanady_shortens_the_time_along_and_across_the_slip() {
+    let (k, eps, c0) = (0.6, 0.3, 2.1);
+    let tl = lagrangian_time(k, eps, c0);
+    let dt = tl / 8.0;
+    let t = uniform(k, eps);
+    let sigma = sigma_of(k);
+    let crossing = Some(Crossing {
+        beta: 1.0,
+        slip: DVec3::new(1.5 * sigma, 0.0, 0.0),
+    });
+    let (along, across) = csanady_factors(1.0, DVec3::new(1.5 * sigma, 0.0, 0.0), sigma);
+    assert!((along - 1.0 / 3.25f64.sqrt()).abs() < 1e-12);
+    assert!((across - 1.0 / 10.0f64.sqrt()).abs() < 1e-12);
+    let n = 100_000u32;
+    let mut states = vec![State::default(); n as usize];
+    let (mut s2, mut c) = (DVec3::ZERO, DVec3::ZERO);
+    for step in 0..20u64 {
+        for (id, s) in states.iter_mut().enumerate() {
+            let before = s.u;
+            let mut d = Draws::new(9, id as u32, step);
+            langevin(dt, &t, c0, crossing, ONES, s, &mut d);
+            if step == 19 {
+                s2 += s.u * s.u;
+                c += before * s.u;
+            }
+        }
+    }
+    let want = 2.0 * k / 3.0;
+    for i in 0..3 {
+        let var = s2[i] / n as f64;
+        assert!(
+            (var / want - 1.0).abs() < 0.02,
+            "variance {i}: {var} vs {want}"
+        );
+        let f = if i == 0 { along } else { across };
+        let rho = c[i] / s2[i];
+        let expect = (-dt / (tl * f)).exp();
+        assert!(
+            (rho - expect).abs() < 0.01,
+            "correlation {i}: {rho} vs {expect}"
+        );
+    }
 }
 
 /// The profile interpolates linearly, clamps or wraps, and its ∇σ is σ's derivative
