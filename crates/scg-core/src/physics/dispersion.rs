@@ -79,6 +79,15 @@ impl Model {
             Model::Langevin { .. } => "langevin",
         }
     }
+
+    /// True when a step reads the mean carrier velocity at the particle: the eddy model's
+    /// slip (its eddy-crossing time), Csanady's slip against the fluid seen.
+    pub fn reads_mean(&self) -> bool {
+        match self {
+            Model::StochasticRas => true,
+            Model::Langevin { csanady, .. } => csanady.is_some(),
+        }
+    }
 }
 
 /// A particle's dispersion state.

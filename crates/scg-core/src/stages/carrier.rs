@@ -64,6 +64,16 @@ impl CarrierModifier {
         }
     }
 
+    /// The mesh move's plan name when it runs this modifier's dispersion
+    /// ([`DispersionInMove`]).
+    pub fn in_move_name(&self) -> &'static str {
+        match self.dispersion().map(|d| d.model) {
+            Some(Model::StochasticRas) => "mesh_flow + dispersion:stochastic_ras",
+            Some(Model::Langevin { .. }) => "mesh_flow + dispersion:langevin",
+            None => "mesh_flow",
+        }
+    }
+
     /// The dispersion, if this modifier is one.
     pub fn dispersion(&self) -> Option<&Dispersion> {
         match self {

@@ -107,13 +107,8 @@ impl Persist for PatchesPart {
 /// Add the mesh-flow integration and boundary systems and their resources.
 pub fn plugin(world: &mut World, b: &mut StepBuilder, spec: MeshFlowSpec, groups: usize) {
     // a dispersion model the move runs (the carrier plugin's `fuse`): named beside it
-    let fused = world.contains_resource::<DispersionInMove>();
-    let effect = match world
-        .get_resource::<CarrierModifier>()
-        .map(CarrierModifier::name)
-    {
-        Some("dispersion:stochastic_ras") if fused => "mesh_flow + dispersion:stochastic_ras",
-        Some("dispersion:langevin") if fused => "mesh_flow + dispersion:langevin",
+    let effect = match world.get_resource::<CarrierModifier>() {
+        Some(m) if world.contains_resource::<DispersionInMove>() => m.in_move_name(),
         _ => "mesh_flow",
     };
     add_integration(b, effect);

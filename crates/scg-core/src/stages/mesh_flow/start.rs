@@ -69,13 +69,13 @@ pub(super) fn kept_start(
 }
 
 /// True when a step reads the fluid velocity at its start ([`Scheme::reads_start`]) or the
-/// carrier modifier reads the mean velocity at the centre (`stochastic_ras`: the slip of
-/// the eddy-crossing time), so that [`FlowAtCentre`] is kept. The landing finds the value
-/// anyway; keeping it costs a store.
+/// dispersion reads the mean velocity at the centre
+/// ([`Model::reads_mean`](crate::physics::dispersion::Model::reads_mean)), so that
+/// [`FlowAtCentre`] is kept. The landing finds the value anyway; keeping it costs a store.
 pub(super) fn keeps_start(m: &Motion, carrier: Option<&CarrierModifier>) -> bool {
     let mean_at_centre = carrier
         .and_then(CarrierModifier::dispersion)
-        .is_some_and(|d| d.model == crate::physics::dispersion::Model::StochasticRas);
+        .is_some_and(|d| d.model.reads_mean());
     mean_at_centre
         || Scheme {
             dt: 0.0,
