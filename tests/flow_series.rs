@@ -386,6 +386,42 @@ fn a_series_is_bit_identical_on_threads_and_restarts() {
     common::assert_replays_bit_identical(&out.join("rec.mcap"));
 }
 
+/// A cycling window kept in memory after its first pass (the default budget) and one read
+/// again at every pass (`SCG_SERIES_KEEP_MB=0`) give the same frames, bit for bit.
+#[test]
+fn keeping_the_snapshots_changes_no_bit() {
+    let (dir, _) = wavy_series();
+    let text = format!("record_every = 32\n{}", many("cycle = true", 2.0));
+    std::fs::write(dir.path().join("keep.toml"), text).unwrap();
+    let frames = |keep: &str| {
+        let out = dir.path().join(format!("frames-{keep}"));
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_scg"))
+            .args(["run", "keep.toml", "--no-record", "--frames-csv"])
+            .arg(&out)
+            .env("SCG_SERIES_KEEP_MB", keep)
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let mut files: Vec<_> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        files.sort();
+        files
+            .iter()
+            .map(|f| std::fs::read(f).unwrap())
+            .collect::<Vec<_>>()
+    };
+    let (streamed, kept) = (frames("0"), frames("1024"));
+    assert!(streamed.len() > 10, "{} frames", streamed.len());
+    assert!(streamed == kept, "keeping the snapshots changed the frames");
+}
+
 /// `scg check` states the window, the spacing and the seam, and warns where the spacing
 /// exceeds the particles' response time.
 #[test]

@@ -211,6 +211,13 @@ impl<'a> Interpolator<'a> {
         })
     }
 
+    /// Bytes held by the prepared values (cell, node and tetrahedron velocities; the
+    /// locator not counted).
+    pub fn bytes(&self) -> usize {
+        (self.cells.len() + self.nodes.len() + self.tets.len()) * size_of::<DVec3>()
+            + self.tet_offsets.len() * size_of::<u32>()
+    }
+
     /// What the conservative scheme's projection changed (`None` for the other schemes).
     pub fn projection(&self) -> Option<&Projection> {
         self.projection.as_ref()

@@ -548,7 +548,16 @@ pub fn check(scene: &Scene) -> Report {
     findings.extend(forces_at::findings(scene, &groups));
     findings.extend(zones::findings(scene));
     findings.extend(mesh_flow_findings(scene));
-    findings.extend(mesh::series_findings(scene, &groups));
+    for f in mesh::series_findings(scene, &groups) {
+        if f.level == Level::Warning && scene.allow.contains(&Allow::SeriesSpacing) {
+            match allowed.iter_mut().find(|a| a.0 == Allow::SeriesSpacing) {
+                Some(a) => a.1 += 1,
+                None => allowed.push((Allow::SeriesSpacing, 1)),
+            }
+        } else {
+            findings.push(f);
+        }
+    }
     findings.extend(dispersion::findings(scene));
     for (code, n) in allowed {
         findings.push(Finding {

@@ -234,6 +234,9 @@ pub enum Allow {
     StokesReynolds,
     /// A simulated density below ten times the fluid's (added mass, buoyancy neglected).
     LightParticles,
+    /// An unsteady series whose snapshots are farther apart than a group's τ or the
+    /// field's median cell crossing time (a CFD written coarsely in time, on purpose).
+    SeriesSpacing,
 }
 
 impl Allow {
@@ -242,6 +245,7 @@ impl Allow {
         match self {
             Allow::StokesReynolds => "stokes_reynolds",
             Allow::LightParticles => "light_particles",
+            Allow::SeriesSpacing => "series_spacing",
         }
     }
 }

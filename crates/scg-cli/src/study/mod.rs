@@ -86,6 +86,11 @@ pub struct StudyArgs {
     /// e.g. `--loadings 1,4,16,64` for the dense end, ≈ 1 h more).
     #[arg(long, value_delimiter = ',', value_name = "L")]
     pub loadings: Option<Vec<f64>>,
+    /// `cyclone` only: run the study on this scene file instead of the embedded
+    /// cases/cyclone.toml (e.g. cases/cyclone-les.toml, the unsteady LES series); its
+    /// relative `flow.case` is resolved from the file's folder.
+    #[arg(long, value_name = "FILE")]
+    pub scene: Option<PathBuf>,
 }
 
 impl StudyArgs {
@@ -103,6 +108,7 @@ impl StudyArgs {
             cg_feed: 1.0,
             markdown: false,
             loadings: None,
+            scene: None,
         }
     }
 }
@@ -310,6 +316,10 @@ pub fn write_outputs(runs: &[VariantRun], nozzle: f64, out: &Path) -> Result<Str
 pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
     if a.loadings.is_some() && a.study != "loading" {
         eprintln!("error: --loadings is for `scg study loading` only");
+        return EXIT_BAD_INPUT;
+    }
+    if a.scene.is_some() && a.study != "cyclone" {
+        eprintln!("error: --scene is for `scg study cyclone` only");
         return EXIT_BAD_INPUT;
     }
     if a.study == "cyclone" {

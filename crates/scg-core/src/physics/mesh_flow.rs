@@ -273,6 +273,12 @@ impl MeshFlow {
         self.table.as_ref()
     }
 
+    /// Bytes this flow holds of its own (its interpolator's values and its tracker
+    /// table; the mesh and locator, which snapshots of a series share, not counted).
+    pub fn bytes(&self) -> usize {
+        self.interp.bytes() + self.table.as_ref().map_or(0, CellTable::bytes)
+    }
+
     /// The interpolation scheme.
     pub fn scheme(&self) -> Interpolation {
         self.interp.scheme()

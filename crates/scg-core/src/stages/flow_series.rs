@@ -3,7 +3,10 @@
 //! the one the clock reaches next is read on a background thread.
 //!
 //! Every snapshot is a pure function of its index (the loader), so which thread read it
-//! and when changes nothing: a run is bit-identical whatever the timing.
+//! and when changes nothing: a run is bit-identical whatever the timing. Snapshots once
+//! read are kept while they fit in [`keep_bytes`] (1 GiB unless `SCG_SERIES_KEEP_MB`
+//! says otherwise), so a cycling window that fits is read once, not once per cycle; past
+//! that budget the series streams, two snapshots and the one read ahead at a time.
 
 use std::sync::Arc;
 use std::thread::JoinHandle;
@@ -29,6 +32,12 @@ pub struct FlowSeries {
     ahead: Option<(usize, JoinHandle<Result<Snapshot, String>>)>,
     /// Snapshots read so far (including the first, given).
     reads: usize,
+    /// Snapshots kept after use (index → snapshot), within `keep_budget` bytes.
+    kept: Vec<Option<Snapshot>>,
+    /// Bytes of `kept`.
+    kept_bytes: usize,
+    /// Most bytes `kept` may hold.
+    keep_budget: usize,
     /// The last [`FlowSeries::advance`] changed the pair.
     changed: bool,
     /// A snapshot that could not be read: the run stops ([`crate::sim::SimError::Flow`]).
@@ -43,15 +52,39 @@ impl FlowSeries {
             turbulence: spec.first_turbulence.clone(),
         };
         let second = spec.second.clone();
-        FlowSeries {
+        let n = spec.clock.len();
+        let mut s = FlowSeries {
             spec,
-            pair: [(0, first), (1, second)],
+            pair: [(0, first.clone()), (1, second.clone())],
             now: Interval { a: 0, b: 1, w: 0.0 },
             ahead: None,
             reads: 2,
+            kept: vec![None; n],
+            kept_bytes: 0,
+            keep_budget: keep_bytes(),
             changed: false,
             failure: None,
+        };
+        s.keep(0, &first);
+        s.keep(1, &second);
+        s
+    }
+
+    /// Keep snapshot `k` for later use when it fits in the budget.
+    fn keep(&mut self, k: usize, snap: &Snapshot) {
+        let bytes = snapshot_bytes(snap);
+        if let Some(slot) = self.kept.get_mut(k)
+            && slot.is_none()
+            && self.kept_bytes + bytes <= self.keep_budget
+        {
+            *slot = Some(snap.clone());
+            self.kept_bytes += bytes;
         }
+    }
+
+    /// Snapshots kept in memory for later use, and their bytes.
+    pub fn kept(&self) -> (usize, usize) {
+        (self.kept.iter().flatten().count(), self.kept_bytes)
     }
 
     /// The clock.
@@ -94,20 +127,28 @@ impl FlowSeries {
         }
     }
 
-    /// Snapshot `k`: one of the pair, the one read ahead, or read now.
+    /// Snapshot `k`: one of the pair, one kept, the one read ahead, or read now.
     fn get(&mut self, k: usize) -> Result<Snapshot, String> {
         if let Some((_, f)) = self.pair.iter().find(|(i, _)| *i == k) {
             return Ok(f.clone());
         }
-        if self.ahead.as_ref().is_some_and(|(i, _)| *i == k) {
+        if let Some(Some(f)) = self.kept.get(k) {
+            return Ok(f.clone());
+        }
+        let r = if self.ahead.as_ref().is_some_and(|(i, _)| *i == k) {
             let (_, h) = self.ahead.take().expect("checked");
-            return match h.join() {
+            match h.join() {
                 Ok(r) => r,
                 Err(_) => Err(format!("reading snapshot {k} panicked")),
-            };
+            }
+        } else {
+            self.reads += 1;
+            (self.spec.load)(k)
+        };
+        if let Ok(snap) = &r {
+            self.keep(k, snap);
         }
-        self.reads += 1;
-        (self.spec.load)(k)
+        r
     }
 
     /// Make the two snapshots around simulation time `t` (s) current, and start reading
@@ -136,12 +177,31 @@ impl FlowSeries {
         if let Some(k) = next
             && self.ahead.is_none()
             && self.pair.iter().all(|(i, _)| *i != k)
+            && self.kept.get(k).is_none_or(Option::is_none)
         {
             let load = Arc::clone(&self.spec.load);
             self.reads += 1;
             self.ahead = Some((k, std::thread::spawn(move || load(k))));
         }
     }
+}
+
+/// Most bytes of snapshots a series keeps in memory for later use: `SCG_SERIES_KEEP_MB`
+/// (MB; 0 keeps none beyond the pair), default 1024.
+pub fn keep_bytes() -> usize {
+    std::env::var("SCG_SERIES_KEEP_MB")
+        .ok()
+        .and_then(|v| v.trim().parse::<usize>().ok())
+        .unwrap_or(1024)
+        .saturating_mul(1 << 20)
+}
+
+/// The bytes of a snapshot of its own (flow values and tables, turbulence per cell).
+fn snapshot_bytes(s: &Snapshot) -> usize {
+    s.flow.bytes()
+        + s.turbulence.as_ref().map_or(0, |t| {
+            (t.k.len() + t.epsilon.len() + 3 * t.grad_sigma.len()) * 8
+        })
 }
 
 /// Add the series' system (before the carrier modifiers and the integration).

@@ -151,6 +151,22 @@ pub(super) fn series_findings(scene: &Scene, groups: &[GroupReport]) -> Vec<Find
             later.shared_bytes() as f64 / 1e6
         ));
     }
+    // snapshots once read stay in memory while they fit (stages::flow_series::keep_bytes)
+    let each = s.spec.second.flow.bytes();
+    let budget = scg_core::stages::flow_series::keep_bytes();
+    let all = m.flow.bytes() + each * (c.len() - 1);
+    note.push_str(&format!(
+        "; snapshots once read are kept while they fit in {:.0} MB (SCG_SERIES_KEEP_MB): {} ({:.1} MB for all {}, {:.1} MB each after the first)",
+        budget as f64 / f64::from(1 << 20),
+        if all <= budget {
+            "this window is read once"
+        } else {
+            "this window does not fit, it is read again at every pass"
+        },
+        all as f64 / 1e6,
+        c.len(),
+        each as f64 / 1e6
+    ));
     if let (Some(p), Some(jump)) = (c.period(), s.seam) {
         note.push_str(&format!(
             "; cycle = true: the window repeats every {p:.6e} s, the field running from the last snapshot back to the first over {:.4e} s (the mean spacing); across that seam the field changes by {:.3} % (rms over the cells, of the first snapshot's rms)",

@@ -87,13 +87,64 @@ pub fn scene_text() -> Result<String, String> {
     super::case_scene(CYCLONE, "cyclone/coarse")
 }
 
+/// The study's scene text and the overrides every run takes: the embedded cyclone scene
+/// ([`scene_text`]) and `--set`, or with `--scene FILE` that file's text, its relative
+/// `flow.case` made absolute from the file's folder (an override before `--set`'s).
+pub fn study_scene(a: &StudyArgs) -> Result<(String, Vec<String>), String> {
+    let Some(path) = &a.scene else {
+        return Ok((scene_text()?, a.set.clone()));
+    };
+    let text =
+        std::fs::read_to_string(path).map_err(|e| format!("--scene {}: {e}", path.display()))?;
+    let table: toml::Table =
+        toml::from_str(&text).map_err(|e| format!("--scene {}: {e}", path.display()))?;
+    let case = table
+        .get("flow")
+        .and_then(|f| f.get("case"))
+        .and_then(|c| c.as_str())
+        .ok_or_else(|| format!("--scene {}: no [flow] case (a mesh case)", path.display()))?;
+    let dir = path
+        .parent()
+        .unwrap_or(std::path::Path::new("."))
+        .join(case);
+    let dir = dir.canonicalize().map_err(|e| {
+        format!(
+            "--scene {}: flow.case {}: {e}",
+            path.display(),
+            dir.display()
+        )
+    })?;
+    let mut set = vec![format!("flow.case={:?}", dir.display().to_string())];
+    set.extend(a.set.iter().cloned());
+    Ok((text, set))
+}
+
 /// The cyclone scene's air field on Barth–Muschelknautz's control surface (the roof at
-/// z = 1 m), 64 × 64 points; `None` without a mesh flow.
+/// z = 1 m), 64 × 64 points, (v_θ, v_r) in m/s; `None` without a mesh flow. For an
+/// unsteady series, the mean over its snapshots (equally spaced: the time average; the
+/// surface mean is linear in the velocity, so this is the swirl of the mean field).
 pub fn field_swirl(scene: &scg_scene::Scene) -> Option<(f64, f64)> {
-    let flow = &scene.mesh_flow.as_ref()?.flow;
-    Cyclone::OPENFOAM_TUTORIAL.control_surface(1.0, 64, |x| {
-        flow.find_cell(x).and_then(|c| flow.velocity_in(c, x))
-    })
+    let m = scene.mesh_flow.as_ref()?;
+    let at = |flow: &scg_core::physics::mesh_flow::MeshFlow| {
+        Cyclone::OPENFOAM_TUTORIAL.control_surface(1.0, 64, |x| {
+            flow.find_cell(x).and_then(|c| flow.velocity_in(c, x))
+        })
+    };
+    let Some(series) = &m.series else {
+        return at(&m.flow);
+    };
+    let n = series.times.len();
+    let (mut vt, mut vr) = (0.0, 0.0);
+    for k in 0..n {
+        let (t, r) = match k {
+            0 => at(&m.flow)?,
+            1 => at(&series.spec.second.flow)?,
+            _ => at(&(series.spec.load)(k).ok()?.flow)?,
+        };
+        vt += t;
+        vr += r;
+    }
+    Some((vt / n as f64, vr / n as f64))
 }
 
 /// The tracer check of a finished study's `summary.json` in `dir`, if it has one.
@@ -178,7 +229,7 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
         },
         None => None,
     };
-    let text = match scene_text() {
+    let (text, set) = match study_scene(&a) {
         Ok(t) => t,
         Err(e) => {
             eprintln!("error: {e}");
@@ -256,7 +307,7 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
         let mut o = variant_overrides(alpha, law, f, duration);
         o.push(format!("name=\"cyclone-{name}\""));
         o.push(format!("record_every={RECORD_EVERY}"));
-        o.extend(a.set.iter().cloned());
+        o.extend(set.iter().cloned());
         o
     };
     // Bad `--set` values are bad input (exit 2), found before anything runs.
@@ -298,7 +349,7 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
     // In the order of VARIANTS (the original first).
     runs.sort_by_key(|r| VARIANTS.iter().position(|v| v.0 == r.name));
     // the scene as the variants ran it: its field's swirl, its outline for the plots
-    let scene = match scg_scene::parse(&text, "<cyclone>", "cyclone", &a.set) {
+    let scene = match scg_scene::parse(&text, "<cyclone>", "cyclone", &set) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
@@ -316,7 +367,7 @@ pub fn study(a: StudyArgs, points: &dyn Points) -> i32 {
     if tracers.is_none() {
         eprintln!("study cyclone: the tracer check…");
         let rate = if a.quick { TRACERS_QUICK } else { TRACERS };
-        match run_tracers(&text, &a.set, rate) {
+        match run_tracers(&text, &set, rate) {
             Ok(t) => {
                 eprintln!("  tracers done in {:.1} s", t.total_s);
                 tracers = Some(t);

@@ -43,8 +43,8 @@ pub const MAX_REFLECTIONS: usize = 8;
 
 /// Settle the end of a move on the mesh: locate `x1` from `h_from` (a cell near the path);
 /// crossing a patch applies that patch's interaction (`models`, one per patch; a patch
-/// past the list escapes): a rebound mirrors the centre back and changes the velocity
-/// ([`coulomb_rebound`](super::coulomb_rebound)), then locates again, at most [`MAX_REFLECTIONS`] times, after
+/// past the list escapes): a rebound changes the velocity and moves the rest of the step
+/// after the impact on the new one ([`rebound`]), then locates again, at most [`MAX_REFLECTIONS`] times, after
 /// which the particle goes back to `x0` (its start, in cell `h0`) with the rebound
 /// velocity, so a wall is never passed; a stick or escape marks the particle
 /// ([`hint::stuck`], [`hint::escaped`]). A boundary face the walk passes on its way to a
@@ -91,6 +91,8 @@ fn land_boundary(
 ) -> Landing {
     let mut from = h_from;
     let mut impact = None;
+    // the step's path length: what a rebound may give back along the wall
+    let reach = (x1 - x0).length();
     for k in 0..MAX_REFLECTIONS {
         // The table's walk met a boundary face (a particle at a wall), or could not tell.
         // Whether the point beyond that face is inside the mesh elsewhere
@@ -160,9 +162,9 @@ fn land_boundary(
                     velocity: w.map_or(v1, |w| v1 - w),
                 }));
                 (x1, v1) = match w {
-                    None => rebound(x1, v1, p, n, e, mu, friction),
+                    None => rebound(x1, v1, p, n, e, mu, friction, reach),
                     Some(w) => {
-                        let (x, v) = rebound(x1, v1 - w, p, n, e, mu, friction);
+                        let (x, v) = rebound(x1, v1 - w, p, n, e, mu, friction, reach);
                         (x, v + w)
                     }
                 };
