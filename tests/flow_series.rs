@@ -420,6 +420,19 @@ fn keeping_the_snapshots_changes_no_bit() {
     let (streamed, kept) = (frames("0"), frames("1024"));
     assert!(streamed.len() > 10, "{} frames", streamed.len());
     assert!(streamed == kept, "keeping the snapshots changed the frames");
+    // a value that is not a number of MB is an error naming it
+    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_scg"))
+        .args(["check", "keep.toml"])
+        .env("SCG_SERIES_KEEP_MB", "lots")
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(bad.status.code(), Some(2), "{text}");
+    assert!(
+        text.contains("SCG_SERIES_KEEP_MB") && text.contains("lots"),
+        "{text}"
+    );
 }
 
 /// `scg check` states the window, the spacing and the seam, and warns where the spacing

@@ -165,6 +165,10 @@ pub fn main_with(launch: &Launch) -> i32 {
             };
         }
     };
+    if let Err(e) = scg_core::stages::flow_series::keep_bytes_from_env() {
+        eprintln!("error: {e}");
+        return EXIT_BAD_INPUT;
+    }
     // The execution settings are read once, here, before anything runs in parallel.
     let mut exec = scg_core::exec::ExecSettings::from_env();
     if exec.threads == 0 {

@@ -187,13 +187,23 @@ impl FlowSeries {
 }
 
 /// Most bytes of snapshots a series keeps in memory for later use: `SCG_SERIES_KEEP_MB`
-/// (MB; 0 keeps none beyond the pair), default 1024.
+/// (MB; 0 keeps none beyond the pair), default 1024 (also when the value is not a whole
+/// number: [`keep_bytes_from_env`] is the check that refuses it, the command line's).
 pub fn keep_bytes() -> usize {
-    std::env::var("SCG_SERIES_KEEP_MB")
-        .ok()
-        .and_then(|v| v.trim().parse::<usize>().ok())
-        .unwrap_or(1024)
-        .saturating_mul(1 << 20)
+    keep_bytes_from_env().unwrap_or(1024 << 20)
+}
+
+/// [`keep_bytes`], or an error naming the variable and its value when it is not a whole
+/// number of MB.
+pub fn keep_bytes_from_env() -> Result<usize, String> {
+    match std::env::var("SCG_SERIES_KEEP_MB") {
+        Err(_) => Ok(1024 << 20),
+        Ok(v) => v
+            .trim()
+            .parse::<usize>()
+            .map(|mb| mb.saturating_mul(1 << 20))
+            .map_err(|_| format!("SCG_SERIES_KEEP_MB = {v:?}: expected a whole number of MB")),
+    }
 }
 
 /// The bytes of a snapshot of its own (flow values and tables, turbulence per cell).
