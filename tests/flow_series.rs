@@ -394,20 +394,15 @@ fn keeping_the_snapshots_changes_no_bit() {
     let text = format!("record_every = 32\n{}", many("cycle = true", 2.0));
     std::fs::write(dir.path().join("keep.toml"), text).unwrap();
     let frames = |keep: &str| {
-        let out = dir.path().join(format!("frames-{keep}"));
-        let run = std::process::Command::new(env!("CARGO_BIN_EXE_scg"))
-            .args(["run", "keep.toml", "--no-record", "--frames-csv"])
-            .arg(&out)
-            .env("SCG_SERIES_KEEP_MB", keep)
-            .current_dir(dir.path())
-            .output()
-            .unwrap();
+        let out = format!("frames-{keep}");
+        let args = ["run", "keep.toml", "--no-record", "--frames-csv", &out];
+        let run = common::scg_env(dir.path(), &args, &[("SCG_SERIES_KEEP_MB", keep)]);
         assert!(
             run.status.success(),
             "{}",
             String::from_utf8_lossy(&run.stderr)
         );
-        let mut files: Vec<_> = std::fs::read_dir(&out)
+        let mut files: Vec<_> = std::fs::read_dir(dir.path().join(&out))
             .unwrap()
             .map(|e| e.unwrap().path())
             .collect();
@@ -421,12 +416,11 @@ fn keeping_the_snapshots_changes_no_bit() {
     assert!(streamed.len() > 10, "{} frames", streamed.len());
     assert!(streamed == kept, "keeping the snapshots changed the frames");
     // a value that is not a number of MB is an error naming it
-    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_scg"))
-        .args(["check", "keep.toml"])
-        .env("SCG_SERIES_KEEP_MB", "lots")
-        .current_dir(dir.path())
-        .output()
-        .unwrap();
+    let bad = common::scg_env(
+        dir.path(),
+        &["check", "keep.toml"],
+        &[("SCG_SERIES_KEEP_MB", "lots")],
+    );
     let text = String::from_utf8_lossy(&bad.stderr);
     assert_eq!(bad.status.code(), Some(2), "{text}");
     assert!(

@@ -68,24 +68,19 @@ source "$here/../foam-env.sh"
 foam_env build-series.sh pimpleFoam
 
 end=$(echo "$spin_up + $window" | bc -l)
-if [ -n "$reuse" ]; then
-    work="$(cd "$reuse" && pwd)"
-    [ -f "$work/log.pimpleFoam" ] || { echo "build-series.sh: --reuse $reuse: no log.pimpleFoam" >&2; exit 1; }
-    echo "== reusing $work (pimpleFoam not run)"
-    cd "$work"
-else
-work="$(mktemp -d "${TMPDIR:-/tmp}/scg-cyclone-les.XXXXXX")"
-[ "$keep" = 1 ] || trap 'rm -rf "$work"' EXIT
-echo "== working in $work"
-mkdir -p "$work/constant/polyMesh" "$work/system" "$work/0"
-for f in points faces owner neighbour boundary; do
-    zcat "$steady/constant/polyMesh/$f.gz" > "$work/constant/polyMesh/$f"
-done
-cp "$steady/constant/transportProperties" "$work/constant/"
-steady_final=$(cd "$steady" && ls -d [0-9]* | sort -g | tail -1)
-# the initial velocity: the steady field's average (its cell values) under the name U, with
-# the steady case's boundary conditions (template/0/U; fieldAverage writes "calculated")
-python3 - "$steady/$steady_final/UMean.gz" "$here/template/0/U" "$work/0/U" <<'PY'
+
+# A fresh OpenFOAM case in $work: the steady case's mesh, its mean velocity as U at t = 0,
+# the LES model's fields and dictionaries.
+write_case() {
+    mkdir -p "$work/constant/polyMesh" "$work/system" "$work/0"
+    for f in points faces owner neighbour boundary; do
+        zcat "$steady/constant/polyMesh/$f.gz" > "$work/constant/polyMesh/$f"
+    done
+    cp "$steady/constant/transportProperties" "$work/constant/"
+    steady_final=$(cd "$steady" && ls -d [0-9]* | sort -g | tail -1)
+    # the initial velocity: the steady field's average (its cell values) under the name U, with
+    # the steady case's boundary conditions (template/0/U; fieldAverage writes "calculated")
+    python3 - "$steady/$steady_final/UMean.gz" "$here/template/0/U" "$work/0/U" <<'PY'
 import gzip, re, sys
 data = gzip.open(sys.argv[1]).read()
 data, n = re.subn(rb"object\s+UMean;", b"object      U;", data, count=1)
@@ -96,8 +91,8 @@ bcs = open(sys.argv[2], "rb").read()
 bcs = bcs[bcs.index(b"boundaryField"):]
 open(sys.argv[3], "wb").write(data[:cut] + bcs)
 PY
-head() { printf 'FoamFile { version 2.0; format ascii; class %s; object %s; }\n' "$1" "$2"; }
-{ head volScalarField p; cat <<'F'
+    foam_header() { printf 'FoamFile { version 2.0; format ascii; class %s; object %s; }\n' "$1" "$2"; }
+    { foam_header volScalarField p; cat <<'F'
 dimensions      [0 2 -2 0 0 0 0];
 internalField   uniform 0;
 boundaryField
@@ -107,8 +102,8 @@ boundaryField
     walls   { type zeroGradient; }
 }
 F
-} > "$work/0/p"
-{ head volScalarField k; cat <<'F'
+    } > "$work/0/p"
+    { foam_header volScalarField k; cat <<'F'
 dimensions      [0 2 -2 0 0 0 0];
 internalField   uniform 0.375;
 boundaryField
@@ -118,8 +113,8 @@ boundaryField
     walls   { type kqRWallFunction; value uniform 0.375; }
 }
 F
-} > "$work/0/k"
-{ head volScalarField nut; cat <<'F'
+    } > "$work/0/k"
+    { foam_header volScalarField nut; cat <<'F'
 dimensions      [0 2 -1 0 0 0 0];
 internalField   uniform 0;
 boundaryField
@@ -129,8 +124,8 @@ boundaryField
     walls   { type nutkWallFunction; value uniform 0; }
 }
 F
-} > "$work/0/nut"
-{ head dictionary turbulenceProperties; cat <<'F'
+    } > "$work/0/nut"
+    { foam_header dictionary turbulenceProperties; cat <<'F'
 simulationType  LES;
 LES
 {
@@ -141,8 +136,8 @@ LES
     cubeRootVolCoeffs { deltaCoeff 1; }
 }
 F
-} > "$work/constant/turbulenceProperties"
-{ head dictionary fvSchemes; cat <<'F'
+    } > "$work/constant/turbulenceProperties"
+    { foam_header dictionary fvSchemes; cat <<'F'
 ddtSchemes      { default backward; }
 gradSchemes     { default Gauss linear; grad(U) cellLimited Gauss linear 1; }
 divSchemes
@@ -157,8 +152,8 @@ interpolationSchemes { default linear; }
 snGradSchemes   { default limited corrected 0.5; }
 wallDist        { method meshWave; }
 F
-} > "$work/system/fvSchemes"
-{ head dictionary fvSolution; cat <<'F'
+    } > "$work/system/fvSchemes"
+    { foam_header dictionary fvSolution; cat <<'F'
 solvers
 {
     p       { solver GAMG; smoother GaussSeidel; tolerance 1e-6; relTol 0.01; }
@@ -173,8 +168,8 @@ PIMPLE
     nNonOrthogonalCorrectors 1;
 }
 F
-} > "$work/system/fvSolution"
-{ head dictionary controlDict; cat <<F
+    } > "$work/system/fvSolution"
+    { foam_header dictionary controlDict; cat <<F
 application     pimpleFoam;
 startFrom       startTime;
 startTime       0;
@@ -208,12 +203,24 @@ $(foam_flow_functions inlet outlet)
     }
 }
 F
-} > "$work/system/controlDict"
+    } > "$work/system/controlDict"
+}
 
+if [ -n "$reuse" ]; then
+    work="$(cd "$reuse" && pwd)"
+    [ -f "$work/log.pimpleFoam" ] || { echo "build-series.sh: --reuse $reuse: no log.pimpleFoam" >&2; exit 1; }
+    echo "== reusing $work (pimpleFoam not run)"
+else
+    work="$(mktemp -d "${TMPDIR:-/tmp}/scg-cyclone-les.XXXXXX")"
+    [ "$keep" = 1 ] || trap 'rm -rf "$work"' EXIT
+    echo "== working in $work"
+    write_case
+fi
 cd "$work"
 step() { foam_step build-series.sh "$work" "$@"; }
-echo "== pimpleFoam, LES kEqn, 0 .. $end s (snapshots every $every s from $spin_up s), maxCo $max_co"
-step pimpleFoam pimpleFoam
+if [ -z "$reuse" ]; then
+    echo "== pimpleFoam, LES kEqn, 0 .. $end s (snapshots every $every s from $spin_up s), maxCo $max_co"
+    step pimpleFoam pimpleFoam
 fi
 
 # --- the series scg reads: the window's snapshots, renamed to the time since its start ---
@@ -232,7 +239,7 @@ if [ -n "$ascii" ]; then
     # controlDict with writeFormat ascii and the requested precision)
     cp system/controlDict system/controlDict.binary
     sed -i -e 's/^writeFormat .*/writeFormat     ascii;/' -e "s/^writePrecision .*/writePrecision  $ascii;/" system/controlDict
-    foam_step build-series.sh "$work" foamFormatConvert foamFormatConvert -noConstant -time "$(echo $picked | tr ' ' ',')"
+    step foamFormatConvert foamFormatConvert -noConstant -time "$(echo $picked | tr ' ' ',')"
     mv system/controlDict.binary system/controlDict
 fi
 format=binary; [ -n "$ascii" ] && format="ASCII, $ascii significant digits"

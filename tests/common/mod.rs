@@ -134,13 +134,19 @@ velocity = [0.0, 0.0, 1.0]
     )
 }
 
-/// `scg ARGS` run in `dir`; asserts that it succeeds (its stderr in the message).
-pub fn scg_ok(dir: &std::path::Path, args: &[&str]) {
-    let run = std::process::Command::new(env!("CARGO_BIN_EXE_scg"))
+/// `scg ARGS` run in `dir` with the environment variables `env` set: its output.
+pub fn scg_env(dir: &std::path::Path, args: &[&str], env: &[(&str, &str)]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_scg"))
         .args(args)
+        .envs(env.iter().copied())
         .current_dir(dir)
         .output()
-        .unwrap();
+        .unwrap()
+}
+
+/// `scg ARGS` run in `dir`; asserts that it succeeds (its stderr in the message).
+pub fn scg_ok(dir: &std::path::Path, args: &[&str]) {
+    let run = scg_env(dir, args, &[]);
     assert!(
         run.status.success(),
         "scg {args:?}: {}",

@@ -382,6 +382,27 @@ pub fn stokes_number(scene: &Scene, reports: &[GroupReport]) -> f64 {
 /// α from which `scg check` calls coarse graining extreme.
 pub const EXTREME_ALPHA: f64 = 16.0;
 
+/// A warning `m` with the allowance `code`: counted in `allowed` when the scene accepts
+/// it (`[checks] allow`), else kept in `findings`.
+fn warn_or_allow(
+    scene: &Scene,
+    findings: &mut Vec<Finding>,
+    allowed: &mut Vec<(Allow, usize)>,
+    code: Option<Allow>,
+    m: String,
+) {
+    match code {
+        Some(c) if scene.allow.contains(&c) => match allowed.iter_mut().find(|a| a.0 == c) {
+            Some(a) => a.1 += 1,
+            None => allowed.push((c, 1)),
+        },
+        _ => findings.push(Finding {
+            level: Level::Warning,
+            message: m,
+        }),
+    }
+}
+
 /// Check a scene.
 pub fn check(scene: &Scene) -> Report {
     let groups: Vec<GroupReport> = scene
@@ -391,16 +412,8 @@ pub fn check(scene: &Scene) -> Report {
         .collect();
     let mut findings = Vec::new();
     let mut allowed: Vec<(Allow, usize)> = Vec::new();
-    let mut warn_unless = |code: Option<Allow>, m: String| match code {
-        Some(c) if scene.allow.contains(&c) => match allowed.iter_mut().find(|a| a.0 == c) {
-            Some(a) => a.1 += 1,
-            None => allowed.push((c, 1)),
-        },
-        _ => findings.push(Finding {
-            level: Level::Warning,
-            message: m,
-        }),
-    };
+    let mut warn_unless =
+        |code: Option<Allow>, m: String| warn_or_allow(scene, &mut findings, &mut allowed, code, m);
     for r in &groups {
         if scene.drag == Some(DragLaw::Stokes) && r.reynolds > 0.1 {
             warn_unless(
@@ -549,13 +562,15 @@ pub fn check(scene: &Scene) -> Report {
     findings.extend(zones::findings(scene));
     findings.extend(mesh_flow_findings(scene));
     for f in mesh::series_findings(scene, &groups) {
-        if f.level == Level::Warning && scene.allow.contains(&Allow::SeriesSpacing) {
-            match allowed.iter_mut().find(|a| a.0 == Allow::SeriesSpacing) {
-                Some(a) => a.1 += 1,
-                None => allowed.push((Allow::SeriesSpacing, 1)),
-            }
-        } else {
-            findings.push(f);
+        match f.level {
+            Level::Warning => warn_or_allow(
+                scene,
+                &mut findings,
+                &mut allowed,
+                Some(Allow::SeriesSpacing),
+                f.message,
+            ),
+            _ => findings.push(f),
         }
     }
     findings.extend(dispersion::findings(scene));

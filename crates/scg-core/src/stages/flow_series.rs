@@ -82,11 +82,6 @@ impl FlowSeries {
         }
     }
 
-    /// Snapshots kept in memory for later use, and their bytes.
-    pub fn kept(&self) -> (usize, usize) {
-        (self.kept.iter().flatten().count(), self.kept_bytes)
-    }
-
     /// The clock.
     pub fn clock(&self) -> &crate::physics::mesh_flow::series::SeriesClock {
         &self.spec.clock
@@ -186,18 +181,21 @@ impl FlowSeries {
     }
 }
 
+/// `SCG_SERIES_KEEP_MB` when it is not set, MB.
+const KEEP_MB: usize = 1024;
+
 /// Most bytes of snapshots a series keeps in memory for later use: `SCG_SERIES_KEEP_MB`
-/// (MB; 0 keeps none beyond the pair), default 1024 (also when the value is not a whole
-/// number: [`keep_bytes_from_env`] is the check that refuses it, the command line's).
+/// (MB; 0 keeps none beyond the pair), default [`KEEP_MB`] (also when the value is not a
+/// whole number: [`keep_bytes_from_env`] is the check that refuses it, the command line's).
 pub fn keep_bytes() -> usize {
-    keep_bytes_from_env().unwrap_or(1024 << 20)
+    keep_bytes_from_env().unwrap_or(KEEP_MB << 20)
 }
 
 /// [`keep_bytes`], or an error naming the variable and its value when it is not a whole
 /// number of MB.
 pub fn keep_bytes_from_env() -> Result<usize, String> {
     match std::env::var("SCG_SERIES_KEEP_MB") {
-        Err(_) => Ok(1024 << 20),
+        Err(_) => Ok(KEEP_MB << 20),
         Ok(v) => v
             .trim()
             .parse::<usize>()
@@ -210,7 +208,8 @@ pub fn keep_bytes_from_env() -> Result<usize, String> {
 fn snapshot_bytes(s: &Snapshot) -> usize {
     s.flow.bytes()
         + s.turbulence.as_ref().map_or(0, |t| {
-            (t.k.len() + t.epsilon.len() + 3 * t.grad_sigma.len()) * 8
+            (t.k.len() + t.epsilon.len()) * size_of::<f64>()
+                + t.grad_sigma.len() * size_of::<glam::DVec3>()
         })
 }
 
