@@ -185,7 +185,7 @@ impl FlowSeries {
 const KEEP_MB: usize = 1024;
 
 /// Most bytes of snapshots a series keeps in memory for later use: `SCG_SERIES_KEEP_MB`
-/// (MB; 0 keeps none beyond the pair), default [`KEEP_MB`] (also when the value is not a
+/// (MB; 0 keeps none beyond the pair), default `KEEP_MB` (1024) (also when the value is not a
 /// whole number: [`keep_bytes_from_env`] is the check that refuses it, the command line's).
 pub fn keep_bytes() -> usize {
     keep_bytes_from_env().unwrap_or(KEEP_MB << 20)
